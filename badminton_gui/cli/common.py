@@ -1,0 +1,72 @@
+"""Helpers shared by the CLI commands: user errors, progress bar, argument parsing."""
+
+from __future__ import annotations
+
+import sys
+import time
+
+from ..core.params import ParamError
+from ..core.rig import RigError
+from ..io.sources import SourceError
+
+
+class UserError(Exception):
+    """Something the user can fix; printed as one line, exit status 2."""
+
+
+# Errors from the layers below that are the user's input, not our bug.
+INPUT_ERRORS = (ParamError, RigError, SourceError, FileNotFoundError, IsADirectoryError,
+                PermissionError, ValueError)
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = text.lower().split("x")
+        size = (int(w), int(h))
+    except ValueError:
+        raise UserError(f"size {text!r} is not WIDTHxHEIGHT, e.g. 1280x720") from None
+    if size[0] < 64 or size[1] < 64 or size[0] > 8192 or size[1] > 8192:
+        raise UserError(f"size {text!r} is outside 64x64 … 8192x8192")
+    return size
+
+
+class Progress:
+    """A one-line progress bar on stderr, redrawn at most 10 times a second.
+
+    Silent when stderr is not a terminal unless ``force`` is set, so logs stay clean.
+    """
+
+    def __init__(self, total: int | None, label: str, force: bool = False) -> None:
+        self.total = total
+        self.label = label
+        self.enabled = force or sys.stderr.isatty()
+        self.start = time.perf_counter()
+        self._last_draw = 0.0
+        self.count = 0
+
+    def update(self, count: int) -> None:
+        self.count = count
+        now = time.perf_counter()
+        if not self.enabled or now - self._last_draw < 0.1:
+            return
+        self._last_draw = now
+        self._draw(now)
+
+    def _draw(self, now: float) -> None:
+        rate = self.count / max(now - self.start, 1e-9)
+        if self.total:
+            frac = min(self.count / self.total, 1.0)
+            bar = "#" * int(frac * 30)
+            eta = (self.total - self.count) / rate if rate > 0 else 0.0
+            text = (f"\r{self.label} [{bar:<30}] {self.count}/{self.total} "
+                    f"{rate:6.1f}/s eta {eta:5.1f}s")
+        else:
+            text = f"\r{self.label} {self.count} {rate:6.1f}/s"
+        sys.stderr.write(text)
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            self._draw(time.perf_counter())
+            sys.stderr.write("\n")
+            sys.stderr.flush()

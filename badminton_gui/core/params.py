@@ -1,0 +1,264 @@
+"""Tracker parameters: frozen dataclasses whose fields carry their own range, unit and help.
+
+Why this file exists: every threshold of the pipeline lives here, once. The tuning dialog,
+presets, the CLI and the tests all read the same declarations, so adding a parameter needs no
+GUI code (stytra's ``Param(default, (lo, hi))`` idea, GUIDE §3.1). Each group dataclass is one
+box in the tuning dialog; :class:`TrackerParams` composes them.
+
+All pixel quantities are in *full-resolution* pixels of the camera image, whatever resolution
+the pipeline works at internally, so a preset means the same thing at any processing scale.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any, ClassVar, Iterator
+
+
+def param(default: Any, lo: float, hi: float, *, step: float | None = None, unit: str = "",
+          label: str = "", help: str = "") -> Any:
+    """A numeric dataclass field with its valid range, unit and a one-line explanation."""
+    return field(default=default, metadata={
+        "range": (lo, hi), "step": step, "unit": unit, "label": label, "help": help})
+
+
+def choice(default: str, options: tuple[str, ...], *, label: str = "", help: str = "") -> Any:
+    """A dataclass field restricted to a fixed set of strings."""
+    return field(default=default, metadata={"options": options, "label": label, "help": help})
+
+
+def flag(default: bool, *, label: str = "", help: str = "") -> Any:
+    """A boolean dataclass field."""
+    return field(default=default, metadata={"label": label, "help": help})
+
+
+class ParamError(ValueError):
+    """A parameter value outside its declared range, or an unknown parameter name."""
+
+
+@dataclass(frozen=True, slots=True)
+class ParamGroup:
+    """Base of every parameter group; validates ranges on construction."""
+
+    TITLE: ClassVar[str] = ""
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            meta = f.metadata
+            if "range" in meta:
+                lo, hi = meta["range"]
+                if not (lo <= value <= hi):
+                    raise ParamError(f"{type(self).__name__}.{f.name} = {value!r} is outside "
+                                     f"its range [{lo}, {hi}]")
+            elif "options" in meta and value not in meta["options"]:
+                raise ParamError(f"{type(self).__name__}.{f.name} = {value!r} is not one of "
+                                 f"{', '.join(meta['options'])}")
+
+
+@dataclass(frozen=True, slots=True)
+class BackgroundParams(ParamGroup):
+    """The paper's Gaussian-mixture background difference (OpenCV MOG2), or a frame difference."""
+
+    TITLE: ClassVar[str] = "Background model"
+    method: str = choice("mog2", ("mog2", "frame_diff"), label="Method",
+                         help="Gaussian mixture (MOG2) or three-frame difference")
+    learning_rate: float = param(0.03, 0.0, 1.0, step=0.005, label="Learning rate α",
+                                 help="How fast the background absorbs change (paper: ≈0.03)")
+    history: int = param(200, 2, 5000, step=10, unit="frames", label="History",
+                         help="MOG2 history length (used for initial learning)")
+    n_mixtures: int = param(3, 1, 8, step=1, label="Gaussians K",
+                            help="Gaussians per pixel (paper: 3–5)")
+    var_threshold: float = param(16.0, 1.0, 200.0, step=1.0, label="Variance threshold",
+                                 help="Squared Mahalanobis distance for a pixel to match a Gaussian")
+    detect_shadows: bool = flag(False, label="Detect shadows",
+                                help="Mark shadows (grey 127) so binarization can drop them")
+    processing_scale: float = param(1.0, 0.125, 1.0, step=0.125, label="Processing scale",
+                                    help="Background model runs on the image scaled by this factor")
+
+
+@dataclass(frozen=True, slots=True)
+class BinarizeParams(ParamGroup):
+    """Binarization of the difference image and morphological denoising."""
+
+    TITLE: ClassVar[str] = "Binarization"
+    threshold: int = param(150, 0, 254, step=1, label="Threshold T",
+                           help="Mask values above T are foreground (paper: 140–160; drops shadows)")
+    diff_threshold: int = param(20, 1, 254, step=1, label="Frame-difference threshold",
+                                help="Grey-level change counted as motion by the frame difference")
+    open_kernel: int = param(3, 0, 15, step=1, unit="px", label="Opening kernel",
+                             help="Morphological opening removes specks smaller than this (0 = off)")
+    dilate_iterations: int = param(1, 0, 5, step=1, label="Dilate iterations",
+                                   help="Joins the broken pieces of a blurred shuttle")
+
+
+@dataclass(frozen=True, slots=True)
+class ContourLengthParams(ParamGroup):
+    """Filter 1: contour length (perimeter)."""
+
+    TITLE: ClassVar[str] = "Contour length"
+    min_length: float = param(4.0, 0.0, 2000.0, step=1.0, unit="px", label="Minimum length")
+    max_length: float = param(250.0, 1.0, 5000.0, step=5.0, unit="px", label="Maximum length")
+
+
+@dataclass(frozen=True, slots=True)
+class TiltedRectParams(ParamGroup):
+    """Filter 2: shortest side of the minimum-area (tilted) bounding rectangle."""
+
+    TITLE: ClassVar[str] = "Tilted rectangle"
+    min_short_side: float = param(1.0, 0.0, 200.0, step=0.5, unit="px", label="Shortest side ≥")
+    max_short_side: float = param(30.0, 0.5, 500.0, step=0.5, unit="px", label="Shortest side ≤")
+
+
+@dataclass(frozen=True, slots=True)
+class ColourParams(ParamGroup):
+    """Filter 3: whiteness of the pixels inside the contour."""
+
+    TITLE: ClassVar[str] = "Colour"
+    min_whiteness: float = param(100.0, 0.0, 255.0, step=1.0, label="Whiteness ≥",
+                                 help="Mean of min(B, G, R) inside the contour")
+    max_saturation: float = param(255.0, 0.0, 255.0, step=1.0, label="Saturation ≤",
+                                  help="Mean of max(B,G,R) − min(B,G,R) inside the contour")
+
+
+@dataclass(frozen=True, slots=True)
+class MotionParams(ParamGroup):
+    """Filter 4: distance moved since the previous frame, speed-aware, and track keeping."""
+
+    TITLE: ClassVar[str] = "Motion"
+    base_radius: float = param(40.0, 0.0, 2000.0, step=1.0, unit="px", label="Base radius",
+                               help="Allowed distance from the predicted position at zero speed")
+    max_image_speed: float = param(15000.0, 0.0, 100000.0, step=100.0, unit="px/s",
+                                   label="Maximum image speed",
+                                   help="Fastest shuttle in the image; the gate grows with the time step")
+    lost_after: float = param(0.15, 0.0, 5.0, step=0.01, unit="s", label="Lost after",
+                              help="Without a hit for this long the track is dropped and any candidate may start a new one")
+    min_displacement: float = param(0.0, 0.0, 50.0, step=0.5, unit="px", label="Stationary below",
+                                    help="Candidates that moved less than this since the last frame are rejected (shuttles lying on the floor)")
+
+
+@dataclass(frozen=True, slots=True)
+class StereoParams(ParamGroup):
+    """Consistency of the two cameras' detections."""
+
+    TITLE: ClassVar[str] = "Stereo"
+    max_epipolar_error: float = param(6.0, 0.1, 500.0, step=0.5, unit="px",
+                                      label="Epipolar tolerance",
+                                      help="Largest distance of the right detection from the left one's epipolar line")
+    min_distance: float = param(0.3, 0.0, 100.0, step=0.1, unit="m", label="Nearest",
+                                help="Triangulated points closer to the left camera are rejected")
+    max_distance: float = param(40.0, 0.5, 500.0, step=0.5, unit="m", label="Farthest")
+    max_candidates: int = param(6, 1, 50, step=1, label="Candidates per camera",
+                                help="How many best candidates per camera are tried for a stereo pair")
+
+
+@dataclass(frozen=True, slots=True)
+class TrajectoryParams(ParamGroup):
+    """3D track keeping, shot segmentation and landing prediction (core/trajectory.py)."""
+
+    TITLE: ClassVar[str] = "Trajectory"
+    doubles: bool = flag(True, label="Doubles court", help="In/out call against the doubles lines (else singles)")
+    max_gap: float = param(0.25, 0.01, 5.0, step=0.01, unit="s", label="Longest gap",
+                           help="A flight without a 3D point for longer than this has ended")
+    outlier_distance: float = param(0.5, 0.01, 10.0, step=0.01, unit="m", label="Outlier distance",
+                                    help="3D points this far from the flight's prediction are ignored")
+    hit_acceleration: float = param(150.0, 10.0, 5000.0, step=5.0, unit="m/s²",
+                                    label="Hit acceleration",
+                                    help="A velocity change this abrupt starts a new shot")
+    min_points: int = param(6, 3, 100, step=1, label="Points before predicting",
+                            help="3D points of a shot needed before a landing is predicted")
+
+
+@dataclass(frozen=True, slots=True)
+class TrackerParams:
+    """Every parameter of the pipeline, one group per box of the tuning dialog."""
+
+    background: BackgroundParams = field(default_factory=BackgroundParams)
+    binarize: BinarizeParams = field(default_factory=BinarizeParams)
+    contour_length: ContourLengthParams = field(default_factory=ContourLengthParams)
+    tilted_rect: TiltedRectParams = field(default_factory=TiltedRectParams)
+    colour: ColourParams = field(default_factory=ColourParams)
+    motion: MotionParams = field(default_factory=MotionParams)
+    stereo: StereoParams = field(default_factory=StereoParams)
+    trajectory: TrajectoryParams = field(default_factory=TrajectoryParams)
+
+    # ---- generic access, used by presets, the tuning dialog and the CLI -------------------
+    def groups(self) -> Iterator[tuple[str, ParamGroup]]:
+        """(attribute name, group) in dialog order."""
+        for f in fields(self):
+            yield f.name, getattr(self, f.name)
+
+    def get(self, path: str) -> Any:
+        """Value at ``"group.name"``."""
+        group, name = self._split(path)
+        return getattr(getattr(self, group), name)
+
+    def with_value(self, path: str, value: Any) -> "TrackerParams":
+        """A copy with one value replaced (validated)."""
+        group, name = self._split(path)
+        g = getattr(self, group)
+        value = _coerce(type(g), name, value)
+        return dataclasses.replace(self, **{group: dataclasses.replace(g, **{name: value})})
+
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        return {name: dataclasses.asdict(g) for name, g in self.groups()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "TrackerParams":
+        """Build from a (possibly partial) nested dict; unknown keys are an error."""
+        out = cls()
+        for group, values in data.items():
+            if group.startswith("_"):
+                continue  # comments / metadata in preset files
+            if not isinstance(values, dict) or group not in {f.name for f in fields(cls)}:
+                raise ParamError(f"unknown parameter group {group!r}")
+            for name, value in values.items():
+                out = out.with_value(f"{group}.{name}", value)
+        return out
+
+    def save(self, path: str | Path, description: str = "") -> None:
+        data: dict[str, Any] = {}
+        if description:
+            data["_description"] = description
+        data.update(self.to_dict())
+        Path(path).write_text(json.dumps(data, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
+
+    @classmethod
+    def load(cls, path: str | Path) -> "TrackerParams":
+        try:
+            data = json.loads(Path(path).read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise ParamError(f"preset file not found: {path}") from None
+        except json.JSONDecodeError as exc:
+            raise ParamError(f"preset file {path} is not valid JSON: {exc}") from None
+        return cls.from_dict(data)
+
+    def _split(self, path: str) -> tuple[str, str]:
+        group, _, name = path.partition(".")
+        g = getattr(self, group, None)
+        if not isinstance(g, ParamGroup) or name not in {f.name for f in fields(g)}:
+            raise ParamError(f"unknown parameter {path!r}")
+        return group, name
+
+
+def _coerce(group_type: type, name: str, value: Any) -> Any:
+    """Convert a value (from JSON, a slider, the command line) to the field's declared type."""
+    f = {f.name: f for f in fields(group_type)}[name]
+    default = f.default
+    if isinstance(default, bool):
+        if isinstance(value, str):
+            return value.strip().lower() in {"1", "true", "yes", "on"}
+        return bool(value)
+    if isinstance(default, int):
+        return int(round(float(value)))
+    if isinstance(default, float):
+        return float(value)
+    return str(value)
+
+
+def field_info(group: ParamGroup) -> list[tuple[str, dataclasses.Field]]:
+    """(name, field) of a group in declaration order; the tuning dialog renders these."""
+    return [(f.name, f) for f in fields(group)]

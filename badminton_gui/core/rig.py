@@ -1,0 +1,252 @@
+"""The stereo rig: two calibrated cameras, their relative pose, and optionally the court pose.
+
+Why this file exists: every 3D quantity of the product (distance, speed, landing point) comes
+from here. The rig file is OpenCV FileStorage YAML with the key names of OpenCV's stereo
+calibration sample (GUIDE §8): ``M1 D1 M2 D2 R T`` (X_right = R·X_left + T), ``image_width``,
+``image_height``, optionally ``R1 R2 P1 P2 Q`` and the court pose ``R_court T_court``
+(X_court = R_court·X_left + T_court).
+
+Triangulation works on undistorted, normalised image points with P_left = [I|0] and
+P_right = [R|T]. That serves parallel binocular rigs and rigs whose cameras face each other
+(the NYCU rig, which ``stereoRectify`` cannot handle) alike; the paper's Z = f·Tx/disparity is
+only the special case of a rectified parallel rig.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+
+class RigError(ValueError):
+    """A rig file that cannot be read, or one that does not fit the frames it is used on."""
+
+
+def _arr(a, shape=None) -> np.ndarray:
+    out = np.asarray(a, dtype=np.float64)
+    if shape is not None:
+        out = out.reshape(shape)
+    return out
+
+
+@dataclass(frozen=True)
+class StereoRig:
+    """Intrinsics and extrinsics of a two-camera rig."""
+
+    M1: np.ndarray
+    D1: np.ndarray
+    M2: np.ndarray
+    D2: np.ndarray
+    R: np.ndarray
+    T: np.ndarray
+    image_size: tuple[int, int]                 # (width, height) of both cameras
+    R1: np.ndarray | None = None
+    R2: np.ndarray | None = None
+    P1: np.ndarray | None = None
+    P2: np.ndarray | None = None
+    Q: np.ndarray | None = None
+    R_court: np.ndarray | None = None
+    T_court: np.ndarray | None = None
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "M1", _arr(self.M1, (3, 3)))
+        object.__setattr__(self, "M2", _arr(self.M2, (3, 3)))
+        object.__setattr__(self, "D1", _arr(self.D1).ravel())
+        object.__setattr__(self, "D2", _arr(self.D2).ravel())
+        object.__setattr__(self, "R", _arr(self.R, (3, 3)))
+        object.__setattr__(self, "T", _arr(self.T).reshape(3))
+        object.__setattr__(self, "image_size", (int(self.image_size[0]), int(self.image_size[1])))
+        if self.R_court is not None:
+            object.__setattr__(self, "R_court", _arr(self.R_court, (3, 3)))
+            object.__setattr__(self, "T_court", _arr(self.T_court).reshape(3))
+
+    # ---- file I/O --------------------------------------------------------------------------
+    @classmethod
+    def load(cls, path: str | Path) -> "StereoRig":
+        path = Path(path)
+        if not path.is_file():
+            raise RigError(f"rig file not found: {path}")
+        try:
+            fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+        except cv2.error as exc:
+            raise RigError(f"rig file {path} is not OpenCV FileStorage YAML/XML: "
+                           f"{str(exc).strip().splitlines()[-1]}") from None
+        if not fs.isOpened():
+            raise RigError(f"rig file {path} cannot be opened as OpenCV FileStorage")
+        try:
+            def mat(key: str, required: bool = True):
+                node = fs.getNode(key)
+                if node.empty() or node.isNone():
+                    if required:
+                        raise RigError(f"rig file {path} lacks the key {key!r}")
+                    return None
+                m = node.mat()
+                if m is None:
+                    raise RigError(f"rig file {path}: key {key!r} is not a matrix")
+                return m
+
+            def num(key: str):
+                node = fs.getNode(key)
+                if node.empty() or node.isNone():
+                    raise RigError(f"rig file {path} lacks the key {key!r}")
+                return int(node.real())
+
+            size = (num("image_width"), num("image_height"))
+            r_court = mat("R_court", required=False)
+            t_court = mat("T_court", required=False)
+            if (r_court is None) != (t_court is None):
+                raise RigError(f"rig file {path} has only one of R_court / T_court")
+            return cls(M1=mat("M1"), D1=mat("D1"), M2=mat("M2"), D2=mat("D2"), R=mat("R"),
+                       T=mat("T"), image_size=size, R1=mat("R1", False), R2=mat("R2", False),
+                       P1=mat("P1", False), P2=mat("P2", False), Q=mat("Q", False),
+                       R_court=r_court, T_court=t_court)
+        finally:
+            fs.release()
+
+    def save(self, path: str | Path) -> None:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        # Write to a temporary file first so a full disk never leaves half a rig behind.
+        tmp = path.with_name(path.name + ".tmp" + path.suffix)
+        fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
+        if not fs.isOpened():
+            raise RigError(f"cannot write rig file {path}")
+        try:
+            fs.write("image_width", int(self.image_size[0]))
+            fs.write("image_height", int(self.image_size[1]))
+            for key in ("M1", "D1", "M2", "D2", "R", "T"):
+                val = getattr(self, key)
+                fs.write(key, val.reshape(1, -1) if key.startswith("D") else
+                         (val.reshape(3, 1) if key == "T" else val))
+            for key in ("R1", "R2", "P1", "P2", "Q"):
+                val = getattr(self, key)
+                if val is not None:
+                    fs.write(key, np.asarray(val, dtype=np.float64))
+            if self.R_court is not None:
+                fs.write("R_court", self.R_court)
+                fs.write("T_court", self.T_court.reshape(3, 1))
+        finally:
+            fs.release()
+        tmp.replace(path)
+
+    # ---- derived quantities ----------------------------------------------------------------
+    @property
+    def has_court_pose(self) -> bool:
+        return self.R_court is not None
+
+    @property
+    def baseline(self) -> float:
+        """Distance between the two optical centres (m)."""
+        return float(np.linalg.norm(self.T))
+
+    def with_court_pose(self, R_court, T_court) -> "StereoRig":
+        return replace(self, R_court=_arr(R_court, (3, 3)), T_court=_arr(T_court).reshape(3),
+                       _cache={})
+
+    def camera_centres(self) -> np.ndarray:
+        """(2, 3) optical centres of the left and right camera, in the output frame."""
+        c_left = np.zeros(3)
+        c_right = -self.R.T @ self.T
+        return self.to_output(np.stack([c_left, c_right]))
+
+    def camera_rotations(self) -> tuple[np.ndarray, np.ndarray]:
+        """Rotation from each camera's frame to the output frame (court if known)."""
+        r_left = np.eye(3) if self.R_court is None else self.R_court
+        return r_left, r_left @ self.R.T
+
+    def check_image_size(self, width: int, height: int, what: str = "the frames") -> None:
+        """Raise a clear error when the rig was calibrated for another resolution."""
+        if (int(width), int(height)) != self.image_size:
+            raise RigError(
+                f"the rig was calibrated for {self.image_size[0]}×{self.image_size[1]} but "
+                f"{what} are {int(width)}×{int(height)}: calibrate again at this resolution "
+                f"or choose the matching rig file")
+
+    def fundamental(self) -> np.ndarray:
+        """Fundamental matrix between *undistorted* pixel coordinates (left → right)."""
+        if "F" not in self._cache:
+            tx = np.array([[0, -self.T[2], self.T[1]], [self.T[2], 0, -self.T[0]],
+                           [-self.T[1], self.T[0], 0]])
+            essential = tx @ self.R
+            self._cache["F"] = np.linalg.inv(self.M2).T @ essential @ np.linalg.inv(self.M1)
+        return self._cache["F"]
+
+    # ---- points ----------------------------------------------------------------------------
+    def undistort(self, camera: int, pts) -> np.ndarray:
+        """Pixel points (N, 2) of camera 0 (left) or 1 (right) → normalised coordinates (N, 2)."""
+        pts = np.asarray(pts, dtype=np.float64).reshape(-1, 1, 2)
+        m, d = (self.M1, self.D1) if camera == 0 else (self.M2, self.D2)
+        if len(pts) == 0:
+            return np.zeros((0, 2))
+        return cv2.undistortPoints(pts, m, d).reshape(-1, 2)
+
+    def undistort_pixels(self, camera: int, pts) -> np.ndarray:
+        """Pixel points → undistorted pixel points of the same camera matrix."""
+        norm = self.undistort(camera, pts)
+        m = self.M1 if camera == 0 else self.M2
+        return norm @ m[:2, :2].T + m[:2, 2]
+
+    def epipolar_errors(self, pts_left, pts_right) -> np.ndarray:
+        """Symmetric epipolar distance (px) for every pair (i, j): (N_left, N_right)."""
+        ul = self.undistort_pixels(0, pts_left)
+        ur = self.undistort_pixels(1, pts_right)
+        if len(ul) == 0 or len(ur) == 0:
+            return np.zeros((len(ul), len(ur)))
+        f = self.fundamental()
+        hl = np.hstack([ul, np.ones((len(ul), 1))])
+        hr = np.hstack([ur, np.ones((len(ur), 1))])
+        lines_r = hl @ f.T          # epipolar lines in the right image, one per left point
+        lines_l = hr @ f            # epipolar lines in the left image, one per right point
+        num = hr @ lines_r.T        # (N_right, N_left): x_r^T F x_l
+        num = np.abs(num.T)         # (N_left, N_right)
+        d_right = num / np.hypot(lines_r[:, 0], lines_r[:, 1])[:, None]
+        d_left = num / np.hypot(lines_l[:, 0], lines_l[:, 1])[None, :]
+        return 0.5 * (d_right + d_left)
+
+    def triangulate(self, pts_left, pts_right) -> np.ndarray:
+        """Matched pixel points (N, 2) × 2 → 3D points (N, 3) in the left camera's frame."""
+        nl = self.undistort(0, pts_left)
+        nr = self.undistort(1, pts_right)
+        if len(nl) == 0:
+            return np.zeros((0, 3))
+        p_left = np.hstack([np.eye(3), np.zeros((3, 1))])
+        p_right = np.hstack([self.R, self.T.reshape(3, 1)])
+        hom = cv2.triangulatePoints(p_left, p_right, nl.T.copy(), nr.T.copy())
+        return (hom[:3] / hom[3]).T
+
+    def to_output(self, pts_left_frame) -> np.ndarray:
+        """Left-camera-frame points → court frame when the pose is known (else unchanged)."""
+        pts = np.asarray(pts_left_frame, dtype=np.float64).reshape(-1, 3)
+        if self.R_court is None:
+            return pts
+        return pts @ self.R_court.T + self.T_court
+
+    def to_left(self, pts_output) -> np.ndarray:
+        """Output-frame points → left-camera frame (inverse of :meth:`to_output`)."""
+        pts = np.asarray(pts_output, dtype=np.float64).reshape(-1, 3)
+        if self.R_court is None:
+            return pts
+        return (pts - self.T_court) @ self.R_court
+
+    def project(self, camera: int, pts_output) -> np.ndarray:
+        """Output-frame 3D points (N, 3) → distorted pixel coordinates (N, 2) of a camera."""
+        pts = self.to_left(pts_output)
+        if camera == 0:
+            rvec, tvec, m, d = np.zeros(3), np.zeros(3), self.M1, self.D1
+        else:
+            rvec, tvec, m, d = cv2.Rodrigues(self.R)[0].ravel(), self.T, self.M2, self.D2
+        if len(pts) == 0:
+            return np.zeros((0, 2))
+        img, _ = cv2.projectPoints(pts.reshape(-1, 1, 3), rvec, tvec, m, d)
+        return img.reshape(-1, 2)
+
+    def depth(self, camera: int, pts_output) -> np.ndarray:
+        """Z of output-frame points in the given camera's frame (positive = in front)."""
+        pts = self.to_left(pts_output)
+        if camera == 1:
+            pts = pts @ self.R.T + self.T
+        return pts[:, 2]

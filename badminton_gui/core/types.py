@@ -1,0 +1,118 @@
+"""The values that flow through the pipeline (GUIDE §1), all frozen.
+
+Why this file exists: sources, the tracker, the GUI worker, the CLI and the robot link exchange
+only these types. They are frozen (caliscope's packets, GUIDE §3.7) so that a result handed to
+the GUI thread can never be changed under its feet by the worker.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# Names of the filters that can reject a candidate; the GUI colours rejected candidates by these.
+REJECT_LENGTH = "length"          # filter 1: contour length out of range
+REJECT_SHORT_SIDE = "short_side"  # filter 2: tilted rectangle's shortest side out of range
+REJECT_WHITENESS = "whiteness"    # filter 3: not white enough / too saturated
+REJECT_MOTION = "motion"          # filter 4: too far from the predicted position, or stationary
+REJECT_STEREO = "stereo"          # no partner on the other camera's epipolar line
+REJECT_SCORE = "score"            # passed the filters but another candidate was better
+REJECT_REASONS = (REJECT_LENGTH, REJECT_SHORT_SIDE, REJECT_WHITENESS, REJECT_MOTION,
+                  REJECT_STEREO, REJECT_SCORE)
+
+
+@dataclass(frozen=True, slots=True)
+class StereoFrame:
+    """One pair of frames as delivered by a source (BGR uint8 images)."""
+
+    left: np.ndarray
+    right: np.ndarray
+    t_left: float          # seconds, the source's clock
+    t_right: float
+    index: int             # left frame index
+    index_right: int = -1  # paired right frame index (-1: same as index)
+
+    @property
+    def timestamp(self) -> float:
+        return self.t_left
+
+
+@dataclass(frozen=True, slots=True)
+class Candidate:
+    """A blob that the background difference found, with what the four filters measured.
+
+    ``x, y`` are full-resolution pixel coordinates of the shuttle's estimated head.
+    ``rejected_by`` is None for the accepted detection and otherwise names the filter (one of
+    ``REJECT_REASONS``) that rejected it.
+    """
+
+    x: float
+    y: float
+    length: float        # contour perimeter, px
+    short_side: float    # shortest side of the minimum-area rectangle, px
+    whiteness: float     # mean min(B,G,R) inside the contour
+    area: float          # contour area, px²
+    motion: float        # distance from the predicted position, px (nan: no track)
+    score: float         # higher is more shuttle-like
+    rejected_by: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class CameraResult:
+    """What one camera's detector concluded for one frame."""
+
+    detection: Candidate | None
+    candidates: tuple[Candidate, ...] = ()
+    mask: np.ndarray | None = None     # binary foreground mask at processing scale (display)
+    mask_scale: float = 1.0            # mask pixel = full-res pixel * mask_scale
+    image_size: tuple[int, int] = (0, 0)  # (width, height) of the full-resolution frame
+
+    @property
+    def visible(self) -> bool:
+        return self.detection is not None
+
+
+@dataclass(frozen=True, slots=True)
+class LandingPrediction:
+    """Where and when the current flight will touch the floor (court frame)."""
+
+    x: float
+    y: float
+    t: float               # absolute time of landing, the tracker's clock (s)
+    radius: float          # 1-sigma-ish uncertainty radius on the floor (m)
+    call: str = ""         # "in" / "out" / "" (unknown)
+    aero_length: float = float("nan")  # fitted L of the drag model (m)
+
+
+@dataclass(frozen=True, slots=True)
+class FlightInfo:
+    """Trajectory state derived from successive 3D points (filled by the trajectory module)."""
+
+    shot_index: int = -1
+    velocity: tuple[float, float, float] | None = None  # m/s
+    peak_speed: float | None = None                     # m/s, of the current shot
+    prediction: LandingPrediction | None = None
+    withheld_reason: str = ""   # why there is no prediction (e.g. "no court pose")
+
+
+@dataclass(frozen=True, slots=True)
+class TrackResult:
+    """Everything the tracker knows after one frame pair."""
+
+    index: int
+    timestamp: float
+    left: CameraResult
+    right: CameraResult
+    point: tuple[float, float, float] | None = None   # metres
+    in_court_frame: bool = False    # point is in court coordinates (else left-camera frame)
+    distance: float | None = None   # metres from the left camera (the paper's readout)
+    speed: float | None = None      # m/s
+    epipolar_error: float | None = None  # px
+    index_right: int = -1
+    processing_ms: float = 0.0
+    flight: FlightInfo = field(default_factory=FlightInfo)
+
+    @property
+    def has_point(self) -> bool:
+        return self.point is not None
