@@ -70,3 +70,17 @@ class Progress:
             self._draw(time.perf_counter())
             sys.stderr.write("\n")
             sys.stderr.flush()
+
+
+def add_preset_argument(parser) -> None:
+    parser.add_argument("--preset", default=None,
+                        help="parameter preset name (see `badminton-track presets`) or a .json file")
+
+
+def params_from_args(args):
+    """The TrackerParams chosen by --preset (default preset otherwise)."""
+    from ..io.presets import load_preset
+    try:
+        return load_preset(getattr(args, "preset", None))
+    except INPUT_ERRORS as exc:
+        raise UserError(str(exc)) from None

@@ -1,0 +1,17 @@
+"""Courtside stereo-vision shuttlecock tracker for badminton robots.
+
+The public, Qt-free entry points::
+
+    from badminton_gui import StereoTracker, StereoRig
+    tracker = StereoTracker(StereoRig.load("calibration/rig.yaml"))
+    result = tracker.process(left_bgr, right_bgr, timestamp)
+"""
+
+from .core.params import TrackerParams
+from .core.rig import RigError, StereoRig
+from .core.tracker import StereoTracker
+from .core.types import CameraResult, Candidate, StereoFrame, TrackResult
+
+__all__ = ["StereoTracker", "StereoRig", "RigError", "TrackerParams", "TrackResult",
+           "CameraResult", "Candidate", "StereoFrame"]
+__version__ = "0.1.0"

@@ -1,0 +1,66 @@
+"""`badminton-track detect VIDEO -o OUT.csv`: one camera alone, TrackNet label format out."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from ..core.detector import CameraDetector
+from ..io.labels import write_point_labels
+from ..io.video import VideoFile
+from .common import INPUT_ERRORS, Progress, UserError, add_preset_argument, params_from_args
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("detect", help="detect the shuttle in one camera's video",
+                       description="Detect the shuttle in one video and write Frame,Visibility,X,Y (pixels).")
+    p.add_argument("video", help="input video file")
+    p.add_argument("-o", "--output", required=True, help="output CSV (TrackNet label format)")
+    add_preset_argument(p)
+    p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    params = params_from_args(args)
+    try:
+        video = VideoFile(args.video)
+    except INPUT_ERRORS as exc:
+        raise UserError(str(exc)) from None
+    detector = CameraDetector(params)
+    frames, visible, xy = [], [], []
+    progress = Progress(video.frame_count or None, "detect", force=False)
+    start = time.perf_counter()
+    i = 0
+    try:
+        while True:
+            frame = video.read()
+            if frame is None:
+                break
+            res = detector.process(frame, i / video.fps, keep_mask=False)
+            d = res.detection
+            frames.append(i)
+            visible.append(d is not None)
+            xy.append((d.x, d.y) if d else (0.0, 0.0))
+            i += 1
+            if not args.quiet:
+                progress.update(i)
+    finally:
+        video.close()
+        if not args.quiet:
+            progress.close()
+    if i == 0:
+        raise UserError(f"{args.video} holds no frames")
+    try:
+        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+        write_point_labels(args.output, frames, visible, xy)
+    except OSError as exc:
+        raise UserError(f"cannot write {args.output}: {exc.strerror or exc}") from None
+    elapsed = time.perf_counter() - start
+    if not args.quiet:
+        print(f"{i} frames, shuttle found in {sum(visible)} ({100 * sum(visible) / i:.1f} %), "
+              f"{i / elapsed:.1f} frames/s → {args.output}")
+    if video.frame_count and i < video.frame_count - 1:
+        print(f"warning: {args.video} ended after {i} of {video.frame_count} frames (truncated?)")
+    return 0

@@ -1,0 +1,72 @@
+"""`badminton-track eval PRED.csv LABELS.csv`: the five-outcome protocol of GUIDE §6."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from ..core.evaluation import DEFAULT_TOLERANCE, evaluate, tolerance_px
+from ..io.labels import CsvFormatError, read_point_labels
+from ..io.video import VideoFile
+from .common import INPUT_ERRORS, UserError
+
+STANDARD_WIDTHS = (512, 640, 1280, 1920, 2048, 2560, 3840)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("eval", help="score predictions against labels (TrackNet protocol)",
+                       description="Count TP/TN/FP1/FP2/FN and print accuracy, precision, recall, F1. "
+                                   "PRED may be `detect` output or `track` output (--camera).")
+    p.add_argument("pred", help="predictions CSV")
+    p.add_argument("labels", help="labels CSV (Frame,Visibility,X,Y)")
+    p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
+                   help="pixels at 512 px image width, scaled to the video width (default 4)")
+    p.add_argument("--width", type=int, default=None, help="image width in pixels")
+    p.add_argument("--video", default=None, help="read the image width from this video")
+    p.add_argument("--camera", choices=("left", "right"), default=None,
+                   help="for `track` output: which camera's columns to score")
+    p.set_defaults(func=run)
+
+
+def read_predictions(path: str, camera: str | None):
+    """Predictions as {frame: (visible, x, y)} from `detect` or `track` output."""
+    if camera is None:
+        try:
+            return read_point_labels(path).as_dict()
+        except CsvFormatError as exc:
+            if "VisL" in str(exc):
+                raise UserError(f"{path} is `track` output: add --camera left or --camera right") from None
+            raise
+    if camera == "left":
+        return read_point_labels(path, "Frame", "VisL", "XL", "YL").as_dict()
+    pred = read_point_labels(path, "FrameR", "VisR", "XR", "YR")
+    out: dict[int, tuple[bool, float, float]] = {}
+    for f, v, (x, y) in zip(pred.frames, pred.visible, pred.xy):
+        # A right frame paired with two left frames counts once, with its first result.
+        out.setdefault(int(f), (bool(v), float(x), float(y)))
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        labels = read_point_labels(args.labels)
+        pred = read_predictions(args.pred, args.camera)
+        width = args.width
+        if width is None and args.video:
+            width = VideoFile(args.video).width
+    except INPUT_ERRORS as exc:
+        raise UserError(str(exc)) from None
+    if width is None:
+        largest = np.nanmax(labels.xy[:, 0]) if labels.visible.any() else 0.0
+        width = next((w for w in STANDARD_WIDTHS if w > largest), STANDARD_WIDTHS[-1])
+        print(f"note: image width assumed {width} px (largest label X is {largest:.0f}); "
+              f"pass --width or --video to set it")
+    tol = tolerance_px(width, args.tolerance)
+    result = evaluate(pred, labels.as_dict(), tol)
+    print(f"frames {result.total}  tolerance {tol:.1f} px at width {width}")
+    print(result.summary())
+    if math.isnan(result.accuracy):
+        raise UserError("no labelled frames to score")
+    return 0

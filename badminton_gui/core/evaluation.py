@@ -1,0 +1,90 @@
+"""The five-outcome evaluation protocol of TrackNet (GUIDE §6), so figures compare with the literature.
+
+Why this file exists: `badminton-track eval`, the accuracy benchmark and the tests must count
+TP / TN / FP1 / FP2 / FN the same way. Every labelled frame is one outcome:
+TP (detected, labelled, within tolerance), FP1 (detected, labelled, too far), FP2 (detected, not
+labelled), FN (labelled, not detected), TN (neither). The tolerance is 4 px at 512 px width,
+scaled with the image width (10 px at 1280, 16 px at 2048).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+REFERENCE_WIDTH = 512.0
+DEFAULT_TOLERANCE = 4.0
+
+
+def tolerance_px(image_width: int, tolerance_at_512: float = DEFAULT_TOLERANCE) -> float:
+    return tolerance_at_512 * image_width / REFERENCE_WIDTH
+
+
+@dataclass(frozen=True, slots=True)
+class Outcomes:
+    tp: int = 0
+    tn: int = 0
+    fp1: int = 0
+    fp2: int = 0
+    fn: int = 0
+
+    @property
+    def total(self) -> int:
+        return self.tp + self.tn + self.fp1 + self.fp2 + self.fn
+
+    @property
+    def accuracy(self) -> float:
+        return (self.tp + self.tn) / self.total if self.total else float("nan")
+
+    @property
+    def precision(self) -> float:
+        d = self.tp + self.fp1 + self.fp2
+        return self.tp / d if d else float("nan")
+
+    @property
+    def recall(self) -> float:
+        d = self.tp + self.fn
+        return self.tp / d if d else float("nan")
+
+    @property
+    def f1(self) -> float:
+        p, r = self.precision, self.recall
+        return 2 * p * r / (p + r) if (p + r) > 0 else float("nan")
+
+    def __add__(self, other: "Outcomes") -> "Outcomes":
+        return Outcomes(self.tp + other.tp, self.tn + other.tn, self.fp1 + other.fp1,
+                        self.fp2 + other.fp2, self.fn + other.fn)
+
+    def summary(self) -> str:
+        return (f"TP {self.tp}  TN {self.tn}  FP1 {self.fp1}  FP2 {self.fp2}  FN {self.fn}  "
+                f"accuracy {self.accuracy:.4f}  precision {self.precision:.4f}  "
+                f"recall {self.recall:.4f}  F1 {self.f1:.4f}")
+
+
+def classify(pred_visible: np.ndarray, pred_xy: np.ndarray, label_visible: np.ndarray,
+             label_xy: np.ndarray, tolerance: float) -> np.ndarray:
+    """Per-frame outcome codes ('TP', 'TN', 'FP1', 'FP2', 'FN') for aligned arrays."""
+    pv = np.asarray(pred_visible, dtype=bool)
+    lv = np.asarray(label_visible, dtype=bool)
+    dist = np.hypot(*(np.asarray(pred_xy, float) - np.asarray(label_xy, float)).T)
+    out = np.full(len(pv), "TN", dtype="<U3")
+    out[pv & lv & (dist <= tolerance)] = "TP"
+    out[pv & lv & ~(dist <= tolerance)] = "FP1"
+    out[pv & ~lv] = "FP2"
+    out[~pv & lv] = "FN"
+    return out
+
+
+def evaluate(pred: dict[int, tuple[bool, float, float]], labels: dict[int, tuple[bool, float, float]],
+             tolerance: float) -> Outcomes:
+    """Count outcomes over the labelled frames; a labelled frame with no prediction is 'not detected'."""
+    frames = sorted(labels)
+    pv = np.array([pred.get(f, (False, np.nan, np.nan))[0] for f in frames], dtype=bool)
+    pxy = np.array([pred.get(f, (False, np.nan, np.nan))[1:] for f in frames], dtype=float).reshape(-1, 2)
+    lv = np.array([labels[f][0] for f in frames], dtype=bool)
+    lxy = np.array([labels[f][1:] for f in frames], dtype=float).reshape(-1, 2)
+    codes = classify(pv, pxy, lv, lxy, tolerance)
+    return Outcomes(tp=int((codes == "TP").sum()), tn=int((codes == "TN").sum()),
+                    fp1=int((codes == "FP1").sum()), fp2=int((codes == "FP2").sum()),
+                    fn=int((codes == "FN").sum()))

@@ -1,0 +1,176 @@
+"""The pure stereo tracker: a pair of frames in, a frozen :class:`TrackResult` out.
+
+Why this file exists: it is the one object that the GUI worker, the CLI and the tests all drive
+(GUIDE §2). It owns one :class:`CameraDetector` per camera, chooses a stereo-consistent pair of
+detections (epipolar check), triangulates, and hands the 3D point to the trajectory module for
+speed and landing prediction.
+
+Usage::
+
+    rig = StereoRig.load("calibration/rig.yaml")
+    tracker = StereoTracker(rig)
+    result = tracker.process(left_bgr, right_bgr, timestamp)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import cv2
+import numpy as np
+
+from .detector import CameraDetector
+from .params import TrackerParams
+from .rig import StereoRig
+from .types import REJECT_STEREO, CameraResult, Candidate, FlightInfo, TrackResult
+
+try:  # the trajectory module is optional at import time only while it is being built
+    from .trajectory import Trajectory
+except ImportError:  # pragma: no cover
+    Trajectory = None  # type: ignore[assignment]
+
+
+class StereoTracker:
+    """Tracks the shuttle with two calibrated cameras."""
+
+    def __init__(self, rig: StereoRig, params: TrackerParams | None = None,
+                 parallel: bool = True) -> None:
+        self.rig = rig
+        self.params = params or TrackerParams()
+        self.left = CameraDetector(self.params)
+        self.right = CameraDetector(self.params)
+        # OpenCV releases the GIL: the two cameras run side by side on two cores (GUIDE §4).
+        self._pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="camera") if parallel else None
+        self._trajectory = (Trajectory(self.params.trajectory, rig.has_court_pose)
+                            if Trajectory is not None else None)
+        self._last_point: tuple[float, np.ndarray] | None = None
+        self._speed: float | None = None
+        self._checked_size = False
+
+    # ---- configuration ---------------------------------------------------------------------
+    def set_params(self, params: TrackerParams) -> None:
+        """Apply a new parameter snapshot (the GUI sends whole snapshots, GUIDE §3.2)."""
+        self.params = params
+        self.left.set_params(params)
+        self.right.set_params(params)
+        if self._trajectory is not None and hasattr(self._trajectory, "set_params"):
+            self._trajectory.set_params(params.trajectory)
+
+    def reset(self) -> None:
+        self.left.reset()
+        self.right.reset()
+        if self._trajectory is not None:
+            self._trajectory.reset()
+        self._last_point = None
+        self._speed = None
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+
+    @property
+    def trajectory(self):
+        """The trajectory model (current flight, predicted path), or None."""
+        return self._trajectory
+
+    # ---- the pipeline ----------------------------------------------------------------------
+    def process(self, left_bgr: np.ndarray, right_bgr: np.ndarray, timestamp: float,
+                index: int = -1, index_right: int = -1, keep_masks: bool = True) -> TrackResult:
+        start = time.perf_counter()
+        if not self._checked_size:
+            h, w = left_bgr.shape[:2]
+            self.rig.check_image_size(w, h, "the left frames")
+            hr, wr = right_bgr.shape[:2]
+            self.rig.check_image_size(wr, hr, "the right frames")
+            self._checked_size = True
+
+        if self._pool is not None:
+            fut = self._pool.submit(self.right.find_candidates, right_bgr, timestamp, keep_masks)
+            res_left = self.left.find_candidates(left_bgr, timestamp, keep_masks)
+            res_right = fut.result()
+        else:
+            res_left = self.left.find_candidates(left_bgr, timestamp, keep_masks)
+            res_right = self.right.find_candidates(right_bgr, timestamp, keep_masks)
+
+        det_left, det_right, point_left, epi = self._choose_pair(res_left, res_right)
+        if point_left is None:
+            # No stereo pair: each camera keeps its own best guess for the 2D readout.
+            det_left = self.left.choose(res_left.candidates)
+            det_right = self.right.choose(res_right.candidates)
+        self.left.commit(det_left, timestamp, res_left.candidates)
+        self.right.commit(det_right, timestamp, res_right.candidates)
+        res_left = CameraDetector.finalise(res_left, det_left)
+        res_right = CameraDetector.finalise(res_right, det_right)
+
+        point_out = None
+        distance = None
+        if point_left is not None:
+            distance = float(np.linalg.norm(point_left))
+            point_out = tuple(float(v) for v in self.rig.to_output(point_left)[0])
+
+        flight = FlightInfo()
+        speed = None
+        if self._trajectory is not None:
+            flight = self._trajectory.update(timestamp, point_out)
+            if flight.velocity is not None:
+                speed = float(math.sqrt(sum(v * v for v in flight.velocity)))
+        else:
+            speed = self._naive_speed(timestamp, point_out)
+
+        return TrackResult(
+            index=index, timestamp=timestamp, left=res_left, right=res_right, point=point_out,
+            in_court_frame=self.rig.has_court_pose, distance=distance, speed=speed,
+            epipolar_error=epi, index_right=index_right,
+            processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
+
+    def _choose_pair(self, res_left: CameraResult, res_right: CameraResult
+                     ) -> tuple[Candidate | None, Candidate | None, np.ndarray | None, float | None]:
+        """The most plausible stereo-consistent pair of surviving candidates, if any."""
+        sp = self.params.stereo
+        k = int(sp.max_candidates)
+        left = sorted((c for c in res_left.candidates if c.rejected_by is None),
+                      key=lambda c: -c.score)[:k]
+        right = sorted((c for c in res_right.candidates if c.rejected_by is None),
+                       key=lambda c: -c.score)[:k]
+        if not left or not right:
+            return None, None, None, None
+        pl = np.array([[c.x, c.y] for c in left])
+        pr = np.array([[c.x, c.y] for c in right])
+        epi = self.rig.epipolar_errors(pl, pr)
+        best = None
+        order = np.argsort(epi, axis=None)
+        for flat in order:
+            i, j = np.unravel_index(flat, epi.shape)
+            if epi[i, j] > sp.max_epipolar_error:
+                break
+            point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
+            dist = float(np.linalg.norm(point))
+            depth_ok = point[2] > 0 and self.rig.depth(1, self.rig.to_output(point))[0] > 0
+            if not depth_ok or not (sp.min_distance <= dist <= sp.max_distance):
+                continue
+            # Prefer shuttle-like blobs; the epipolar error breaks near ties.
+            merit = left[i].score + right[j].score - epi[i, j] / max(sp.max_epipolar_error, 1e-6)
+            if best is None or merit > best[0]:
+                best = (merit, i, j, point, float(epi[i, j]))
+        if best is None:
+            return None, None, None, None
+        _, i, j, point, err = best
+        return left[i], right[j], point, err
+
+    def _naive_speed(self, t: float, point) -> float | None:
+        if point is None:
+            return self._speed
+        p = np.asarray(point)
+        if self._last_point is not None and t - self._last_point[0] > 1e-6:
+            inst = float(np.linalg.norm(p - self._last_point[1]) / (t - self._last_point[0]))
+            self._speed = inst if self._speed is None else 0.5 * inst + 0.5 * self._speed
+        self._last_point = (t, p)
+        return self._speed
+
+
+def configure_opencv_threads() -> None:
+    """One OpenCV thread per camera worker: a pool on top of OpenCV's own threads is slower."""
+    cv2.setNumThreads(1)
