@@ -21,6 +21,9 @@ import cv2
 import numpy as np
 
 
+_UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-12)
+
+
 class RigError(ValueError):
     """A rig file that cannot be read, or one that does not fit the frames it is used on."""
 
@@ -72,9 +75,10 @@ class StereoRig:
             raise RigError(f"rig file not found: {path}")
         try:
             fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-        except cv2.error as exc:
-            raise RigError(f"rig file {path} is not OpenCV FileStorage YAML/XML: "
-                           f"{str(exc).strip().splitlines()[-1]}") from None
+        except (cv2.error, SystemError) as exc:
+            # OpenCV's parser raises cv2.error, or a SystemError wrapping one, on garbage.
+            detail = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
+            raise RigError(f"rig file {path} is not OpenCV FileStorage YAML/XML ({detail})") from None
         if not fs.isOpened():
             raise RigError(f"rig file {path} cannot be opened as OpenCV FileStorage")
         try:
@@ -182,7 +186,11 @@ class StereoRig:
         m, d = (self.M1, self.D1) if camera == 0 else (self.M2, self.D2)
         if len(pts) == 0:
             return np.zeros((0, 2))
-        return cv2.undistortPoints(pts, m, d).reshape(-1, 2)
+        if not np.any(d):
+            return cv2.undistortPoints(pts, m, d).reshape(-1, 2)
+        # More iterations than cv2.undistortPoints' default: strong barrel lenses (the NYCU rig)
+        # otherwise leave micrometre-level errors that add up in triangulation.
+        return cv2.undistortPoints(pts, m, d, None, None, None, _UNDISTORT_CRITERIA).reshape(-1, 2)
 
     def undistort_pixels(self, camera: int, pts) -> np.ndarray:
         """Pixel points → undistorted pixel points of the same camera matrix."""

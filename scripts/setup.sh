@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Creates/refreshes the project's virtualenv (.venv) with the pinned packages, and on Debian as
+# root installs the few system libraries Qt needs for windows and Xvfb (GUIDE §4).
+# Sourced or run by scripts/start-demo and scripts/run-tests; safe to run again (it is quick
+# when nothing changed: a stamp file records the pyproject.toml it installed).
+set -euo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$repo"
+
+want_system=(libgl1 libegl1 libglib2.0-0 libfontconfig1 libdbus-1-3 libxkbcommon0
+             xvfb xauth libxcb-cursor0 libxcb-icccm4 libxcb-image0 libxcb-keysyms1
+             libxcb-render-util0 libxcb-shape0 libxcb-xkb1 libxkbcommon-x11-0)
+if command -v dpkg-query >/dev/null 2>&1; then
+  missing=()
+  for pkg in "${want_system[@]}"; do
+    dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
+  done
+  if ((${#missing[@]})); then
+    if [ "$(id -u)" = 0 ]; then
+      echo "setup: installing system packages: ${missing[*]}"
+      export DEBIAN_FRONTEND=noninteractive
+      apt-get update -qq >/dev/null
+      apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+    else
+      echo "setup: missing system packages (install them with sudo apt-get install): ${missing[*]}" >&2
+    fi
+  fi
+fi
+
+python=""
+for candidate in python3.11 python3; do
+  if command -v "$candidate" >/dev/null 2>&1 &&
+     "$candidate" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))' 2>/dev/null; then
+    python="$candidate"; break
+  fi
+done
+if [ -z "$python" ]; then
+  echo "setup: Python 3.11 is required (python3.11 not found)" >&2
+  exit 1
+fi
+
+if [ ! -x .venv/bin/python ]; then
+  echo "setup: creating .venv with $($python --version)"
+  "$python" -m venv .venv
+fi
+stamp=.venv/.installed-pyproject
+if ! cmp -s pyproject.toml "$stamp" 2>/dev/null; then
+  echo "setup: installing pinned packages into .venv (first run takes a minute)"
+  .venv/bin/python -m pip install -q --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
+  .venv/bin/python -m pip install -q -e ".[test]" 2>&1 | grep -v "^WARNING: Location" || true
+  .venv/bin/python -c "import badminton_gui, cv2, PySide6, pyqtgraph, serial" 
+  cp pyproject.toml "$stamp"
+fi
