@@ -1,0 +1,565 @@
+"""From 3D points to a flight: smoothing, speed, shot segmentation and landing prediction.
+
+Why this file exists: the stereo tracker stops at one 3D point per frame pair; the robot needs the
+shuttle's velocity and, above all, *where and when it will land*, early and exact. This module
+turns the stream of (noisy, sometimes wrong, sometimes missing) points into that, once per frame,
+within a budget of about a millisecond (it runs inside the tracker at 120 fps).
+
+How (court frame, Z up):
+
+* Each shot is followed by an extended Kalman filter on the state ``(position, velocity, k)``
+  of the quadratic-drag model of ``core/physics.py``, ``a = g − k |v| v`` with ``k = 1/L``.
+  The aerodynamic length is part of the state, so every shot *fits* its own L; the filter is the
+  recursive form of the Gauss–Newton fit of (p0, v0, L) to the shot's points (one linearisation
+  per point around the current estimate, exact for the linear measurement), at a fraction of the
+  cost of refitting the whole shot every frame. L is kept inside ``physics.AERO_LENGTH_BOUNDS``.
+* The session prior on L: when a shot ends, the information its points carried about L (its
+  posterior minus the prior it started with) is added to a session estimate, which is the prior of
+  the next shot. A variance floor keeps it adaptable (feathers wear, shuttles are changed).
+* Outliers: a point whose innovation is beyond ``outlier_sigma`` standard deviations (or farther
+  than ``outlier_distance``) is not used. Rejected points seed a *tentative* track; when
+  ``CONFIRM_POINTS`` consecutive rejected points agree with each other, the tentative track
+  replaces the flight. If its velocity differs from the flight's by more than
+  ``hit_acceleration`` × the time step, that is a hit: a new shot starts. Otherwise the flight was
+  only re-synchronised (model mismatch) and keeps its shot number and its L.
+* A flight ends when the shuttle reaches the floor, or after ``max_gap`` seconds without a point.
+* The landing point is the drag model integrated (RK4, adaptive step) from the current state down
+  to Z = 0; its uncertainty is the filter covariance carried along that path by the linearised
+  dynamics (state-transition matrices) and projected onto the floor. The in/out call uses
+  ``court.is_in``.
+
+Without a court pose (points in the left-camera frame) gravity's direction is unknown, so there is
+no drag model: velocity comes from a local quadratic fit of the last few points, and landing
+predictions are withheld with a reason.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import court, physics
+from .params import TrajectoryParams
+from .types import FlightInfo, LandingPrediction
+
+NO_COURT_POSE = "no court pose: calibrate the court pose to get landing predictions"
+CONFIRM_POINTS = 4          # consecutive agreeing points that start (or restart) a flight
+MIN_FLIGHT_SPEED = 1.0      # m/s: slower "tracks" are shuttles lying on the floor or held in a hand
+LANDED_HEIGHT = 0.03        # m: a flight whose estimate is this low has landed (cork radius ≈ 1.3 cm)
+MAX_FLIGHT_TIME = 6.0       # s: the landing search stops here
+K_MIN = 1.0 / physics.AERO_LENGTH_BOUNDS[1]
+K_MAX = 1.0 / physics.AERO_LENGTH_BOUNDS[0]
+_G = physics.GRAVITY
+_I7 = np.eye(7)
+
+
+# ---------------------------------------------------------------------------------------------
+# The drag model in plain floats: per-frame work on 3-vectors is several times faster this way
+# than with numpy arrays (call overhead dominates at this size).
+# ---------------------------------------------------------------------------------------------
+def _rk4(px, py, pz, vx, vy, vz, k, h):
+    """One RK4 step of a = g − k|v|v; returns the new (px, py, pz, vx, vy, vz)."""
+    s1 = math.sqrt(vx * vx + vy * vy + vz * vz) * k
+    a1x, a1y, a1z = -s1 * vx, -s1 * vy, -_G - s1 * vz
+    hh = 0.5 * h
+    wx, wy, wz = vx + hh * a1x, vy + hh * a1y, vz + hh * a1z
+    s2 = math.sqrt(wx * wx + wy * wy + wz * wz) * k
+    a2x, a2y, a2z = -s2 * wx, -s2 * wy, -_G - s2 * wz
+    ux, uy, uz = vx + hh * a2x, vy + hh * a2y, vz + hh * a2z
+    s3 = math.sqrt(ux * ux + uy * uy + uz * uz) * k
+    a3x, a3y, a3z = -s3 * ux, -s3 * uy, -_G - s3 * uz
+    qx, qy, qz = vx + h * a3x, vy + h * a3y, vz + h * a3z
+    s4 = math.sqrt(qx * qx + qy * qy + qz * qz) * k
+    a4x, a4y, a4z = -s4 * qx, -s4 * qy, -_G - s4 * qz
+    h6 = h / 6.0
+    return (px + h6 * (vx + 2 * wx + 2 * ux + qx),
+            py + h6 * (vy + 2 * wy + 2 * uy + qy),
+            pz + h6 * (vz + 2 * wz + 2 * uz + qz),
+            vx + h6 * (a1x + 2 * a2x + 2 * a3x + a4x),
+            vy + h6 * (a1y + 2 * a2y + 2 * a3y + a4y),
+            vz + h6 * (a1z + 2 * a2z + 2 * a3z + a4z))
+
+
+def _step_size(vx, vy, vz, k, h_max):
+    """A step of a tenth of the drag time constant 1/(k|v|), at most h_max (RK4 is then exact to
+    well under a millimetre over a whole flight)."""
+    s = math.sqrt(vx * vx + vy * vy + vz * vz) * k
+    return h_max if s * h_max <= 0.12 else 0.12 / s
+
+
+def _propagate(state, k, duration, h_max=0.01):
+    """The state ``(px, py, pz, vx, vy, vz)`` after ``duration`` seconds (may be negative)."""
+    if duration == 0.0:
+        return state
+    sign = 1.0 if duration > 0 else -1.0
+    remaining = abs(duration)
+    s = state
+    while remaining > 1e-12:
+        h = min(_step_size(s[3], s[4], s[5], k, h_max), remaining)
+        s = _rk4(*s, k, sign * h)
+        remaining -= h
+    return s
+
+
+def _jacobians(vel: np.ndarray, k: np.ndarray | float) -> np.ndarray:
+    """Continuous-time Jacobians F (n, 7, 7) of d(p, v, k)/dt at velocities ``vel`` (n, 3)."""
+    vel = np.atleast_2d(vel)
+    n = vel.shape[0]
+    speed = np.maximum(np.linalg.norm(vel, axis=1), 1e-9)
+    k = np.broadcast_to(np.asarray(k, dtype=float), (n,))
+    f = np.zeros((n, 7, 7))
+    f[:, 0, 3] = f[:, 1, 4] = f[:, 2, 5] = 1.0
+    # ∂a/∂v = −k (|v| I + v vᵀ/|v|);  ∂a/∂k = −|v| v
+    f[:, 3:6, 3:6] = -(k[:, None, None] * (speed[:, None, None] * np.eye(3)
+                                            + vel[:, :, None] * vel[:, None, :] / speed[:, None, None]))
+    f[:, 3:6, 6] = -speed[:, None] * vel
+    return f
+
+
+def _transitions(vel: np.ndarray, k: float, steps: np.ndarray) -> np.ndarray:
+    """Discrete transition matrices I + FΔ + (FΔ)²/2 for each (velocity, step) pair, (n, 7, 7)."""
+    fd = _jacobians(vel, k) * steps[:, None, None]
+    return _I7 + fd + 0.5 * (fd @ fd)
+
+
+def _chain(phis: np.ndarray) -> np.ndarray:
+    """Product Φn ··· Φ2 Φ1 of a stack of matrices by pairwise (tree) reduction."""
+    while phis.shape[0] > 1:
+        if phis.shape[0] % 2:
+            phis = np.concatenate([phis, _I7[None]], axis=0)
+        phis = phis[1::2] @ phis[0::2]
+    return phis[0]
+
+
+# ---------------------------------------------------------------------------------------------
+@dataclass(slots=True)
+class _Filter:
+    """Extended Kalman filter on (p, v, k) for one flight (mutable, private)."""
+
+    x: np.ndarray          # (7,) state at time t
+    P: np.ndarray          # (7, 7) covariance
+    t: float
+    k_prior: tuple[float, float]   # (mean, variance) of k when the filter started
+    points: list           # accepted measurements (t, x, y, z)
+    start_t: float
+
+    @classmethod
+    def from_two_points(cls, t1, p1, t2, p2, sigma, k_prior):
+        dt = t2 - t1
+        p1 = np.asarray(p1, dtype=float)
+        p2 = np.asarray(p2, dtype=float)
+        v_mid = (p2 - p1) / dt
+        k = k_prior[0]
+        # The chord gives the velocity at mid-interval; carry it to t2 with the model.
+        speed = float(np.linalg.norm(v_mid))
+        acc = physics.GRAVITY_VECTOR - k * speed * v_mid
+        v2 = v_mid + acc * (0.5 * dt)
+        x = np.concatenate([p2, v2, [k]])
+        P = np.zeros((7, 7))
+        var_p = sigma * sigma
+        # Velocity: chord noise, the model's change of acceleration over the interval, and the
+        # unknown k (a smash decelerates at ~2000 m/s²) — generous, the next points settle it.
+        var_v = (2.0 * var_p / (dt * dt) + (0.5 * float(np.linalg.norm(acc)) * dt) ** 2
+                 + (0.5 * speed * speed * dt) ** 2 * k_prior[1] + 0.25)
+        P[0:3, 0:3] = np.eye(3) * var_p
+        P[3:6, 3:6] = np.eye(3) * var_v
+        P[0:3, 3:6] = P[3:6, 0:3] = np.eye(3) * (var_p / dt)
+        P[6, 6] = k_prior[1]
+        return cls(x=x, P=P, t=t2, k_prior=k_prior,
+                   points=[(t1, *p1.tolist()), (t2, *p2.tolist())], start_t=t1)
+
+    # ---- prediction -----------------------------------------------------------------------
+    def predicted(self, t: float) -> tuple[float, float, float, float, float, float]:
+        return _propagate(tuple(self.x[:6].tolist()), float(self.x[6]), t - self.t)
+
+    def predict(self, t: float, accel_noise: float) -> None:
+        """Move the state and covariance to time t."""
+        dt = t - self.t
+        if dt <= 0.0:
+            return
+        k = float(self.x[6])
+        s = tuple(self.x[:6].tolist())
+        # Sub-steps short enough for the linearisation (a smash changes speed fast).
+        vels, steps = [], []
+        remaining = dt
+        while remaining > 1e-12:
+            h = min(_step_size(s[3], s[4], s[5], k, 0.01), remaining)
+            vels.append(s[3:6])
+            steps.append(h)
+            s = _rk4(*s, k, h)
+            remaining -= h
+        phi = _chain(_transitions(np.asarray(vels), k, np.asarray(steps)))
+        self.x = np.array([*s, k])
+        P = phi @ self.P @ phi.T
+        if accel_noise > 0.0:
+            # White acceleration noise (model mismatch: flipping after a hit, spin, air currents).
+            q = accel_noise * accel_noise
+            P[0:3, 0:3] += np.eye(3) * (q * dt ** 3 / 3.0)
+            P[0:3, 3:6] += np.eye(3) * (q * dt ** 2 / 2.0)
+            P[3:6, 0:3] += np.eye(3) * (q * dt ** 2 / 2.0)
+            P[3:6, 3:6] += np.eye(3) * (q * dt)
+        self.P = P
+        self.t = t
+
+    # ---- measurement ----------------------------------------------------------------------
+    def innovation(self, z: np.ndarray, sigma: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """(innovation, its covariance S, squared Mahalanobis distance) of a point at self.t."""
+        nu = z - self.x[:3]
+        S = self.P[0:3, 0:3] + np.eye(3) * (sigma * sigma)
+        d2 = float(nu @ np.linalg.solve(S, nu))
+        return nu, S, d2
+
+    def correct(self, t: float, z: np.ndarray, nu: np.ndarray, S: np.ndarray, sigma: float) -> None:
+        PHt = self.P[:, 0:3]
+        K = np.linalg.solve(S, PHt.T).T          # (7, 3), S is symmetric
+        self.x = self.x + K @ nu
+        IKH = _I7.copy()
+        IKH[:, 0:3] -= K
+        # Joseph form: stays positive definite whatever the rounding.
+        self.P = IKH @ self.P @ IKH.T + (sigma * sigma) * (K @ K.T)
+        self.x[6] = min(max(self.x[6], K_MIN), K_MAX)
+        self.points.append((t, float(z[0]), float(z[1]), float(z[2])))
+
+    @property
+    def speed(self) -> float:
+        return float(np.linalg.norm(self.x[3:6]))
+
+
+@dataclass(frozen=True, slots=True)
+class _Landing:
+    """A landing computed from a filter state (cached until the next accepted point)."""
+
+    prediction: LandingPrediction
+    path: np.ndarray           # (M, 3) predicted positions from now to the floor
+
+
+class Trajectory:
+    """Per-frame flight model: call :meth:`update` once per frame pair with the 3D point or None.
+
+    ``court_frame`` says whether the points are in court coordinates (Z up); without it there are
+    no landing predictions (see the module docstring).
+    """
+
+    def __init__(self, params: TrajectoryParams, court_frame: bool) -> None:
+        self.params = params
+        self.court_frame = bool(court_frame)
+        self.reset()
+
+    # ---- configuration ---------------------------------------------------------------------
+    def set_params(self, params: TrajectoryParams) -> None:
+        """Apply a new parameter snapshot; the current flight continues."""
+        self.params = params
+
+    def reset(self) -> None:
+        """Forget every flight and the session's estimate of L."""
+        k0 = 1.0 / physics.DEFAULT_AERO_LENGTH
+        sigma_k0 = self._sigma_k(self.params.aero_length_sigma)
+        self._session_k = (k0, sigma_k0 * sigma_k0)
+        self._flight: _Filter | None = None
+        self._tentative: _Filter | None = None
+        self._seed: tuple[float, np.ndarray] | None = None  # last unexplained point
+        self._shot_index = -1
+        self._peak_speed: float | None = None
+        self._launch_speed: float | None = None
+        self._landing: _Landing | None = None
+        self._last_t: float | None = None
+        self._ended_points: np.ndarray | None = None
+        self._recent: list[tuple[float, float, float, float]] = []   # camera-frame mode
+        self._velocity_no_model: tuple[float, float, float] | None = None
+        self.shots_ended = 0
+
+    # ---- read-only views for plots and tests ------------------------------------------------
+    def current_flight(self) -> np.ndarray:
+        """Accepted points of the current (or just ended) shot, (N, 4): t, x, y, z."""
+        if not self.court_frame:
+            return np.asarray(self._recent, dtype=float).reshape(-1, 4)
+        if self._flight is not None:
+            return np.asarray(self._flight.points, dtype=float).reshape(-1, 4)
+        if self._ended_points is not None:
+            return self._ended_points
+        return np.zeros((0, 4))
+
+    def predicted_path(self) -> np.ndarray:
+        """Predicted positions from the current state to the floor, (M, 3) (empty if none)."""
+        if self._landing is None or self._flight is None:
+            return np.zeros((0, 3))
+        return self._landing.path
+
+    @property
+    def session_aero_length(self) -> float:
+        """The session's estimate of L (the prior of the next shot), m."""
+        return 1.0 / self._session_k[0]
+
+    @property
+    def current_aero_length(self) -> float | None:
+        """The current shot's fitted L, m, or None without a flight."""
+        return None if self._flight is None else 1.0 / float(self._flight.x[6])
+
+    # ---- the per-frame entry point ------------------------------------------------------------
+    def update(self, t: float, point: tuple | None) -> FlightInfo:
+        """Feed one frame pair's 3D point (or None) at time t (s); returns the flight state."""
+        if self._last_t is not None and t < self._last_t - 1e-9:
+            self.reset()        # the clock went back: a new video / replay
+        self._last_t = t
+        if not self.court_frame:
+            return self._update_no_model(t, point)
+
+        p = self.params
+        if self._flight is not None and t - self._flight.t > p.max_gap:
+            self._end_flight()
+        if self._tentative is not None and t - self._tentative.t > p.max_gap:
+            self._tentative = None
+        if self._seed is not None and t - self._seed[0] > p.max_gap:
+            self._seed = None
+
+        accepted = False
+        if point is not None:
+            z = np.asarray(point, dtype=float)
+            if np.all(np.isfinite(z)):
+                accepted = self._feed(t, z)
+
+        return self._info(t, accepted)
+
+    # ---- court-frame machinery ---------------------------------------------------------------
+    def _feed(self, t: float, z: np.ndarray) -> bool:
+        """Use one point; True when it extended the current flight."""
+        p = self.params
+        sigma = p.measurement_noise
+        flight = self._flight
+        if flight is not None and t > flight.t:
+            # Gate against a copy of the prediction: a rejected point must leave the flight as it was.
+            saved = (flight.x, flight.P, flight.t)
+            flight.predict(t, p.model_noise)
+            nu, S, d2 = flight.innovation(z, sigma)
+            if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
+                flight.correct(t, z, nu, S, sigma)
+                self._after_flight_update()
+                self._tentative = None
+                self._seed = None
+                return True
+            flight.x, flight.P, flight.t = saved
+        self._feed_tentative(t, z)
+        return self._flight is not None and self._flight.t == t
+
+    def _feed_tentative(self, t: float, z: np.ndarray) -> None:
+        """A point the flight could not explain: grow (or restart) the tentative track."""
+        p = self.params
+        sigma = p.measurement_noise
+        tent = self._tentative
+        if tent is not None and t > tent.t:
+            saved = (tent.x, tent.P, tent.t)
+            tent.predict(t, p.model_noise)
+            nu, S, d2 = tent.innovation(z, sigma)
+            if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
+                tent.correct(t, z, nu, S, sigma)
+                if len(tent.points) >= CONFIRM_POINTS:
+                    self._promote(tent)
+                return
+            tent.x, tent.P, tent.t = saved
+        # Start a tentative track from the previous unexplained point and this one.
+        if self._seed is not None and t > self._seed[0]:
+            t0, z0 = self._seed
+            self._tentative = _Filter.from_two_points(t0, z0, t, z, sigma, self._session_k)
+        self._seed = (t, z)
+
+    def _promote(self, tent: _Filter) -> None:
+        """The tentative track becomes the flight: a new shot, or a re-synchronised one."""
+        if tent.speed < MIN_FLIGHT_SPEED:
+            return      # a shuttle lying on the floor or held in a hand: not a flight
+        old = self._flight
+        new_shot = True
+        if old is not None:
+            t_first = tent.points[0][0]
+            old_v = np.asarray(old.predicted(t_first)[3:6])
+            new_v = np.asarray(_propagate(tuple(tent.x[:6].tolist()), float(tent.x[6]),
+                                          t_first - tent.t)[3:6])
+            frame_dt = max(t_first - old.t, 1e-3)
+            new_shot = float(np.linalg.norm(new_v - old_v)) / frame_dt >= self.params.hit_acceleration
+            if not new_shot:
+                # Same shot, the model had drifted: keep what the shot knew about L.
+                tent.x[6] = old.x[6]
+                tent.P[6, :] = tent.P[:, 6] = 0.0
+                tent.P[6, 6] = old.P[6, 6]
+                tent.k_prior = old.k_prior
+                tent.points = old.points + tent.points
+                tent.start_t = old.start_t
+            else:
+                self._end_flight()
+        self._flight = tent
+        self._tentative = None
+        self._seed = None
+        if new_shot:
+            self._shot_index += 1
+            self._peak_speed = None
+            self._launch_speed = None
+        self._after_flight_update()
+
+    def _after_flight_update(self) -> None:
+        """Bookkeeping after the flight took a point: landing, peak speed, end on the floor."""
+        f = self._flight
+        assert f is not None
+        n = len(f.points)
+        speed = f.speed
+        if n >= 3:
+            self._peak_speed = speed if self._peak_speed is None else max(self._peak_speed, speed)
+        # The launch speed: the current state carried back to the shot's first point. Cheap while
+        # the shot is young, and by then the estimate is as good as it gets for fast shots.
+        if n <= 3 * self.params.min_points:
+            back = _propagate(tuple(f.x[:6].tolist()), float(f.x[6]), f.start_t - f.t)
+            self._launch_speed = math.sqrt(back[3] ** 2 + back[4] ** 2 + back[5] ** 2)
+        if f.x[2] <= LANDED_HEIGHT and f.x[5] <= 0.0:
+            self._landing = self._compute_landing(f) if n >= self.params.min_points else None
+            self._end_flight(keep_landing=True)
+            return
+        self._landing = self._compute_landing(f) if n >= self.params.min_points else None
+
+    def _end_flight(self, keep_landing: bool = False) -> None:
+        """Close the current shot and fold what it learnt about L into the session prior."""
+        f = self._flight
+        if f is None:
+            return
+        self._ended_points = np.asarray(f.points, dtype=float).reshape(-1, 4)
+        k_post, var_post = float(f.x[6]), float(f.P[6, 6])
+        k_pri, var_pri = f.k_prior
+        # Information the shot's own points carried about k = posterior − prior information.
+        info = 1.0 / max(var_post, 1e-12) - 1.0 / max(var_pri, 1e-12)
+        if info > 1e-6 and K_MIN < k_post < K_MAX:
+            k_shot = (k_post / var_post - k_pri / var_pri) / info
+            if K_MIN <= k_shot <= K_MAX:
+                s_k, s_var = self._session_k
+                new_info = 1.0 / s_var + info
+                new_k = (s_k / s_var + k_shot * info) / new_info
+                floor = self._sigma_k(self.params.aero_length_floor, 1.0 / new_k) ** 2
+                self._session_k = (new_k, max(1.0 / new_info, floor))
+        self._flight = None
+        self.shots_ended += 1
+        if not keep_landing:
+            self._landing = None
+
+    def _sigma_k(self, sigma_length: float, length: float = physics.DEFAULT_AERO_LENGTH) -> float:
+        """σ of k = 1/L for a σ of L (first order)."""
+        return sigma_length / (length * length)
+
+    def _compute_landing(self, f: _Filter) -> _Landing:
+        """Integrate the model to the floor and carry the covariance along (module docstring)."""
+        k = float(f.x[6])
+        s = tuple(f.x[:6].tolist())
+        path = [s[:3]]
+        vels, steps = [], []
+        elapsed = 0.0
+        if s[2] > 0.0:
+            while elapsed < MAX_FLIGHT_TIME:
+                h = _step_size(s[3], s[4], s[5], k, 0.025)
+                nxt = _rk4(*s, k, h)
+                if nxt[2] <= 0.0:
+                    # Land exactly: two secant refinements of the last step's length.
+                    lo, hi, z_lo, z_hi = 0.0, h, s[2], nxt[2]
+                    for _ in range(2):
+                        frac = lo + (hi - lo) * z_lo / max(z_lo - z_hi, 1e-12)
+                        trial = _rk4(*s, k, frac)
+                        if trial[2] > 0.0:
+                            lo, z_lo = frac, trial[2]
+                        else:
+                            hi, z_hi = frac, trial[2]
+                    h = lo + (hi - lo) * z_lo / max(z_lo - z_hi, 1e-12)
+                    nxt = _rk4(*s, k, h)
+                    vels.append(s[3:6])
+                    steps.append(h)
+                    elapsed += h
+                    s = nxt
+                    path.append(s[:3])
+                    break
+                vels.append(s[3:6])
+                steps.append(h)
+                elapsed += h
+                s = nxt
+                path.append(s[:3])
+        x_land, y_land = s[0], s[1]
+        # Uncertainty: δ(landing) = [I2, −v_xy/v_z] · Φ[0:3, :] δstate (moving along the path to Z=0).
+        if steps:
+            phi = _chain(_transitions(np.asarray(vels), k, np.asarray(steps)))
+        else:
+            phi = _I7
+        vz = s[5] if s[5] < -1e-3 else -1e-3
+        J = np.zeros((2, 3))
+        J[0, 0] = J[1, 1] = 1.0
+        J[0, 2] = -s[3] / vz
+        J[1, 2] = -s[4] / vz
+        Jx = J @ phi[0:3, :]
+        cov = Jx @ f.P @ Jx.T
+        radius = math.sqrt(max(float(cov[0, 0] + cov[1, 1]), 0.0))
+        call = "in" if court.is_in(x_land, y_land, self.params.doubles) else "out"
+        pred = LandingPrediction(x=float(x_land), y=float(y_land), t=f.t + elapsed, radius=radius,
+                                 call=call, aero_length=1.0 / k)
+        return _Landing(pred, np.asarray(path, dtype=float))
+
+    def _info(self, t: float, accepted: bool) -> FlightInfo:
+        f = self._flight
+        if f is None:
+            reason = "no shuttle in flight"
+            pred = self._landing.prediction if self._landing is not None else None
+            return FlightInfo(shot_index=self._shot_index, velocity=None,
+                              peak_speed=self._peak_speed_value(), prediction=pred,
+                              withheld_reason="" if pred is not None else reason,
+                              in_flight=False)
+        if accepted or t <= f.t:
+            vel = tuple(float(v) for v in f.x[3:6])
+        else:
+            vel = tuple(float(v) for v in f.predicted(t)[3:6])   # coasting through a short gap
+        pred = self._landing.prediction if self._landing is not None else None
+        reason = ""
+        if pred is None:
+            reason = f"collecting points: {len(f.points)}/{self.params.min_points}"
+        return FlightInfo(shot_index=self._shot_index, velocity=vel,
+                          peak_speed=self._peak_speed_value(), prediction=pred,
+                          withheld_reason=reason, in_flight=True)
+
+    def _peak_speed_value(self) -> float | None:
+        values = [v for v in (self._peak_speed, self._launch_speed) if v is not None]
+        return max(values) if values else None
+
+    # ---- without a court pose -----------------------------------------------------------------
+    def _update_no_model(self, t: float, point: tuple | None) -> FlightInfo:
+        """Local quadratic fit of the last few points: velocity only (gravity's direction unknown)."""
+        p = self.params
+        recent = self._recent
+        if recent and t - recent[-1][0] > p.max_gap:
+            recent.clear()
+            self._velocity_no_model = None
+        accepted = False
+        if point is not None and all(math.isfinite(c) for c in point):
+            z = np.asarray(point, dtype=float)
+            if len(recent) >= 3:
+                pos, _ = self._poly_fit(recent[-8:], t)
+                accepted = float(np.linalg.norm(z - pos)) <= p.outlier_distance
+                if not accepted:
+                    self._seed_no_model = getattr(self, "_seed_no_model", 0) + 1
+                    if self._seed_no_model >= CONFIRM_POINTS:   # the track has really moved on
+                        recent.clear()
+                        accepted = True
+            else:
+                accepted = True
+            if accepted:
+                self._seed_no_model = 0
+                if not recent:
+                    self._shot_index += 1
+                recent.append((t, float(z[0]), float(z[1]), float(z[2])))
+                del recent[:-64]
+                if len(recent) >= 3:
+                    _, vel = self._poly_fit(recent[-8:], t)
+                    self._velocity_no_model = tuple(float(v) for v in vel)
+        vel = self._velocity_no_model if (accepted or (recent and t - recent[-1][0] <= p.max_gap)) else None
+        return FlightInfo(shot_index=self._shot_index, velocity=vel, peak_speed=None,
+                          prediction=None, withheld_reason=NO_COURT_POSE, in_flight=bool(recent))
+
+    @staticmethod
+    def _poly_fit(points: list, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Position and velocity at t of a least-squares quadratic (linear if < 4 points)."""
+        arr = np.asarray(points, dtype=float)
+        tau = arr[:, 0] - t
+        degree = 2 if len(arr) >= 4 else 1
+        A = np.vander(tau, degree + 1, increasing=True)
+        coef, *_ = np.linalg.lstsq(A, arr[:, 1:], rcond=None)
+        return coef[0], coef[1]

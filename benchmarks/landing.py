@@ -1,0 +1,223 @@
+"""Landing-prediction and speed accuracy of core/trajectory.py on synthetic drag-model flights.
+
+Why this file exists: the robot needs the landing point early and exact, and no published
+badminton system reports that error in centimetres. This benchmark flies shots with the drag
+physics of core/physics.py (clears, lifts, drops, drives, smashes; L drawn in 4.4–5.2 m per
+session, one shuttle per session), samples them at a camera rate with stereo-like 3D noise
+(isotropic Gaussian σ, a few % outliers, a few % missed frames), feeds them frame by frame to
+:class:`Trajectory` exactly as the tracker does, and prints:
+
+* the landing-point error (median, p95, cm) by time left before landing (600 … 100 ms), with the
+  share of flights that had a prediction by then, for each frame rate and noise level;
+* the speed error (median and p95 of |estimated − true| / true, after the prediction starts);
+* how often the true landing lies inside the predicted radius (calibration of the uncertainty);
+* the update cost per frame (median and mean µs) and the fitted L error at the end of a shot.
+
+Usage:  python benchmarks/landing.py [--sessions N] [--shots N] [--fps 120 60] [--sigma 0.01 0.02]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from badminton_gui.core import physics  # noqa: E402
+from badminton_gui.core.params import TrajectoryParams  # noqa: E402
+from badminton_gui.core.trajectory import Trajectory  # noqa: E402
+
+LEAD_TIMES_MS = (600, 500, 400, 300, 200, 100)
+
+# Shot families: (name, launch height m, speed m/s, elevation deg, start Y m)
+SHOT_KINDS = {
+    "clear": ((2.2, 2.9), (28.0, 45.0), (25.0, 50.0), (-5.8, -3.5)),
+    "lift": ((0.4, 1.0), (20.0, 35.0), (35.0, 60.0), (-3.0, -1.0)),
+    "drop": ((2.0, 2.7), (8.0, 16.0), (-15.0, 15.0), (-5.5, -3.5)),
+    "drive": ((0.9, 1.6), (18.0, 35.0), (-3.0, 10.0), (-4.0, -1.5)),
+    "smash": ((2.3, 3.0), (50.0, 110.0), (-22.0, -7.0), (-5.0, -2.0)),
+}
+
+
+@dataclass(frozen=True)
+class SyntheticShot:
+    """A drag-model flight from a hit to the floor, densely sampled (true values)."""
+
+    kind: str
+    aero_length: float
+    t: np.ndarray        # (N,) s from the hit
+    pos: np.ndarray      # (N, 3)
+    vel: np.ndarray      # (N, 3)
+
+    @property
+    def landing(self) -> np.ndarray:
+        return self.pos[-1]
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1])
+
+    def at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """True positions and velocities at times (s from the hit), linear interpolation."""
+        pos = np.stack([np.interp(times, self.t, self.pos[:, i]) for i in range(3)], axis=1)
+        vel = np.stack([np.interp(times, self.t, self.vel[:, i]) for i in range(3)], axis=1)
+        return pos, vel
+
+
+def make_shot(rng: np.random.Generator, kind: str, aero_length: float,
+              dt: float = 5e-4) -> SyntheticShot:
+    """One random shot of a family (hit from the near half towards the far half)."""
+    (z_lo, z_hi), (s_lo, s_hi), (e_lo, e_hi), (y_lo, y_hi) = SHOT_KINDS[kind]
+    x0 = rng.uniform(-2.5, 2.5)
+    p0 = np.array([x0, rng.uniform(y_lo, y_hi), rng.uniform(z_lo, z_hi)])
+    speed = rng.uniform(s_lo, s_hi)
+    elev = np.radians(rng.uniform(e_lo, e_hi))
+    # Aim roughly at the other half, with some cross-court spread.
+    azimuth = np.arctan2(rng.uniform(-2.8, 2.8) - x0, 8.0) + np.radians(rng.uniform(-4, 4))
+    v0 = speed * np.array([np.cos(elev) * np.sin(azimuth), np.cos(elev) * np.cos(azimuth), np.sin(elev)])
+    t, pos, vel = physics.simulate(p0, v0, 6.0, dt=dt, aero_length=aero_length, floor_z=0.0)
+    return SyntheticShot(kind, aero_length, t, pos, vel)
+
+
+def observe(rng: np.random.Generator, shot: SyntheticShot, fps: float, sigma: float,
+            outlier_rate: float = 0.03, miss_rate: float = 0.02
+            ) -> tuple[np.ndarray, list[tuple | None], np.ndarray, np.ndarray]:
+    """Camera-rate samples of a shot: (times, points or None, true pos, true vel).
+
+    Noise: isotropic Gaussian σ; outliers: a point displaced 0.15–1.5 m in a random direction
+    (a wrong stereo pair); misses: no point (the shuttle hidden or not detected).
+    """
+    phase = rng.uniform(0.0, 1.0 / fps)
+    times = np.arange(phase, shot.duration, 1.0 / fps)
+    true_pos, true_vel = shot.at(times)
+    points: list[tuple | None] = []
+    for p in true_pos:
+        u = rng.uniform()
+        if u < miss_rate:
+            points.append(None)
+            continue
+        q = p + rng.normal(0.0, sigma, 3)
+        if u < miss_rate + outlier_rate:
+            d = rng.normal(size=3)
+            q = p + d / np.linalg.norm(d) * rng.uniform(0.15, 1.5)
+        points.append(tuple(q))
+    return times, points, true_pos, true_vel
+
+
+@dataclass
+class ShotRecord:
+    kind: str
+    lead_errors: dict          # lead ms -> landing error (m) or None (no prediction yet)
+    lead_inside: dict          # lead ms -> true landing within the predicted radius
+    speed_rel_errors: list     # per frame with a prediction
+    aero_error: float | None   # |fitted L − true L| at the last frame, m
+    shots_seen: int
+
+
+def run_session(rng: np.random.Generator, n_shots: int, fps: float, sigma: float,
+                params: TrajectoryParams, timings: list[float]) -> list[ShotRecord]:
+    """One shuttle (one L), several shots separated by pauses, fed to one Trajectory."""
+    aero_length = rng.uniform(4.4, 5.2)
+    traj = Trajectory(params, court_frame=True)
+    records = []
+    clock = 0.0
+    kinds = list(SHOT_KINDS)
+    for _ in range(n_shots):
+        kind = kinds[rng.integers(len(kinds))]
+        shot = make_shot(rng, kind, aero_length)
+        times, points, true_pos, true_vel = observe(rng, shot, fps, sigma)
+        t_land = clock + shot.duration
+        history = []   # (t, prediction, velocity)
+        shot_before = traj._shot_index
+        for t_rel, pt, tv in zip(times, points, true_vel):
+            t_abs = clock + t_rel
+            start = time.perf_counter()
+            info = traj.update(t_abs, pt)
+            timings.append(time.perf_counter() - start)
+            history.append((t_abs, info.prediction if info.in_flight else None, info.velocity, tv))
+        lead_errors, lead_inside = {}, {}
+        for lead in LEAD_TIMES_MS:
+            t_ask = t_land - lead / 1000.0
+            before = [h for h in history if h[0] <= t_ask]
+            pred = before[-1][1] if before else None
+            if pred is None:
+                lead_errors[lead] = None
+                lead_inside[lead] = None
+            else:
+                err = float(np.hypot(pred.x - shot.landing[0], pred.y - shot.landing[1]))
+                lead_errors[lead] = err
+                lead_inside[lead] = err <= pred.radius
+        speed_errors = [abs(float(np.linalg.norm(v)) - float(np.linalg.norm(tv))) / float(np.linalg.norm(tv))
+                        for _, pred, v, tv in history if pred is not None and v is not None]
+        fitted = traj.current_aero_length
+        aero_err = abs(fitted - aero_length) if fitted is not None else None
+        records.append(ShotRecord(kind, lead_errors, lead_inside, speed_errors, aero_err,
+                                  traj._shot_index - shot_before))
+        # The shuttle lies on the floor, then the next rally starts (no points meanwhile).
+        clock = t_land + rng.uniform(0.5, 1.5)
+    return records
+
+
+def percentile(values, q):
+    return float(np.percentile(values, q)) if len(values) else float("nan")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--sessions", type=int, default=30, help="sessions (one L each), default 30")
+    parser.add_argument("--shots", type=int, default=6, help="shots per session, default 6")
+    parser.add_argument("--fps", type=float, nargs="+", default=[120.0, 60.0], help="frame rates")
+    parser.add_argument("--sigma", type=float, nargs="+", default=[0.01, 0.02],
+                        help="3D noise σ per axis, m (default 0.01 0.02)")
+    parser.add_argument("--outliers", type=float, default=0.03, help="outlier share, default 0.03")
+    parser.add_argument("--seed", type=int, default=1, help="random seed")
+    parser.add_argument("--by-kind", action="store_true", help="also print the 300 ms row per shot kind")
+    args = parser.parse_args(argv)
+
+    print(f"# {args.sessions} sessions x {args.shots} shots per configuration, outliers "
+          f"{args.outliers:.0%}, misses 2%, L in 4.4–5.2 m, seed {args.seed}")
+    for sigma in args.sigma:
+        for fps in args.fps:
+            rng = np.random.default_rng(args.seed)
+            params = TrajectoryParams(measurement_noise=max(sigma, 0.005))
+            timings: list[float] = []
+            records: list[ShotRecord] = []
+            for _ in range(args.sessions):
+                records += run_session(rng, args.shots, fps, sigma, params, timings)
+            print(f"\n## fps {fps:g}, σ = {sigma * 100:g} cm: {len(records)} shots")
+            print(f"{'before landing':>15} | {'median cm':>9} | {'p95 cm':>7} | {'with pred.':>10} | "
+                  f"{'inside r':>8}")
+            for lead in LEAD_TIMES_MS:
+                errs = [r.lead_errors[lead] for r in records if r.lead_errors[lead] is not None]
+                inside = [r.lead_inside[lead] for r in records if r.lead_inside[lead] is not None]
+                print(f"{lead:>12} ms | {percentile(errs, 50) * 100:9.1f} | {percentile(errs, 95) * 100:7.1f} | "
+                      f"{len(errs) / len(records):9.0%} | {np.mean(inside) if inside else float('nan'):8.0%}")
+            if args.by_kind:
+                for kind in SHOT_KINDS:
+                    errs = [r.lead_errors[300] for r in records
+                            if r.kind == kind and r.lead_errors[300] is not None]
+                    n = sum(r.kind == kind for r in records)
+                    print(f"   300 ms {kind:>6}: median {percentile(errs, 50) * 100:5.1f} cm, "
+                          f"p95 {percentile(errs, 95) * 100:5.1f} cm, predicted {len(errs)}/{n}")
+            speed = [e for r in records for e in r.speed_rel_errors]
+            aero = [r.aero_error for r in records if r.aero_error is not None]
+            split = [r.shots_seen for r in records]
+            us = np.asarray(timings) * 1e6
+            print(f"speed error: median {percentile(speed, 50):.2%}, p95 {percentile(speed, 95):.2%} "
+                  f"({len(speed)} frames with a prediction)")
+            print(f"fitted L error at landing: median {percentile(aero, 50) * 100:.1f} cm, "
+                  f"p95 {percentile(aero, 95) * 100:.1f} cm")
+            print(f"shots counted per true shot: {np.bincount(split).tolist()} (index = count)")
+            print(f"update cost: median {np.median(us):.0f} µs, mean {np.mean(us):.0f} µs, "
+                  f"p99 {np.percentile(us, 99):.0f} µs over {len(us)} frames")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
