@@ -163,11 +163,21 @@ class TrajectoryParams(ParamGroup):
     doubles: bool = flag(True, label="Doubles court", help="In/out call against the doubles lines (else singles)")
     max_gap: float = param(0.25, 0.01, 5.0, step=0.01, unit="s", label="Longest gap",
                            help="A flight without a 3D point for longer than this has ended")
+    measurement_noise: float = param(0.02, 0.001, 0.5, step=0.005, unit="m", label="3D point noise σ",
+                                     help="Standard deviation of a triangulated point (per axis)")
+    outlier_sigma: float = param(5.0, 2.0, 50.0, step=0.5, unit="σ", label="Outlier gate",
+                                 help="3D points farther than this many standard deviations from the flight's prediction are ignored")
     outlier_distance: float = param(0.5, 0.01, 10.0, step=0.01, unit="m", label="Outlier distance",
                                     help="3D points this far from the flight's prediction are ignored")
     hit_acceleration: float = param(150.0, 10.0, 5000.0, step=5.0, unit="m/s²",
                                     label="Hit acceleration",
                                     help="A velocity change this abrupt starts a new shot")
+    model_noise: float = param(1.0, 0.0, 100.0, step=0.1, unit="m/s²", label="Model noise",
+                               help="Random acceleration the drag model does not explain (spin, flipping, air)")
+    aero_length_sigma: float = param(0.4, 0.01, 3.0, step=0.01, unit="m", label="Prior σ of L",
+                                     help="Uncertainty of the aerodynamic length L before the session's first shot")
+    aero_length_floor: float = param(0.1, 0.0, 3.0, step=0.01, unit="m", label="Session σ of L ≥",
+                                     help="The session estimate of L never gets surer than this (feathers wear)")
     min_points: int = param(6, 3, 100, step=1, label="Points before predicting",
                             help="3D points of a shot needed before a landing is predicted")
 

@@ -94,6 +94,7 @@ class FlightInfo:
     peak_speed: float | None = None                     # m/s, of the current shot
     prediction: LandingPrediction | None = None
     withheld_reason: str = ""   # why there is no prediction (e.g. "no court pose")
+    in_flight: bool = False     # a flight is being followed (False: idle, or landed / ended)
 
 
 @dataclass(frozen=True, slots=True)
