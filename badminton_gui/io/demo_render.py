@@ -1,0 +1,342 @@
+"""Drawing the demo court: static hall per camera, articulated players, motion-blurred shuttle.
+
+Why this file exists: the demo scene (``demo_scene.py``) must render both cameras faster than
+real time at 1280×720, so everything that does not move is drawn once per camera
+(``render_background``: 3D polygons clipped to the near plane, projected, ``fillPoly`` with
+sub-pixel ``shift`` and anti-aliasing), and each frame only copies that image with a flicker
+gain, draws the players (capsules, painter's order with the shuttle) and the shuttle, and adds
+pre-generated sensor noise. The shuttle is drawn in a 4× supersampled patch, integrated over
+the exposure interval centred on the frame time, so a detector can localise it to ~0.1 px and
+the centre of its blur streak is the truth position.
+
+Cameras here are pinhole (the demo rig has D = 0); ``PinholeCamera`` is derived from the
+``StereoRig`` so that drawing and ``StereoRig.project`` agree exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from ..core import court
+from ..core.rig import StereoRig
+from .demo_rally import CORK_RADIUS, Capsule
+
+NEAR_PLANE = 0.05          # m: polygons are clipped here before projection
+SHIFT = 4                  # sub-pixel bits for cv2 drawing
+SCALE = float(1 << SHIFT)
+SKIRT_LENGTH = 0.06        # cork centre to the skirt's open end (m)
+SKIRT_RADIUS = 0.032       # radius of the skirt's open end (m)
+SUPERSAMPLE = 4
+
+# BGR colours.
+COLOURS = {
+    "ceiling": (38, 36, 34), "wall": (62, 56, 52), "back_wall": (70, 62, 55),
+    "floor": (52, 70, 92), "mat": (62, 112, 48), "line": (232, 236, 236),
+    "light": (252, 252, 252), "post": (40, 90, 40), "net": (25, 25, 25), "tape": (240, 242, 242),
+}
+PLAYER_COLOURS = [
+    {"shirt": (170, 90, 30), "shorts": (30, 30, 30), "skin": (120, 150, 200), "hair": (25, 30, 40),
+     "racket": (30, 30, 160), "racket_head": (40, 40, 170)},
+    {"shirt": (40, 40, 190), "shorts": (60, 50, 40), "skin": (105, 135, 180), "hair": (20, 20, 25),
+     "racket": (150, 60, 20), "racket_head": (160, 80, 30)},
+]
+
+
+@dataclass(frozen=True)
+class PinholeCamera:
+    """World (court) → camera transform and intrinsics of one camera of the rig."""
+
+    R: np.ndarray          # court → camera rotation
+    t: np.ndarray          # court → camera translation
+    K: np.ndarray
+    size: tuple[int, int]
+
+    @classmethod
+    def from_rig(cls, rig: StereoRig, camera: int) -> "PinholeCamera":
+        r_l = rig.R_court.T                       # court → left
+        t_l = -r_l @ rig.T_court
+        if camera == 0:
+            return cls(r_l, t_l, rig.M1, rig.image_size)
+        return cls(rig.R @ r_l, rig.R @ t_l + rig.T, rig.M2, rig.image_size)
+
+    @property
+    def focal(self) -> float:
+        return float(self.K[0, 0])
+
+    def to_camera(self, pts) -> np.ndarray:
+        return np.asarray(pts, dtype=float).reshape(-1, 3) @ self.R.T + self.t
+
+    def project_camera(self, pc: np.ndarray) -> np.ndarray:
+        """Camera-frame points (N, 3), z > 0 → pixels (N, 2)."""
+        z = pc[:, 2:3]
+        return (pc[:, :2] / z) @ self.K[:2, :2].T + self.K[:2, 2]
+
+
+# ---- static background ----------------------------------------------------------------------
+
+def _clip_near(poly_cam: np.ndarray) -> np.ndarray:
+    """Sutherland–Hodgman clip of a camera-frame polygon to z ≥ NEAR_PLANE."""
+    out = []
+    n = len(poly_cam)
+    for i in range(n):
+        a, b = poly_cam[i], poly_cam[(i + 1) % n]
+        a_in, b_in = a[2] >= NEAR_PLANE, b[2] >= NEAR_PLANE
+        if a_in:
+            out.append(a)
+        if a_in != b_in:
+            s = (NEAR_PLANE - a[2]) / (b[2] - a[2])
+            out.append(a + s * (b - a))
+    return np.array(out) if out else np.zeros((0, 3))
+
+
+def _fill_polygon(img: np.ndarray, cam: PinholeCamera, poly_world, colour) -> None:
+    pc = _clip_near(cam.to_camera(poly_world))
+    if len(pc) < 3:
+        return
+    uv = np.clip(cam.project_camera(pc), -1e5, 1e5)
+    pts = np.round(uv * SCALE).astype(np.int32).reshape(-1, 1, 2)
+    cv2.fillPoly(img, [pts], colour, cv2.LINE_AA, SHIFT)
+
+
+def _quad_xy(x0, y0, x1, y1, z=0.0) -> np.ndarray:
+    return np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], dtype=float)
+
+
+def _hall_polygons() -> list[tuple[np.ndarray, str]]:
+    """Ceiling, walls with light panels, floor, mat and lines, in painter's order."""
+    hx, hy, hz = 8.0, 11.0, 9.0
+    polys: list[tuple[np.ndarray, str]] = []
+    polys.append((_quad_xy(-hx, -hy, hx, hy, hz), "ceiling"))
+    for sx in (-1, 1):      # side walls
+        polys.append((np.array([[sx * hx, -hy, 0], [sx * hx, hy, 0], [sx * hx, hy, hz],
+                                [sx * hx, -hy, hz]], float), "wall"))
+    for sy in (-1, 1):      # back walls (behind each baseline)
+        polys.append((np.array([[-hx, sy * hy, 0], [hx, sy * hy, 0], [hx, sy * hy, hz],
+                                [-hx, sy * hy, hz]], float), "back_wall"))
+    # Bright lights: panels high on every wall and rows on the ceiling.
+    for sy in (-1, 1):
+        for x in (-5.0, -1.5, 2.0, 5.5):
+            y = sy * (hy - 0.01)
+            polys.append((np.array([[x, y, 6.2], [x + 1.2, y, 6.2], [x + 1.2, y, 6.9],
+                                    [x, y, 6.9]], float), "light"))
+    for sx in (-1, 1):
+        for y in (-8.0, -3.5, 1.0, 5.5):
+            x = sx * (hx - 0.01)
+            polys.append((np.array([[x, y, 6.4], [x, y + 1.6, 6.4], [x, y + 1.6, 6.9],
+                                    [x, y, 6.9]], float), "light"))
+    for x in (-4.5, 4.5):
+        for y in (-7.5, -2.5, 2.5, 7.5):
+            polys.append((_quad_xy(x - 0.5, y - 0.9, x + 0.5, y + 0.9, hz - 0.01), "light"))
+    polys.append((_quad_xy(-hx, -hy, hx, hy, 0.0), "floor"))
+    w, h = court.HALF_WIDTH_DOUBLES + 0.6, court.HALF_LENGTH + 1.2
+    polys.append((_quad_xy(-w, -h, w, h, 0.0), "mat"))
+    half = court.LINE_WIDTH / 2
+    for line in court.court_lines():
+        (x0, y0), (x1, y1) = line.start, line.end
+        if abs(x0 - x1) < 1e-9:      # along Y
+            polys.append((_quad_xy(x0 - half, min(y0, y1) - half, x0 + half, max(y0, y1) + half,
+                                   0.0), "line"))
+        else:
+            polys.append((_quad_xy(min(x0, x1) - half, y0 - half, max(x0, x1) + half, y0 + half,
+                                   0.0), "line"))
+    return polys
+
+
+def _net_top(x: float) -> float:
+    """Height of the tape: 1.55 m at the posts, sagging to 1.524 m at the centre."""
+    frac = abs(x) / court.HALF_WIDTH_DOUBLES
+    return court.NET_HEIGHT_CENTRE + (court.NET_HEIGHT_POSTS - court.NET_HEIGHT_CENTRE) * frac
+
+
+def render_background(cam: PinholeCamera) -> np.ndarray:
+    """The static hall, court, posts and net as this camera sees them (BGR uint8)."""
+    w, h = cam.size
+    img = np.zeros((h, w, 3), np.uint8)
+    for poly, key in _hall_polygons():
+        _fill_polygon(img, cam, poly, COLOURS[key])
+    # Net: translucent dark mesh with a grid, then the white tape, then the posts.
+    xs = np.linspace(-court.HALF_WIDTH_DOUBLES, court.HALF_WIDTH_DOUBLES, 9)
+    overlay = img.copy()
+    for x0, x1 in zip(xs[:-1], xs[1:]):
+        top0, top1 = _net_top(x0), _net_top(x1)
+        quad = np.array([[x0, 0, top0 - court.NET_TOP_OF_MESH_DROP], [x1, 0, top1 - court.NET_TOP_OF_MESH_DROP],
+                         [x1, 0, top1], [x0, 0, top0]])
+        _fill_polygon(overlay, cam, quad, COLOURS["net"])
+    img[:] = cv2.addWeighted(overlay, 0.45, img, 0.55, 0)
+    grid = img.copy()
+    for x in np.arange(-court.HALF_WIDTH_DOUBLES, court.HALF_WIDTH_DOUBLES + 1e-6, 0.15):
+        top = _net_top(x)
+        _draw_segment(grid, cam, (x, 0, top - court.NET_TOP_OF_MESH_DROP), (x, 0, top), COLOURS["net"], 1)
+    for dz in np.arange(0.0, court.NET_TOP_OF_MESH_DROP, 0.15):
+        for x0, x1 in zip(xs[:-1], xs[1:]):
+            _draw_segment(grid, cam, (x0, 0, _net_top(x0) - dz), (x1, 0, _net_top(x1) - dz),
+                          COLOURS["net"], 1)
+    img[:] = cv2.addWeighted(grid, 0.5, img, 0.5, 0)
+    for x0, x1 in zip(xs[:-1], xs[1:]):
+        quad = np.array([[x0, 0, _net_top(x0) - 0.075], [x1, 0, _net_top(x1) - 0.075],
+                         [x1, 0, _net_top(x1)], [x0, 0, _net_top(x0)]])
+        _fill_polygon(img, cam, quad, COLOURS["tape"])
+    for bottom, top in court.net_posts():
+        _draw_capsule(img, cam, bottom, top, 0.02, 0.02, COLOURS["post"])
+    return img
+
+
+def _draw_segment(img, cam: PinholeCamera, a, b, colour, thickness: int) -> None:
+    pc = cam.to_camera([a, b])
+    if pc[0, 2] < NEAR_PLANE and pc[1, 2] < NEAR_PLANE:
+        return
+    if pc[0, 2] < NEAR_PLANE or pc[1, 2] < NEAR_PLANE:
+        i_in = 0 if pc[0, 2] >= NEAR_PLANE else 1
+        s = (NEAR_PLANE - pc[i_in, 2]) / (pc[1 - i_in, 2] - pc[i_in, 2])
+        pc[1 - i_in] = pc[i_in] + s * (pc[1 - i_in] - pc[i_in])
+    uv = np.clip(cam.project_camera(pc), -1e5, 1e5)
+    p = np.round(uv * SCALE).astype(np.int32)
+    cv2.line(img, tuple(map(int, p[0])), tuple(map(int, p[1])), colour, thickness, cv2.LINE_AA, SHIFT)
+
+
+# ---- players ---------------------------------------------------------------------------------
+
+def _draw_capsule(img, cam: PinholeCamera, a, b, ra, rb, colour) -> None:
+    pc = cam.to_camera([a, b])
+    if pc[0, 2] < NEAR_PLANE or pc[1, 2] < NEAR_PLANE:
+        return
+    uv = cam.project_camera(pc)
+    r = cam.focal * np.array([ra, rb]) / pc[:, 2]
+    _draw_capsule_2d(img, uv, r, colour)
+
+
+def _draw_capsule_2d(img, uv: np.ndarray, r: np.ndarray, colour) -> None:
+    d = uv[1] - uv[0]
+    n = np.hypot(*d)
+    for i in range(2):
+        c = tuple(int(v) for v in np.round(uv[i] * SCALE))
+        cv2.circle(img, c, max(int(round(r[i] * SCALE)), 1), colour, -1, cv2.LINE_AA, SHIFT)
+    if n > 1e-6:
+        perp = np.array([-d[1], d[0]]) / n
+        quad = np.array([uv[0] + perp * r[0], uv[1] + perp * r[1], uv[1] - perp * r[1],
+                         uv[0] - perp * r[0]])
+        cv2.fillConvexPoly(img, np.round(quad * SCALE).astype(np.int32), colour, cv2.LINE_AA, SHIFT)
+
+
+@dataclass(frozen=True)
+class ProjectedCapsule:
+    uv: np.ndarray          # (2, 2) pixels of the two ends
+    r: np.ndarray           # (2,) pixel radii
+    depth: np.ndarray       # (2,) camera depths of the two ends (m)
+    colour: tuple[int, int, int]
+    part: str
+    occludes: bool
+
+
+def project_capsules(cam: PinholeCamera, capsules: list[Capsule], player: int
+                     ) -> list[ProjectedCapsule]:
+    out = []
+    for c in capsules:
+        pc = cam.to_camera([c.a, c.b])
+        if pc[0, 2] < NEAR_PLANE or pc[1, 2] < NEAR_PLANE:
+            continue
+        uv = cam.project_camera(pc)
+        r = cam.focal * np.array([c.ra, c.rb]) / pc[:, 2]
+        out.append(ProjectedCapsule(uv, r, pc[:, 2], PLAYER_COLOURS[player][c.part], c.part,
+                                    c.occludes))
+    return out
+
+
+def occluded_by(caps: list[ProjectedCapsule], uv: np.ndarray, depth: float) -> bool:
+    """True when the point (pixel ``uv`` at camera ``depth``) lies inside a nearer body part."""
+    for c in caps:
+        if not c.occludes:
+            continue
+        d = c.uv[1] - c.uv[0]
+        n2 = float(d @ d)
+        s = float(np.clip((uv - c.uv[0]) @ d / n2, 0.0, 1.0)) if n2 > 1e-12 else 0.0
+        closest = c.uv[0] + s * d
+        radius = c.r[0] + s * (c.r[1] - c.r[0])
+        part_depth = c.depth[0] + s * (c.depth[1] - c.depth[0])
+        if np.hypot(*(uv - closest)) <= radius and part_depth < depth:
+            return True
+    return False
+
+
+def draw_capsule(img, c: ProjectedCapsule, gain: float) -> None:
+    colour = tuple(min(255, int(v * gain)) for v in c.colour)
+    if c.part == "racket_head":
+        centre = tuple(int(v) for v in np.round(c.uv[0] * SCALE))
+        axes = (max(int(round(c.r[0] * 0.8 * SCALE)), 1), max(int(round(c.r[0] * SCALE)), 1))
+        cv2.ellipse(img, centre, axes, 0, 0, 360, colour, max(1, int(c.r[0] / 8)), cv2.LINE_AA, SHIFT)
+        return
+    _draw_capsule_2d(img, c.uv, c.r, colour)
+
+
+# ---- shuttle ---------------------------------------------------------------------------------
+
+def draw_shuttle(img: np.ndarray, cam: PinholeCamera, positions: np.ndarray,
+                 directions: np.ndarray, gain: float) -> None:
+    """Composite a shuttle integrated over ``positions`` (K samples across the exposure).
+
+    ``directions`` (K, 3) are unit flight directions: the skirt trails opposite to them.
+    Drawn at 4× into a two-channel patch (coverage, premultiplied grey), averaged over the
+    samples and reduced with INTER_AREA, so edges and blur are sub-pixel exact.
+    """
+    h_img, w_img = img.shape[:2]
+    heads = cam.to_camera(positions)
+    tails = cam.to_camera(positions - SKIRT_LENGTH * directions)
+    if np.any(heads[:, 2] < NEAR_PLANE) or np.any(tails[:, 2] < NEAR_PLANE):
+        return
+    uv_h = cam.project_camera(heads)
+    uv_t = cam.project_camera(tails)
+    r_h = cam.focal * CORK_RADIUS / heads[:, 2]
+    r_t = cam.focal * SKIRT_RADIUS / tails[:, 2]
+    margin = float(max(r_h.max(), r_t.max())) + 2.0
+    allpts = np.vstack([uv_h, uv_t])
+    x0 = int(np.floor(allpts[:, 0].min() - margin))
+    y0 = int(np.floor(allpts[:, 1].min() - margin))
+    x1 = int(np.ceil(allpts[:, 0].max() + margin)) + 1
+    y1 = int(np.ceil(allpts[:, 1].max() + margin)) + 1
+    x0c, y0c, x1c, y1c = max(x0, 0), max(y0, 0), min(x1, w_img), min(y1, h_img)
+    if x0c >= x1c or y0c >= y1c or (x1 - x0) * (y1 - y0) > 400 * 400:
+        return
+    S = SUPERSAMPLE
+    pw, ph = x1 - x0, y1 - y0
+    acc = np.zeros((ph * S, pw * S, 2), np.float32)
+    canvas = np.zeros((ph * S, pw * S, 2), np.uint8)
+    origin = np.array([x0, y0], float)
+
+    def to_canvas(p: np.ndarray) -> np.ndarray:
+        return ((p - origin + 0.5) * S - 0.5) * SCALE
+
+    # How much of the skirt's open end shows depends on the view angle to the shuttle axis.
+    view = heads / np.linalg.norm(heads, axis=1, keepdims=True)
+    axis_cam = directions @ cam.R.T
+    end_on = np.abs(np.sum(view * axis_cam, axis=1))
+    for k in range(len(positions)):
+        canvas[:] = 0
+        ch, ct = uv_h[k], uv_t[k]
+        rh, rt = r_h[k] * S, r_t[k] * S
+        d = ct - ch
+        n = float(np.hypot(*d))
+        skirt_colour = (190, 165)          # coverage 0.75, grey 215 premultiplied
+        if n > 1e-6:
+            perp = np.array([-d[1], d[0]]) / n
+            quad = np.array([to_canvas(ch) + perp * rh * 0.9 * SCALE,
+                             to_canvas(ct) + perp * rt * SCALE,
+                             to_canvas(ct) - perp * rt * SCALE,
+                             to_canvas(ch) - perp * rh * 0.9 * SCALE])
+            cv2.fillConvexPoly(canvas, np.round(quad).astype(np.int32), skirt_colour,
+                               cv2.LINE_AA, SHIFT)
+        r_end = rt * max(0.3, float(end_on[k]))
+        cv2.circle(canvas, tuple(int(v) for v in np.round(to_canvas(ct))),
+                   max(int(round(r_end * SCALE)), 1), skirt_colour, -1, cv2.LINE_AA, SHIFT)
+        cv2.circle(canvas, tuple(int(v) for v in np.round(to_canvas(ch))),
+                   max(int(round(rh * SCALE)), 1), (255, 250), -1, cv2.LINE_AA, SHIFT)
+        acc += canvas
+    acc *= 1.0 / (255.0 * len(positions))
+    small = cv2.resize(acc, (pw, ph), interpolation=cv2.INTER_AREA)
+    small = small[y0c - y0:y1c - y0, x0c - x0:x1c - x0]
+    alpha = small[..., 0:1]
+    grey = small[..., 1:2] * (255.0 * gain)
+    roi = img[y0c:y1c, x0c:x1c].astype(np.float32)
+    img[y0c:y1c, x0c:x1c] = np.clip(roi * (1.0 - alpha) + grey, 0, 255).astype(np.uint8)
