@@ -178,6 +178,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--outliers", type=float, default=0.03, help="outlier share, default 0.03")
     parser.add_argument("--seed", type=int, default=1, help="random seed")
     parser.add_argument("--by-kind", action="store_true", help="also print the 300 ms row per shot kind")
+    parser.add_argument("--model-noise", type=float, default=None,
+                        help="override TrajectoryParams.model_noise (m/s²)")
+    parser.add_argument("--min-points", type=int, default=None,
+                        help="override TrajectoryParams.min_points")
     args = parser.parse_args(argv)
 
     print(f"# {args.sessions} sessions x {args.shots} shots per configuration, outliers "
@@ -185,7 +189,12 @@ def main(argv: list[str] | None = None) -> int:
     for sigma in args.sigma:
         for fps in args.fps:
             rng = np.random.default_rng(args.seed)
-            params = TrajectoryParams(measurement_noise=max(sigma, 0.005))
+            overrides = {"measurement_noise": max(sigma, 0.005)}
+            if args.model_noise is not None:
+                overrides["model_noise"] = args.model_noise
+            if args.min_points is not None:
+                overrides["min_points"] = args.min_points
+            params = TrajectoryParams(**overrides)
             timings: list[float] = []
             records: list[ShotRecord] = []
             for _ in range(args.sessions):
@@ -203,8 +212,10 @@ def main(argv: list[str] | None = None) -> int:
                     errs = [r.lead_errors[300] for r in records
                             if r.kind == kind and r.lead_errors[300] is not None]
                     n = sum(r.kind == kind for r in records)
+                    sp = [e for r in records if r.kind == kind for e in r.speed_rel_errors]
                     print(f"   300 ms {kind:>6}: median {percentile(errs, 50) * 100:5.1f} cm, "
-                          f"p95 {percentile(errs, 95) * 100:5.1f} cm, predicted {len(errs)}/{n}")
+                          f"p95 {percentile(errs, 95) * 100:5.1f} cm, predicted {len(errs)}/{n}; "
+                          f"speed error p95 {percentile(sp, 95):.1%}")
             speed = [e for r in records for e in r.speed_rel_errors]
             aero = [r.aero_error for r in records if r.aero_error is not None]
             split = [r.shots_seen for r in records]

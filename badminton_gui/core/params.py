@@ -141,6 +141,33 @@ class MotionParams(ParamGroup):
 
 
 @dataclass(frozen=True, slots=True)
+class AssociationParams(ParamGroup):
+    """Filter 4, multi-frame: candidates joined into smooth image paths (core/association.py)."""
+
+    TITLE: ClassVar[str] = "Association"
+    min_hits: int = param(4, 1, 50, step=1, unit="frames", label="Confirm after",
+                          help="Frames a tracklet must be seen before it may supply the detection")
+    min_travel: float = param(12.0, 0.0, 500.0, step=1.0, unit="px", label="Minimum travel",
+                              help="A tracklet must have moved this far from its start (lights, a shuttle on the floor do not)")
+    max_misses: int = param(3, 0, 50, step=1, unit="frames", label="Coast for",
+                            help="Frames a tracklet survives without a candidate")
+    max_tracklets: int = param(80, 1, 500, step=1, label="Tracklets kept",
+                               help="Upper bound on simultaneous hypotheses per camera")
+    speed_gate_gain: float = param(0.6, 0.0, 5.0, step=0.05, label="Gate per speed",
+                                   help="Gate radius grows by this fraction of the tracklet's own image step")
+    acceleration_px: float = param(10.0, 0.0, 500.0, step=1.0, unit="px", label="Gate slack",
+                                   help="Extra gate radius per frame for changes of velocity")
+    velocity_smoothing: float = param(0.6, 0.05, 1.0, step=0.05, label="Velocity update",
+                                      help="Weight of the newest velocity measurement")
+    residual_scale: float = param(20.0, 0.1, 500.0, step=1.0, unit="px", label="Residual scale",
+                                  help="Prediction residual that costs one unit of merit (smooth paths win)")
+    hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
+                              help="Merit bonus of the tracklet already followed")
+    min_quality: float = param(0.0, 0.0, 1.0, step=0.01, label="Minimum candidate quality",
+                               help="Candidates below this shape/contrast score are not associated")
+
+
+@dataclass(frozen=True, slots=True)
 class StereoParams(ParamGroup):
     """Consistency of the two cameras' detections."""
 
@@ -172,7 +199,7 @@ class TrajectoryParams(ParamGroup):
     hit_acceleration: float = param(150.0, 10.0, 5000.0, step=5.0, unit="m/s²",
                                     label="Hit acceleration",
                                     help="A velocity change this abrupt starts a new shot")
-    model_noise: float = param(1.0, 0.0, 100.0, step=0.1, unit="m/s²", label="Model noise",
+    model_noise: float = param(0.5, 0.0, 100.0, step=0.1, unit="m/s²", label="Model noise",
                                help="Random acceleration the drag model does not explain (spin, flipping, air)")
     aero_length_sigma: float = param(0.4, 0.01, 3.0, step=0.01, unit="m", label="Prior σ of L",
                                      help="Uncertainty of the aerodynamic length L before the session's first shot")
@@ -192,6 +219,7 @@ class TrackerParams:
     tilted_rect: TiltedRectParams = field(default_factory=TiltedRectParams)
     colour: ColourParams = field(default_factory=ColourParams)
     motion: MotionParams = field(default_factory=MotionParams)
+    association: AssociationParams = field(default_factory=AssociationParams)
     stereo: StereoParams = field(default_factory=StereoParams)
     trajectory: TrajectoryParams = field(default_factory=TrajectoryParams)
 
