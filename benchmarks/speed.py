@@ -1,0 +1,223 @@
+"""Speed of the tracker against the plain full-resolution chain, measured in the same run.
+
+    .venv/bin/python benchmarks/speed.py [--pairs 300] [--long 10000] [--profile]
+
+For each resolution (2048×1536 NYCU frames as recorded, and the same frames resized to 1280×720
+and 640×480) it prints:
+  - pairs/s of ``StereoTracker.process`` on frames already in memory, and the ratio to the
+    *plain chain* — MOG2 + threshold + open + findContours + the four filters, per camera, one
+    camera after the other, at full resolution (the paper written plainly) — timed on the same
+    frames in the same run (GUIDE §9: absolute times drift ±15–25 % between runs, ratios do not);
+  - latency from a frame pair to its TrackResult, p50 / p99;
+  - peak RSS.
+Then the file processing figures (`track` on a NYCU rally, decoding included: pairs/s and the
+share of time spent decoding vs tracking), peak RSS after 1000 and after ``--long`` pairs, and
+with ``--profile`` a cProfile summary of where the tracker's time goes.
+
+Needs ../shared/data/nycu-stereo. Tests never assert on these figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import io
+import math
+import pstats
+import resource
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from badminton_gui.core.params import TrackerParams  # noqa: E402
+from badminton_gui.core.rig import StereoRig  # noqa: E402
+from badminton_gui.core.tracker import StereoTracker  # noqa: E402
+from badminton_gui.io.labels import read_timestamps  # noqa: E402
+from badminton_gui.io.nycu import rig_from_nycu  # noqa: E402
+from badminton_gui.io.presets import load_preset  # noqa: E402
+from badminton_gui.io.video import VideoPair  # noqa: E402
+
+DATA = REPO.parent / "shared" / "data" / "nycu-stereo"
+RALLY = "rally_11-46-04"
+
+
+def peak_rss_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+class PlainChain:
+    """The paper's chain written plainly, one camera: the baseline every speed-up is measured against."""
+
+    def __init__(self) -> None:
+        self.mog = cv2.createBackgroundSubtractorMOG2(history=200, varThreshold=16, detectShadows=False)
+        self.kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
+        self.last: tuple[float, float] | None = None
+
+    def process(self, frame: np.ndarray) -> tuple[float, float] | None:
+        mask = self.mog.apply(frame, learningRate=0.03)
+        _, mask = cv2.threshold(mask, 150, 255, cv2.THRESH_BINARY)
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self.kernel)
+        contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        best = None
+        for c in contours:
+            length = cv2.arcLength(c, True)
+            if not 4 <= length <= 250:
+                continue
+            (cx, cy), (w, h), _ = cv2.minAreaRect(c)
+            if not 1 <= min(w, h) <= 30:
+                continue
+            x, y, bw, bh = cv2.boundingRect(c)
+            patch = frame[y:y + bh, x:x + bw]
+            whiteness = float(patch.min(axis=2).mean())
+            if whiteness < 100:
+                continue
+            dist = 0.0 if self.last is None else math.hypot(cx - self.last[0], cy - self.last[1])
+            if self.last is not None and dist > 200:
+                continue
+            if best is None or dist < best[0]:
+                best = (dist, (cx, cy))
+        if best is not None:
+            self.last = best[1]
+        return None if best is None else best[1]
+
+
+def load_pairs(n: int, size: tuple[int, int] | None) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    d = DATA / RALLY
+    lt = read_timestamps(d / "CameraReader_1.csv")[1]
+    rt = read_timestamps(d / "CameraReader_2.csv")[1]
+    src = VideoPair(d / "CameraReader_1.mp4", d / "CameraReader_2.mp4", lt, rt)
+    pairs = []
+    try:
+        while len(pairs) < n:
+            f = src.read()
+            if f is None:
+                break
+            left, right = f.left, f.right
+            if size is not None:
+                left = cv2.resize(left, size, interpolation=cv2.INTER_AREA)
+                right = cv2.resize(right, size, interpolation=cv2.INTER_AREA)
+            pairs.append((left, right, f.t_left))
+    finally:
+        src.close()
+    return pairs
+
+
+def scaled_rig(rig: StereoRig, size: tuple[int, int]) -> StereoRig:
+    """The same rig for frames resized to ``size`` (intrinsics scaled)."""
+    sx = size[0] / rig.image_size[0]
+    sy = size[1] / rig.image_size[1]
+    s = np.diag([sx, sy, 1.0])
+    return StereoRig(s @ rig.M1, rig.D1, s @ rig.M2, rig.D2, rig.R, rig.T, size,
+                     R_court=rig.R_court, T_court=rig.T_court)
+
+
+def time_plain(pairs) -> float:
+    left, right = PlainChain(), PlainChain()
+    start = time.perf_counter()
+    for lf, rf, _ in pairs:
+        left.process(lf)
+        right.process(rf)
+    return len(pairs) / (time.perf_counter() - start)
+
+
+def time_tracker(pairs, rig: StereoRig, params: TrackerParams, repeat: int = 1):
+    tracker = StereoTracker(rig, params)
+    lat = []
+    start = time.perf_counter()
+    for _ in range(repeat):
+        for lf, rf, t in pairs:
+            t0 = time.perf_counter()
+            tracker.process(lf, rf, t, keep_masks=False)
+            lat.append(time.perf_counter() - t0)
+    rate = len(lat) / (time.perf_counter() - start)
+    tracker.close()
+    lat_ms = np.asarray(lat) * 1000
+    return rate, float(np.percentile(lat_ms, 50)), float(np.percentile(lat_ms, 99))
+
+
+def file_processing(rig: StereoRig, params: TrackerParams, n: int) -> tuple[float, float]:
+    d = DATA / RALLY
+    lt = read_timestamps(d / "CameraReader_1.csv")[1]
+    rt = read_timestamps(d / "CameraReader_2.csv")[1]
+    src = VideoPair(d / "CameraReader_1.mp4", d / "CameraReader_2.mp4", lt, rt)
+    tracker = StereoTracker(rig, params)
+    decode = track = 0.0
+    count = 0
+    try:
+        while count < n:
+            t0 = time.perf_counter()
+            f = src.read()
+            t1 = time.perf_counter()
+            if f is None:
+                break
+            tracker.process(f.left, f.right, f.t_left, f.index, f.index_right, keep_masks=False)
+            t2 = time.perf_counter()
+            decode += t1 - t0
+            track += t2 - t1
+            count += 1
+    finally:
+        src.close()
+        tracker.close()
+    return count / (decode + track), decode / (decode + track)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--pairs", type=int, default=300, help="frame pairs held in memory per resolution")
+    ap.add_argument("--long", type=int, default=10000, help="pairs for the memory run (0: skip)")
+    ap.add_argument("--preset", default=None)
+    ap.add_argument("--profile", action="store_true")
+    args = ap.parse_args()
+    if not DATA.is_dir():
+        sys.exit(f"needs {DATA}")
+    params = load_preset(args.preset)
+    full_rig = rig_from_nycu(DATA / RALLY / "CameraReader_1.cfg", DATA / RALLY / "CameraReader_2.cfg")
+    print(f"cv2 {cv2.__version__}, {cv2.getNumberOfCPUs()} CPUs, preset {args.preset or 'default'}")
+    print(f"{'resolution':>10} {'plain/s':>8} {'tracker/s':>9} {'ratio':>6} {'p50 ms':>7} {'p99 ms':>7} {'RSS MB':>7}")
+    for size in (None, (1280, 720), (640, 480)):
+        pairs = load_pairs(args.pairs, size)
+        rig = full_rig if size is None else scaled_rig(full_rig, size)
+        plain = time_plain(pairs)
+        rate, p50, p99 = time_tracker(pairs, rig, params)
+        w, h = pairs[0][0].shape[1], pairs[0][0].shape[0]
+        print(f"{w:>5}x{h:<4} {plain:8.1f} {rate:9.1f} {rate / plain:6.2f} {p50:7.2f} {p99:7.2f} {peak_rss_mb():7.0f}")
+        if args.profile and size is None:
+            prof = cProfile.Profile()
+            tracker = StereoTracker(rig, params, parallel=False)
+            prof.enable()
+            for lf, rf, t in pairs:
+                tracker.process(lf, rf, t, keep_masks=False)
+            prof.disable()
+            tracker.close()
+            out = io.StringIO()
+            pstats.Stats(prof, stream=out).sort_stats("tottime").print_stats(12)
+            profile_text = out.getvalue()
+        del pairs
+    rate, decode_share = file_processing(full_rig, params, 600)
+    print(f"file processing ({RALLY}, decoding included): {rate:.1f} pairs/s, "
+          f"decoding {100 * decode_share:.0f} % / tracking {100 - 100 * decode_share:.0f} % of the time")
+    if args.long:
+        pairs = load_pairs(100, (640, 480))
+        rig = scaled_rig(full_rig, (640, 480))
+        tracker = StereoTracker(rig, params)
+        rss = {}
+        for i in range(args.long):
+            lf, rf, _ = pairs[i % len(pairs)]
+            tracker.process(lf, rf, i / 119.0, keep_masks=False)
+            if i + 1 in (1000, args.long):
+                rss[i + 1] = peak_rss_mb()
+        tracker.close()
+        print("peak RSS " + ", ".join(f"after {k} pairs {v:.0f} MB" for k, v in rss.items()))
+    if args.profile:
+        print("\nprofile (2048x1536, one thread, top functions by own time):")
+        print(profile_text)
+
+
+if __name__ == "__main__":
+    main()
