@@ -46,8 +46,13 @@ fi
 stamp=.venv/.installed-pyproject
 if ! cmp -s pyproject.toml "$stamp" 2>/dev/null; then
   echo "setup: installing pinned packages into .venv (first run takes a minute)"
-  .venv/bin/python -m pip install -q --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
-  .venv/bin/python -m pip install -q -e ".[test]" 2>&1 | grep -v "^WARNING: Location" || true
-  .venv/bin/python -c "import badminton_gui, cv2, PySide6, pyqtgraph, serial" 
+  log=.venv/pip-install.log
+  if ! { .venv/bin/python -m pip install --upgrade pip &&
+         .venv/bin/python -m pip install -e ".[test]"; } >"$log" 2>&1; then
+    tail -n 30 "$log" >&2
+    echo "setup: installing the packages failed (full log: $log)" >&2
+    exit 1
+  fi
+  .venv/bin/python -c "import badminton_gui, cv2, PySide6, pyqtgraph, serial"
   cp pyproject.toml "$stamp"
 fi
