@@ -1,0 +1,68 @@
+"""Frame sources: video pairs and live cameras share one protocol and fail with clear sentences."""
+
+import numpy as np
+import pytest
+
+from badminton_gui.io.cameras import CameraPair
+from badminton_gui.io.sources import FrameSource, SourceError
+from badminton_gui.io.video import VideoPair
+
+from .test_cli import H, W, moving_dot_frames, write_video
+
+
+@pytest.fixture()
+def two_videos(tmp_path):
+    frames, _ = moving_dot_frames(12)
+    write_video(tmp_path / "a.avi", frames)
+    write_video(tmp_path / "b.avi", frames[::-1])
+    return tmp_path / "a.avi", tmp_path / "b.avi"
+
+
+def test_video_pair_reads_by_index(two_videos):
+    src = VideoPair(*two_videos)
+    assert isinstance(src, FrameSource)
+    assert src.image_size == (W, H)
+    seen = []
+    while (f := src.read()) is not None:
+        seen.append((f.index, f.index_right, f.t_left))
+        assert f.left.shape == (H, W, 3)
+    src.close()
+    assert [s[0] for s in seen] == list(range(12))
+    assert seen[3][2] == pytest.approx(3 / 30.0)
+
+
+def test_video_pair_loops_when_asked(two_videos):
+    src = VideoPair(*two_videos, loop=True)
+    indices = [src.read().index for _ in range(30)]
+    src.close()
+    assert indices[:14] == list(range(12)) + [0, 1]
+
+
+def test_video_pair_rejects_mismatched_sizes(tmp_path, two_videos):
+    import cv2
+    small = tmp_path / "small.avi"
+    w = cv2.VideoWriter(str(small), cv2.VideoWriter_fourcc(*"MJPG"), 30, (160, 120))
+    for _ in range(3):
+        w.write(np.zeros((120, 160, 3), np.uint8))
+    w.release()
+    with pytest.raises(SourceError, match="differ in size"):
+        VideoPair(two_videos[0], small)
+
+
+def test_camera_that_cannot_open_says_so(tmp_path):
+    with pytest.raises(SourceError, match="left camera .* cannot be opened"):
+        CameraPair(str(tmp_path / "no-such-device"), 0)
+
+
+def test_camera_that_stops_delivering_says_so(two_videos):
+    """A capture that runs dry (here a file opened as a 'camera') is a camera unplugged."""
+    cams = CameraPair(str(two_videos[0]), str(two_videos[1]))
+    frames = []
+    with pytest.raises(SourceError, match="stopped delivering frames"):
+        for _ in range(100):
+            frames.append(cams.read())
+    cams.close()
+    assert len(frames) == 12
+    times = [f.t_left for f in frames]
+    assert all(b >= a for a, b in zip(times, times[1:]))
+    assert all(abs(f.t_right - f.t_left) < 0.5 for f in frames)
