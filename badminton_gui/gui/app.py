@@ -1,0 +1,99 @@
+"""`badminton-gui`: the operator's application, and its unattended screenshot mode.
+
+Why this file exists: the entry point declared in pyproject. Without arguments it reopens the
+last source (the demo court the first time). ``--source demo|video|cameras`` overrides it, and
+``--screenshot PATH --quit-after SECONDS`` tracks for that long, saves the window and exits 0
+(used under Xvfb to check the product end to end).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+
+from ..core.params import ParamError
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="badminton-gui", description="Courtside stereo shuttlecock tracker.")
+    p.add_argument("--source", choices=("demo", "video", "cameras"),
+                   help="what to track (default: the last source, else the demo court)")
+    p.add_argument("--left", help="left video file / camera index")
+    p.add_argument("--right", help="right video file / camera index")
+    p.add_argument("--calib", help="rig file (OpenCV FileStorage YAML)")
+    p.add_argument("--left-times", help="CSV with Frame,Timestamp for the left video")
+    p.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
+    p.add_argument("--preset", help="parameter preset name or .json file")
+    p.add_argument("--fast", action="store_true", help="process files as fast as possible (no real-time pacing)")
+    p.add_argument("--screenshot", metavar="PATH", help="save a screenshot of the window before quitting")
+    p.add_argument("--quit-after", type=float, metavar="SECONDS", help="quit after this many seconds")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if args.source in ("video", "cameras") and not (args.left and args.right):
+        print(f"badminton-gui: --source {args.source} needs --left and --right", file=sys.stderr)
+        return 2
+
+    from PySide6.QtWidgets import QApplication
+
+    from . import settings as st
+    from .main_window import MainWindow
+
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    app.setOrganizationName(st.ORGANISATION)
+    app.setApplicationName(st.APPLICATION)
+    params = None
+    if args.preset:
+        from ..io.presets import load_preset
+        try:
+            params = load_preset(args.preset)
+        except ParamError as exc:
+            print(f"badminton-gui: {exc}", file=sys.stderr)
+            return 2
+    spec = None
+    if args.source:
+        spec = st.SourceSpec(args.source, args.left or "", args.right or "", args.calib or "",
+                             args.left_times or "", args.right_times or "", not args.fast)
+    elif args.fast:
+        spec = st.SourceSpec(realtime=False)
+    window = MainWindow(params=params, spec=spec)
+    if args.fast:
+        window.realtime_action.setChecked(False)
+        window._realtime_changed()
+    window.show()
+    # Ctrl+C in the terminal closes the window cleanly instead of being ignored by Qt.
+    signal.signal(signal.SIGINT, lambda *_: window.close())
+
+    status = {"code": 0}
+    if args.quit_after is not None:
+        from PySide6.QtCore import QTimer
+
+        def finish() -> None:
+            if args.screenshot:
+                path = os.path.abspath(args.screenshot)
+                if not window.grab_window().save(path):
+                    print(f"badminton-gui: cannot write the screenshot {path}", file=sys.stderr)
+                    status["code"] = 1
+                else:
+                    print(f"screenshot: {path}; results shown {window.results_seen}, "
+                          f"display {window.display_rate:.1f} Hz, processing "
+                          f"{_processing_fps(window):.1f} fps")
+            window.close()
+            app.quit()
+
+        QTimer.singleShot(int(args.quit_after * 1000), finish)
+    app.exec()
+    return status["code"]
+
+
+def _processing_fps(window) -> float:
+    p = window.latest_packet
+    return p.stats.processing_fps if p is not None else 0.0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,265 @@
+"""The court in 3D (OpenGL) and as a plan and a side view (2D), with flight and landing point.
+
+Why this file exists: the operator sees where the shuttle is and where it will land. The 3D view
+(pyqtgraph.opengl) shows the court, the net, the two cameras as small frustums, the current
+flight, the position, the predicted path and the landing circle; it can be rotated and zoomed.
+The plan and side views are plain 2D plots that show the same data; they are also the whole
+display when OpenGL is unavailable (``BADMINTON_GUI_NO_GL=1``, an offscreen platform, or a
+context that cannot be created), so the window never depends on a working GL driver.
+
+Note: pyqtgraph 0.14.0 hangs with setAspectLocked(True) combined with setXLink/setYLink,
+so the two 2D plots lock their aspect and are deliberately not linked.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6.QtGui import QGuiApplication
+
+from ..core import court
+from ..core.rig import StereoRig
+from .worker import DisplayPacket
+
+NO_GL_ENV = "BADMINTON_GUI_NO_GL"
+
+FLIGHT_COLOUR = (255, 210, 0)
+POSITION_COLOUR = (255, 0, 0)
+PREDICTED_COLOUR = (80, 220, 255)
+IN_COLOUR = (40, 220, 90)
+OUT_COLOUR = (255, 70, 70)
+CAMERA_COLOURS = ((0, 200, 255), (255, 140, 0))
+
+
+def gl_unavailable_reason() -> str:
+    """Why the 3D view cannot be used here, or "" when OpenGL looks usable."""
+    if os.environ.get(NO_GL_ENV, "").strip() not in ("", "0"):
+        return f"3D view off ({NO_GL_ENV} is set)"
+    platform = QGuiApplication.platformName()
+    if platform in ("offscreen", "minimal", "vnc"):
+        return f"3D view needs a display (Qt platform '{platform}')"
+    try:
+        import OpenGL.GL  # noqa: F401  (PyOpenGL is what pyqtgraph.opengl needs)
+        import pyqtgraph.opengl  # noqa: F401
+    except ImportError as exc:
+        return f"3D view unavailable: {exc}"
+    from PySide6.QtGui import QOffscreenSurface, QOpenGLContext
+    context = QOpenGLContext()
+    if not context.create():
+        return "3D view unavailable: no OpenGL context could be created"
+    surface = QOffscreenSurface()
+    surface.create()
+    ok = context.makeCurrent(surface)
+    if ok:
+        context.doneCurrent()
+    surface.destroy()
+    if not ok:
+        return "3D view unavailable: the OpenGL context does not work on this display"
+    return ""
+
+
+def _court_segments_3d() -> np.ndarray:
+    segs = []
+    for line in court.court_lines():
+        segs += [(*line.start, 0.0), (*line.end, 0.0)]
+    return np.array(segs, dtype=float)
+
+
+def _net_segments_3d() -> np.ndarray:
+    posts = court.net_posts()
+    w = court.HALF_WIDTH_DOUBLES
+    top = court.NET_HEIGHT_POSTS
+    bottom = top - court.NET_TOP_OF_MESH_DROP
+    segs = [posts[0, 0], posts[0, 1], posts[1, 0], posts[1, 1],
+            (-w, 0, top), (0, 0, court.NET_HEIGHT_CENTRE), (0, 0, court.NET_HEIGHT_CENTRE), (w, 0, top),
+            (-w, 0, bottom), (w, 0, bottom)]
+    for x in np.linspace(-w, w, 13)[1:-1]:          # a hint of mesh
+        segs += [(x, 0, bottom), (x, 0, top)]
+    return np.array(segs, dtype=float)
+
+
+def _circle(x: float, y: float, r: float, z: float | None = None, n: int = 48) -> np.ndarray:
+    a = np.linspace(0, 2 * math.pi, n)
+    pts = [x + r * np.cos(a), y + r * np.sin(a)]
+    if z is not None:
+        pts.append(np.full(n, z))
+    return np.stack(pts, axis=1)
+
+
+def camera_frustums(rig: StereoRig, depth: float = 0.8) -> list[np.ndarray]:
+    """Line segments (2k, 3) of a small frustum per camera, in the rig's output frame."""
+    centres = rig.camera_centres()
+    rotations = rig.camera_rotations()
+    w, h = rig.image_size
+    out = []
+    for cam, (centre, rot, m) in enumerate(zip(centres, rotations, (rig.M1, rig.M2))):
+        corners_px = np.array([[0, 0], [w, 0], [w, h], [0, h]], dtype=float)
+        rays = np.column_stack([(corners_px[:, 0] - m[0, 2]) / m[0, 0],
+                                (corners_px[:, 1] - m[1, 2]) / m[1, 1], np.ones(4)])
+        corners = centre + (rays * depth) @ rot.T
+        segs = []
+        for i in range(4):
+            segs += [centre, corners[i], corners[i], corners[(i + 1) % 4]]
+        out.append(np.array(segs))
+    return out
+
+
+def to_display_frame(pts: np.ndarray, in_court_frame: bool) -> np.ndarray:
+    """Points as drawn: court frame as is; left-camera frame (x right, y down, z ahead) → z up."""
+    pts = np.asarray(pts, dtype=float).reshape(-1, 3)
+    if in_court_frame:
+        return pts
+    return np.column_stack([pts[:, 0], pts[:, 2], -pts[:, 1]])
+
+
+class CourtGLView:
+    """Factory + updater around a pyqtgraph GLViewWidget (import deferred: it needs OpenGL)."""
+
+    def __init__(self) -> None:
+        import pyqtgraph.opengl as gl
+
+        self._gl = gl
+        self.widget = gl.GLViewWidget()
+        self.widget.setBackgroundColor((18, 20, 26))
+        self.widget.setCameraPosition(distance=21.0, elevation=24.0, azimuth=-62.0)
+        self.widget.opts["center"] = pg.Vector(0.0, 0.0, 1.0)
+        self.widget.setMinimumSize(280, 200)
+        self._court = gl.GLLinePlotItem(pos=_court_segments_3d(), mode="lines",
+                                        color=(0.95, 0.95, 0.95, 1.0), width=1.5, antialias=True)
+        self._net = gl.GLLinePlotItem(pos=_net_segments_3d(), mode="lines",
+                                      color=(0.75, 0.75, 0.8, 0.9), width=1.2, antialias=True)
+        floor = np.array([[-4.5, -8.5, -0.01], [4.5, -8.5, -0.01], [4.5, 8.5, -0.01], [-4.5, 8.5, -0.01],
+                          [-4.5, -8.5, -0.01]])
+        self._floor = gl.GLLinePlotItem(pos=floor, mode="line_strip", color=(0.3, 0.35, 0.4, 1.0))
+        self._cameras = [gl.GLLinePlotItem(pos=np.zeros((2, 3)), mode="lines", width=1.5,
+                                           color=tuple(c / 255 for c in col) + (1.0,))
+                         for col in CAMERA_COLOURS]
+        self._flight = gl.GLLinePlotItem(pos=np.zeros((0, 3)), mode="line_strip", width=2.5,
+                                         color=tuple(c / 255 for c in FLIGHT_COLOUR) + (1.0,), antialias=True)
+        self._predicted = gl.GLLinePlotItem(pos=np.zeros((0, 3)), mode="line_strip", width=2.0,
+                                            color=tuple(c / 255 for c in PREDICTED_COLOUR) + (0.9,), antialias=True)
+        self._landing = gl.GLLinePlotItem(pos=np.zeros((0, 3)), mode="line_strip", width=2.5,
+                                          color=(0.2, 0.9, 0.4, 1.0), antialias=True)
+        self._position = gl.GLScatterPlotItem(pos=np.zeros((0, 3)), size=14.0,
+                                              color=(1.0, 0.0, 0.0, 1.0), pxMode=True)
+        for item in (self._floor, self._court, self._net, *self._cameras, self._flight,
+                     self._predicted, self._landing, self._position):
+            self.widget.addItem(item)
+        self._in_court_frame = True
+
+    def set_rig(self, rig: StereoRig) -> None:
+        self._in_court_frame = rig.has_court_pose
+        for item in (self._court, self._net, self._floor):
+            item.setVisible(rig.has_court_pose)
+        for item, segs in zip(self._cameras, camera_frustums(rig)):
+            item.setData(pos=to_display_frame(segs, rig.has_court_pose))
+        if not rig.has_court_pose:
+            self.widget.opts["center"] = pg.Vector(0.0, 6.0, 0.0)
+
+    def show_packet(self, packet: DisplayPacket) -> None:
+        r = packet.result
+        cf = r.in_court_frame
+        flight = packet.flight
+        self._flight.setData(pos=to_display_frame(flight[:, 1:4], cf) if flight is not None and len(flight)
+                             else np.zeros((0, 3)))
+        pred = packet.predicted
+        self._predicted.setData(pos=to_display_frame(pred, cf) if pred is not None and len(pred)
+                                else np.zeros((0, 3)))
+        self._position.setData(pos=to_display_frame(np.array(r.point), cf) if r.point is not None
+                               else np.zeros((0, 3)))
+        lp = r.flight.prediction
+        if lp is not None and cf:
+            colour = IN_COLOUR if lp.call == "in" else OUT_COLOUR if lp.call == "out" else PREDICTED_COLOUR
+            self._landing.setData(pos=_circle(lp.x, lp.y, max(lp.radius, 0.05), z=0.01),
+                                  color=tuple(c / 255 for c in colour) + (1.0,))
+        else:
+            self._landing.setData(pos=np.zeros((0, 3)))
+
+
+def _plot(title: str, x_label: str, y_label: str) -> pg.PlotWidget:
+    w = pg.PlotWidget(background=(18, 20, 26))
+    w.setTitle(title, color="#dddddd", size="10pt")
+    w.setLabel("bottom", x_label, units="m")
+    w.setLabel("left", y_label, units="m")
+    w.showGrid(x=True, y=True, alpha=0.15)
+    w.setMenuEnabled(False)
+    w.getPlotItem().hideButtons()
+    w.setAspectLocked(True)
+    w.setMinimumSize(240, 120)
+    return w
+
+
+class CourtPlanView:
+    """Top view of the court, Y (along the court) horizontal: flight, landing point, call."""
+
+    def __init__(self) -> None:
+        self.widget = _plot("Court plan (top view)", "Y along court", "X")
+        segs = _court_segments_3d()
+        # Y horizontal, X vertical: the court is wide on screen like the window.
+        self.widget.plot(segs[:, 1], segs[:, 0], connect="pairs", pen=pg.mkPen((230, 230, 230), width=1.2))
+        w = court.HALF_WIDTH_DOUBLES
+        self.widget.plot([0, 0], [-w - 0.2, w + 0.2], pen=pg.mkPen((160, 160, 200), width=3))
+        self._flight = self.widget.plot([], [], pen=pg.mkPen(FLIGHT_COLOUR, width=2))
+        self._predicted = self.widget.plot([], [], pen=pg.mkPen(PREDICTED_COLOUR, width=2, style=pg.QtCore.Qt.PenStyle.DashLine))
+        self._circle = self.widget.plot([], [], pen=pg.mkPen(IN_COLOUR, width=2))
+        self._landing = pg.ScatterPlotItem(size=9, brush=pg.mkBrush(IN_COLOUR), pen=None)
+        self._position = pg.ScatterPlotItem(size=11, brush=pg.mkBrush(POSITION_COLOUR), pen=pg.mkPen("w"))
+        self._call = pg.TextItem("", anchor=(0.5, 1.2))
+        for item in (self._landing, self._position, self._call):
+            self.widget.addItem(item)
+        self.widget.setRange(xRange=(-7.6, 7.6), yRange=(-3.6, 3.6), padding=0)
+
+    def show_packet(self, packet: DisplayPacket) -> None:
+        r = packet.result
+        cf = r.in_court_frame
+        f = packet.flight
+        if f is not None and len(f) and cf:
+            self._flight.setData(f[:, 2], f[:, 1])
+        else:
+            self._flight.setData([], [])
+        p = packet.predicted
+        self._predicted.setData(*((p[:, 1], p[:, 0]) if p is not None and len(p) and cf else ([], [])))
+        self._position.setData(*(([r.point[1]], [r.point[0]]) if r.point is not None and cf else ([], [])))
+        lp = r.flight.prediction
+        if lp is not None and cf:
+            colour = IN_COLOUR if lp.call == "in" else OUT_COLOUR if lp.call == "out" else PREDICTED_COLOUR
+            c = _circle(lp.y, lp.x, max(lp.radius, 0.05))
+            self._circle.setData(c[:, 0], c[:, 1], pen=pg.mkPen(colour, width=2))
+            self._landing.setData([lp.y], [lp.x], brush=pg.mkBrush(colour))
+            self._call.setText(lp.call.upper() or "?", color=colour)
+            self._call.setPos(lp.y, lp.x)
+        else:
+            self._circle.setData([], [])
+            self._landing.setData([], [])
+            self._call.setText("")
+
+
+class SideView:
+    """Side view (Y along the court horizontal, height vertical) with the net."""
+
+    def __init__(self) -> None:
+        self.widget = _plot("Side view", "Y along court", "height Z")
+        h = court.HALF_LENGTH
+        self.widget.plot([-h, h], [0, 0], pen=pg.mkPen((230, 230, 230), width=2))
+        self.widget.plot([0, 0], [0, court.NET_HEIGHT_POSTS], pen=pg.mkPen((160, 160, 200), width=3))
+        self._flight = self.widget.plot([], [], pen=pg.mkPen(FLIGHT_COLOUR, width=2))
+        self._predicted = self.widget.plot([], [], pen=pg.mkPen(PREDICTED_COLOUR, width=2, style=pg.QtCore.Qt.PenStyle.DashLine))
+        self._position = pg.ScatterPlotItem(size=11, brush=pg.mkBrush(POSITION_COLOUR), pen=pg.mkPen("w"))
+        self._landing = pg.ScatterPlotItem(size=9, brush=pg.mkBrush(IN_COLOUR), pen=None)
+        self.widget.addItem(self._position)
+        self.widget.addItem(self._landing)
+        self.widget.setRange(xRange=(-7.6, 7.6), yRange=(-0.3, 6.0), padding=0)
+
+    def show_packet(self, packet: DisplayPacket) -> None:
+        r = packet.result
+        cf = r.in_court_frame
+        f = packet.flight
+        self._flight.setData(*((f[:, 2], f[:, 3]) if f is not None and len(f) and cf else ([], [])))
+        p = packet.predicted
+        self._predicted.setData(*((p[:, 1], p[:, 2]) if p is not None and len(p) and cf else ([], [])))
+        self._position.setData(*(([r.point[1]], [r.point[2]]) if r.point is not None and cf else ([], [])))
+        lp = r.flight.prediction
+        self._landing.setData(*(([lp.y], [0.0]) if lp is not None and cf else ([], [])))

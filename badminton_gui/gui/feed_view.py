@@ -1,0 +1,165 @@
+"""One camera feed with the shuttle overlays: red circle, fading trail, rejected candidates.
+
+Why this file exists: the operator's main view. Painting must cost little on the GUI thread
+(GUIDE §4): the worker already shrank the frame, so here a numpy BGR array is wrapped in a
+QImage without copying (Format_BGR888) and drawn scaled to fit; the overlays are a few QPainter
+primitives in full-resolution coordinates mapped to the widget.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import QPointF, QRectF, QSize, Qt
+from PySide6.QtGui import QColor, QFont, QImage, QPainter, QPen
+from PySide6.QtWidgets import QSizePolicy, QWidget
+
+from ..core.types import CameraResult
+from .overlays import DETECTION_COLOUR, REJECT_STYLE, TRAIL_COLOUR, reject_style
+
+CIRCLE_RADIUS = 11.0     # widget px: clearly visible at any zoom
+
+
+class FeedView(QWidget):
+    """Draws the newest frame of one camera scaled to fit, with the tracking overlays."""
+
+    def __init__(self, title: str, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.title = title
+        self.show_rejected = False
+        self.show_legend = True
+        self._image: np.ndarray | None = None
+        self._qimage: QImage | None = None
+        self._display_scale = 1.0
+        self._camera: CameraResult | None = None
+        self._trail = np.zeros((0, 3))
+        self._message = "no source"
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
+        self.setMinimumSize(240, 160)
+        self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
+
+    def sizeHint(self) -> QSize:
+        return QSize(560, 340)
+
+    # ---- data ------------------------------------------------------------------------------
+    def set_frame(self, image: np.ndarray, display_scale: float, camera: CameraResult | None,
+                  trail: np.ndarray) -> None:
+        """Show a BGR display image; overlay coordinates are full-resolution pixels."""
+        h, w = image.shape[:2]
+        self._image = image            # keeps the buffer alive while the QImage wraps it
+        self._qimage = QImage(image.data, w, h, image.strides[0], QImage.Format.Format_BGR888)
+        self._display_scale = display_scale
+        self._camera = camera
+        self._trail = trail
+        self._message = ""
+        self.update()
+
+    def set_message(self, text: str) -> None:
+        """Replace the picture by a line of text (no source, source ended)."""
+        self._message = text
+        self.update()
+
+    # ---- geometry --------------------------------------------------------------------------
+    def image_rect(self) -> QRectF:
+        """Where the frame is drawn inside the widget (aspect kept, centred)."""
+        if self._qimage is None:
+            return QRectF(self.rect())
+        iw, ih = self._qimage.width(), self._qimage.height()
+        k = min(self.width() / iw, self.height() / ih)
+        w, h = iw * k, ih * k
+        return QRectF((self.width() - w) / 2, (self.height() - h) / 2, w, h)
+
+    def image_to_widget(self, x: float, y: float) -> QPointF:
+        """Full-resolution pixel coordinates → widget coordinates."""
+        r = self.image_rect()
+        if self._qimage is None:
+            return QPointF(x, y)
+        k = r.width() / self._qimage.width() * self._display_scale
+        return QPointF(r.left() + x * k, r.top() + y * k)
+
+    # ---- painting --------------------------------------------------------------------------
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt naming
+        p = QPainter(self)
+        p.fillRect(self.rect(), QColor(20, 20, 24))
+        if self._qimage is not None:
+            p.drawImage(self.image_rect(), self._qimage)
+            p.setRenderHint(QPainter.RenderHint.Antialiasing, True)
+            if self.show_rejected and self._camera is not None:
+                self._paint_rejected(p)
+            self._paint_trail(p)
+            self._paint_detection(p)
+            if self.show_rejected and self.show_legend:
+                self._paint_legend(p)
+        self._paint_title(p)
+        if self._message:
+            p.setPen(QColor(230, 230, 230))
+            f = QFont(self.font())
+            f.setPointSizeF(f.pointSizeF() * 1.3)
+            p.setFont(f)
+            p.drawText(self.rect(), Qt.AlignmentFlag.AlignCenter | Qt.TextFlag.TextWordWrap,
+                       self._message)
+        p.end()
+
+    def _paint_title(self, p: QPainter) -> None:
+        text = self.title
+        if self._camera is not None:
+            text += "  ·  shuttle found" if self._camera.detection is not None else "  ·  no shuttle"
+        f = QFont(self.font())
+        f.setBold(True)
+        p.setFont(f)
+        fm = p.fontMetrics()
+        box = QRectF(6, 6, fm.horizontalAdvance(text) + 12, fm.height() + 6)
+        p.fillRect(box, QColor(0, 0, 0, 150))
+        p.setPen(QColor(255, 255, 255))
+        p.drawText(box, Qt.AlignmentFlag.AlignCenter, text)
+
+    def _paint_detection(self, p: QPainter) -> None:
+        if self._camera is None or self._camera.detection is None:
+            return
+        d = self._camera.detection
+        c = self.image_to_widget(d.x, d.y)
+        p.setBrush(Qt.BrushStyle.NoBrush)
+        p.setPen(QPen(DETECTION_COLOUR, 3.0))
+        p.drawEllipse(c, CIRCLE_RADIUS, CIRCLE_RADIUS)
+
+    def _paint_trail(self, p: QPainter) -> None:
+        trail = self._trail
+        if len(trail) < 2:
+            return
+        t_newest = trail[-1, 0]
+        pts = [self.image_to_widget(x, y) for _, x, y in trail]
+        for i in range(1, len(pts)):
+            age = (t_newest - trail[i, 0]) / 0.5
+            alpha = int(max(0.0, 1.0 - age) * 220)
+            if alpha <= 0:
+                continue
+            colour = QColor(TRAIL_COLOUR)
+            colour.setAlpha(alpha)
+            p.setPen(QPen(colour, 2.5, Qt.PenStyle.SolidLine, Qt.PenCapStyle.RoundCap))
+            p.drawLine(pts[i - 1], pts[i])
+
+    def _paint_rejected(self, p: QPainter) -> None:
+        p.setBrush(Qt.BrushStyle.NoBrush)
+        for c in self._camera.candidates:
+            if c.rejected_by is None:
+                continue
+            colour, _ = reject_style(c.rejected_by)
+            p.setPen(QPen(colour, 1.6))
+            p.drawEllipse(self.image_to_widget(c.x, c.y), 6.0, 6.0)
+
+    def _paint_legend(self, p: QPainter) -> None:
+        f = QFont(self.font())
+        f.setPointSizeF(max(7.0, f.pointSizeF() * 0.85))
+        p.setFont(f)
+        fm = p.fontMetrics()
+        rows = list(REJECT_STYLE.values())
+        width = max(fm.horizontalAdvance(t) for _, t in rows) + 30
+        height = fm.height() * len(rows) + 8
+        box = QRectF(self.width() - width - 6, self.height() - height - 6, width, height)
+        p.fillRect(box, QColor(0, 0, 0, 160))
+        for i, (colour, text) in enumerate(rows):
+            y = box.top() + 4 + i * fm.height()
+            p.setPen(QPen(colour, 1.6))
+            p.drawEllipse(QPointF(box.left() + 10, y + fm.height() / 2), 4.5, 4.5)
+            p.setPen(QColor(235, 235, 235))
+            p.drawText(QRectF(box.left() + 20, y, width - 22, fm.height()),
+                       Qt.AlignmentFlag.AlignVCenter, text)

@@ -1,0 +1,469 @@
+"""The main window: two feeds, the court views, the readouts, and the controls around them.
+
+Why this file exists: it wires the pieces and nothing more. It never processes a frame: it
+starts a :class:`~.worker.TrackingWorker` on a QThread for the chosen source, polls the worker's
+one-slot output with a ~30 Hz timer, and hands the newest packet to the views. Errors from the
+worker arrive as one sentence and are shown in a banner; the window stays usable and another
+source can be chosen.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+from typing import Callable
+
+from PySide6.QtCore import QPoint, QStandardPaths, Qt, QThread, QTimer, Signal
+from PySide6.QtGui import QAction, QFont, QKeySequence, QPainter, QPixmap
+from PySide6.QtWidgets import (QDockWidget, QFrame, QGridLayout, QHBoxLayout, QLabel,
+                               QMainWindow, QMessageBox, QPushButton, QSizePolicy, QSplitter,
+                               QVBoxLayout, QWidget)
+
+from ..core.params import TrackerParams
+from ..core.rig import StereoRig
+from . import settings as st
+from .court_views import CourtGLView, CourtPlanView, SideView, gl_unavailable_reason
+from .feed_view import FeedView
+from .robot_panel import RobotLinkPanel
+from .sources import CameraPairDialog, VideoPairDialog, open_spec
+from .worker import DisplayPacket, RateMeter, SourceOpener, TrackingWorker
+
+DISPLAY_INTERVAL_MS = 33          # ≈30 Hz, whatever the tracking rate
+
+
+class Banner(QFrame):
+    """A one-sentence error line across the top of the window, with a close button."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("banner")
+        self.setStyleSheet("#banner { background: #a8322d; border-radius: 4px; }"
+                           "#banner QLabel { color: white; font-weight: bold; }")
+        self.label = QLabel("", self)
+        self.label.setWordWrap(True)
+        self.label.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        close = QPushButton("✕", self)
+        close.setFlat(True)
+        close.setFixedWidth(28)
+        close.setStyleSheet("color: white;")
+        close.clicked.connect(self.hide)
+        lay = QHBoxLayout(self)
+        lay.setContentsMargins(10, 4, 4, 4)
+        lay.addWidget(self.label, 1)
+        lay.addWidget(close)
+        self.hide()
+
+    def show_message(self, text: str) -> None:
+        self.label.setText(text)
+        self.show()
+
+    @property
+    def text(self) -> str:
+        return self.label.text() if self.isVisible() else ""
+
+
+class Readouts(QWidget):
+    """The numbers: distance (mm), speed, shot peak speed, rates, drops, latency, landing."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.values: dict[str, QLabel] = {}
+        grid = QGridLayout(self)
+        grid.setContentsMargins(8, 4, 8, 4)
+        grid.setVerticalSpacing(3)
+        big = QFont(self.font())
+        big.setPointSizeF(big.pointSizeF() * 1.6)
+        big.setBold(True)
+        rows = [("distance", "Distance"), ("speed", "Speed"), ("peak", "Shot peak speed"),
+                ("landing", "Landing"), ("call", "Call"), (None, None),
+                ("capture", "Capture fps L / R"), ("processing", "Processing"),
+                ("display", "Display"), ("dropped", "Dropped frames"), ("latency", "Latency"),
+                ("playback", "Playback")]
+        for r, (key, text) in enumerate(rows):
+            if key is None:
+                line = QFrame(self)
+                line.setFrameShape(QFrame.Shape.HLine)
+                line.setStyleSheet("color: #555;")
+                grid.addWidget(line, r, 0, 1, 2)
+                continue
+            name = QLabel(text, self)
+            name.setStyleSheet("color: #aaa;")
+            value = QLabel("—", self)
+            value.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+            if key in ("distance", "speed", "call"):
+                value.setFont(big)
+            value.setWordWrap(key == "landing")
+            grid.addWidget(name, r, 0, Qt.AlignmentFlag.AlignTop)
+            grid.addWidget(value, r, 1)
+            self.values[key] = value
+        grid.setRowStretch(len(rows), 1)
+        grid.setColumnStretch(1, 1)
+
+    def show_packet(self, packet: DisplayPacket, display_hz: float) -> None:
+        r, s = packet.result, packet.stats
+        v = self.values
+        v["distance"].setText(f"{r.distance * 1000:,.0f} mm".replace(",", " ") if r.distance is not None else "—")
+        v["speed"].setText(f"{r.speed * 3.6:.0f} km/h  ({r.speed:.1f} m/s)" if r.speed is not None else "—")
+        peak = r.flight.peak_speed
+        v["peak"].setText(f"{peak * 3.6:.0f} km/h  ({peak:.1f} m/s)" if peak is not None else "—")
+        lp = r.flight.prediction
+        if lp is not None:
+            v["landing"].setText(f"x {lp.x:+.2f} m, y {lp.y:+.2f} m, ±{lp.radius:.2f} m\n"
+                                 f"in {max(0.0, lp.t - r.timestamp):.2f} s")
+            colour = "#3c3" if lp.call == "in" else "#e44" if lp.call == "out" else "#ccc"
+            v["call"].setText(f"<span style='color:{colour}'>{(lp.call or 'unknown').upper()}</span>")
+        else:
+            v["landing"].setText(f"withheld: {r.flight.withheld_reason}" if r.flight.withheld_reason else "—")
+            v["call"].setText("—")
+        v["capture"].setText(f"{s.capture_fps_left:.0f} / {s.capture_fps_right:.0f}")
+        v["processing"].setText(f"{s.processing_fps:.0f} fps  ({s.processing_ms:.1f} ms/pair)")
+        v["display"].setText(f"{display_hz:.0f} Hz")
+        v["dropped"].setText(str(s.dropped))
+        v["latency"].setText(f"{s.latency_ms:.1f} ms")
+        v["playback"].setText(f"{s.playback_speed:.2f}× real time")
+
+
+class MainWindow(QMainWindow):
+    """The operator's window."""
+
+    sourceOpened = Signal(str)
+
+    def __init__(self, params: TrackerParams | None = None, spec: st.SourceSpec | None = None,
+                 start: bool = True) -> None:
+        super().__init__()
+        self.setWindowTitle("Badminton shuttle tracker")
+        self.settings = st.open_settings()
+        self.params = params or st.load_params(self.settings) or TrackerParams()
+        self.spec = spec or st.load_source_spec(self.settings)
+        self.rig: StereoRig | None = None
+        self.worker: TrackingWorker | None = None
+        self.thread: QThread | None = None
+        self.latest_packet: DisplayPacket | None = None
+        self.results_seen = 0               # packets taken from the worker
+        self.display_refreshes = 0          # timer ticks that repainted
+        self._display_rate = RateMeter()
+        self._tuning = None
+        self._paused = False
+        self._build_ui()
+        self._build_actions()
+        self._timer = QTimer(self)
+        self._timer.setTimerType(Qt.TimerType.PreciseTimer)
+        self._timer.timeout.connect(self._refresh_display)
+        self._timer.start(DISPLAY_INTERVAL_MS)
+        geometry = self.settings.value("window/geometry")
+        if geometry is not None:
+            self.restoreGeometry(geometry)
+        else:
+            self.resize(1280, 720)
+        if start:
+            self.start_spec(self.spec)
+
+    # ---- layout ----------------------------------------------------------------------------
+    def _build_ui(self) -> None:
+        self.banner = Banner(self)
+        self.left_feed = FeedView("Left camera")
+        self.right_feed = FeedView("Right camera")
+        feeds = QSplitter(Qt.Orientation.Horizontal)
+        feeds.addWidget(self.left_feed)
+        feeds.addWidget(self.right_feed)
+
+        self.gl_reason = gl_unavailable_reason()
+        self.gl_view: CourtGLView | None = None
+        if not self.gl_reason:
+            try:
+                self.gl_view = CourtGLView()
+            except Exception as exc:  # noqa: BLE001 - any GL failure means: use the 2D views
+                self.gl_reason = f"3D view unavailable: {exc}"
+        self.plan = CourtPlanView()
+        self.side = SideView()
+        plots = QSplitter(Qt.Orientation.Vertical)
+        plots.addWidget(self.plan.widget)
+        plots.addWidget(self.side.widget)
+        self.readouts = Readouts()
+        self.readouts.setMinimumWidth(250)
+        self.readouts.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Preferred)
+
+        bottom = QSplitter(Qt.Orientation.Horizontal)
+        if self.gl_view is not None:
+            bottom.addWidget(self.gl_view.widget)
+        bottom.addWidget(plots)
+        bottom.addWidget(self.readouts)
+        if self.gl_view is not None:
+            bottom.setSizes([420, 460, 280])
+        else:
+            bottom.setSizes([800, 280])
+
+        main = QSplitter(Qt.Orientation.Vertical)
+        main.addWidget(feeds)
+        main.addWidget(bottom)
+        main.setSizes([380, 300])
+        self.main_splitter = main
+
+        central = QWidget(self)
+        lay = QVBoxLayout(central)
+        lay.setContentsMargins(4, 4, 4, 4)
+        lay.setSpacing(4)
+        lay.addWidget(self.banner)
+        lay.addWidget(main, 1)
+        self.setCentralWidget(central)
+
+        self.link_panel = RobotLinkPanel(str(self.settings.value("robot/port", "")),
+                                         int(self.settings.value("robot/baud", 115200)))
+        self.link_panel.linkChanged.connect(self._set_link)
+        self.link_dock = QDockWidget("Robot link", self)
+        self.link_dock.setObjectName("robot-link")
+        self.link_dock.setWidget(self.link_panel)
+        self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.link_dock)
+        self.link_dock.hide()
+        self.status_source = QLabel("")
+        self.statusBar().addWidget(self.status_source, 1)
+        if self.gl_reason:
+            self.statusBar().addPermanentWidget(QLabel(self.gl_reason + " — showing the 2D views"))
+
+    def _build_actions(self) -> None:
+        menu = self.menuBar()
+        src = menu.addMenu("&Source")
+        self._action(src, "&Demo court", lambda: self.start_spec(
+            st.SourceSpec("demo", realtime=self.realtime_action.isChecked())), "Ctrl+D")
+        self._action(src, "Two &cameras…", self.choose_cameras)
+        self._action(src, "Stereo &video pair…", self.choose_videos, "Ctrl+O")
+        src.addSeparator()
+        self._action(src, "&Restart source", lambda: self.start_spec(self.spec), "Ctrl+R")
+        src.addSeparator()
+        self._action(src, "&Quit", self.close, QKeySequence.StandardKey.Quit)
+
+        play = menu.addMenu("&Playback")
+        self.pause_action = self._action(play, "&Pause", self.toggle_pause, "Space", checkable=True)
+        self.step_action = self._action(play, "&Single step", self.step, "Right")
+        self.realtime_action = self._action(play, "&Real-time playback", self._realtime_changed,
+                                            checkable=True)
+        self.realtime_action.setChecked(self.spec.realtime)
+        self.realtime_action.setToolTip("Pace file and demo sources to their frame rate; "
+                                        "off: as fast as possible")
+
+        view = menu.addMenu("&View")
+        self.mask_action = self._action(view, "Foreground &mask", self._overlays_changed, "M", checkable=True)
+        self.rejected_action = self._action(view, "&Rejected candidates", self._overlays_changed, "C",
+                                            checkable=True)
+        view.addAction(self.link_dock.toggleViewAction())
+
+        tools = menu.addMenu("&Tools")
+        self._action(tools, "&Tuning…", self.open_tuning, "Ctrl+T")
+        self._action(tools, "&Calibrate…", self.open_calibration)
+
+        bar = self.addToolBar("Controls")
+        bar.setObjectName("controls")
+        bar.setMovable(False)
+        for a in (self.pause_action, self.step_action, self.realtime_action, None,
+                  self.mask_action, self.rejected_action, None):
+            if a is None:
+                bar.addSeparator()
+            else:
+                bar.addAction(a)
+        bar.addAction("Tuning…", self.open_tuning)
+        bar.addAction(self.link_dock.toggleViewAction())
+
+    def _action(self, menu, text: str, slot: Callable, shortcut=None, checkable: bool = False) -> QAction:
+        action = QAction(text, self)
+        if shortcut is not None:
+            action.setShortcut(QKeySequence(shortcut))
+        action.setCheckable(checkable)
+        action.triggered.connect(lambda *_: slot())
+        menu.addAction(action)
+        return action
+
+    # ---- sources and the worker ------------------------------------------------------------
+    def start_spec(self, spec: st.SourceSpec) -> None:
+        """Open a source described by a spec (remembered for the next start)."""
+        self.spec = dataclasses.replace(spec, realtime=self.realtime_action.isChecked()
+                                        if hasattr(self, "realtime_action") else spec.realtime)
+        st.save_source_spec(self.settings, self.spec)
+        self.start_opener(lambda spec=self.spec: open_spec(spec), self.spec.describe())
+
+    def start_opener(self, opener: SourceOpener, description: str) -> None:
+        """Stop the current worker and start one on a new source (tests pass stand-ins here)."""
+        self.stop_worker()
+        self.banner.hide()
+        self.status_source.setText(f"Opening {description}…")
+        for feed in (self.left_feed, self.right_feed):
+            feed.set_message(f"Opening {description}…")
+        worker = TrackingWorker(opener, self.params, realtime=self.realtime_action.isChecked(),
+                                show_mask=self.mask_action.isChecked())
+        thread = QThread(self)
+        thread.setObjectName("tracking")
+        worker.moveToThread(thread)
+        thread.started.connect(worker.run)
+        worker.finished.connect(thread.quit)
+        worker.opened.connect(self._on_opened)
+        worker.error.connect(self._on_error)
+        worker.ended.connect(self._on_ended)
+        worker.set_paused(self._paused)
+        worker.set_link(self.link_panel.link)
+        self.worker, self.thread = worker, thread
+        thread.start()
+
+    def stop_worker(self) -> None:
+        """Cooperative stop: raise the abort flag, let the loop return, wait for the thread."""
+        if self.worker is None:
+            return
+        self.worker.abort()
+        self.worker.set_link(None)
+        self.thread.quit()
+        if not self.thread.wait(5000):
+            self.banner.show_message("The tracking thread did not stop within 5 s (a camera may hang).")
+        # Queued signals of the old worker may still arrive; drop them.
+        for sig, slot in ((self.worker.opened, self._on_opened), (self.worker.error, self._on_error),
+                          (self.worker.ended, self._on_ended)):
+            try:
+                sig.disconnect(slot)
+            except (RuntimeError, TypeError):
+                pass
+        self.worker.deleteLater()
+        self.thread.deleteLater()
+        self.worker = self.thread = None
+
+    def _on_opened(self, name: str, rig: StereoRig) -> None:
+        self.rig = rig
+        self.status_source.setText(f"{name} — rig {rig.image_size[0]}×{rig.image_size[1]}"
+                                   f"{', court pose' if rig.has_court_pose else ', no court pose'}")
+        if self.gl_view is not None:
+            self.gl_view.set_rig(rig)
+        self.sourceOpened.emit(name)
+
+    def _on_error(self, message: str) -> None:
+        self.banner.show_message(message[:1].upper() + message[1:])
+        self.status_source.setText("Stopped — choose a source in the Source menu")
+        for feed in (self.left_feed, self.right_feed):
+            feed.set_message("No frames: " + message)
+
+    def _on_ended(self, message: str) -> None:
+        self.status_source.setText(message[:1].upper() + message[1:])
+
+    def choose_cameras(self) -> None:
+        dialog = CameraPairDialog(self.spec, self)
+        if dialog.exec():
+            self.start_spec(dialog.spec(self.realtime_action.isChecked()))
+
+    def choose_videos(self) -> None:
+        dialog = VideoPairDialog(self.spec, self)
+        if dialog.exec():
+            self.start_spec(dialog.spec(self.realtime_action.isChecked()))
+
+    # ---- controls --------------------------------------------------------------------------
+    def toggle_pause(self) -> None:
+        self._paused = self.pause_action.isChecked()
+        if self.worker is not None:
+            self.worker.set_paused(self._paused)
+
+    def step(self) -> None:
+        if not self._paused:
+            self.pause_action.setChecked(True)
+            self.toggle_pause()
+        elif self.worker is not None:
+            self.worker.step()
+
+    def _realtime_changed(self) -> None:
+        self.spec = dataclasses.replace(self.spec, realtime=self.realtime_action.isChecked())
+        st.save_source_spec(self.settings, self.spec)
+        if self.worker is not None:
+            self.worker.set_realtime(self.realtime_action.isChecked())
+
+    def _overlays_changed(self) -> None:
+        if self.worker is not None:
+            self.worker.set_show_mask(self.mask_action.isChecked())
+        for feed in (self.left_feed, self.right_feed):
+            feed.show_rejected = self.rejected_action.isChecked()
+            feed.update()
+
+    def set_params(self, params: TrackerParams) -> None:
+        """A new parameter snapshot from the tuning dialog: to the worker, and remembered."""
+        self.params = params
+        if self.worker is not None:
+            self.worker.set_params(params)
+        st.save_params(self.settings, params)
+
+    def _set_link(self, link) -> None:
+        if self.worker is not None:
+            self.worker.set_link(link)
+        self.settings.setValue("robot/port", self.link_panel.port.currentText())
+        self.settings.setValue("robot/baud", int(self.link_panel.baud.currentText()))
+
+    def open_tuning(self) -> None:
+        from .tuning_dialog import TuningDialog
+        if self._tuning is None:
+            self._tuning = TuningDialog(self.params, self)
+            self._tuning.paramsChanged.connect(self.set_params)
+        self._tuning.show()
+        self._tuning.raise_()
+
+    def open_calibration(self) -> None:
+        """Pause tracking (the wizard needs the cameras), run the wizard, load its rig."""
+        try:
+            from .calibration_wizard import CalibrationWizard
+        except ImportError as exc:
+            QMessageBox.information(self, "Calibrate", f"The calibration wizard is not available "
+                                    f"in this installation ({exc}).")
+            return
+        spec = self.spec
+        self.stop_worker()
+        save_dir = Path(QStandardPaths.writableLocation(
+            QStandardPaths.StandardLocation.AppDataLocation) or Path.home()) / "rigs"
+        saved: list[str] = []
+        wizard = CalibrationWizard(lambda: open_spec(dataclasses.replace(spec, calib=""))[0]
+                                   if spec.kind == "demo" else open_spec(spec)[0],
+                                   parent=self, save_dir=save_dir)
+        wizard.rigSaved.connect(saved.append)
+        wizard.exec()
+        if saved:
+            spec = dataclasses.replace(spec, calib=saved[-1])
+        self.start_spec(spec)
+
+    # ---- display ---------------------------------------------------------------------------
+    def _refresh_display(self) -> None:
+        if self.worker is None:
+            return
+        packet = self.worker.output.take()
+        if packet is None:
+            return
+        self.latest_packet = packet
+        self.results_seen += 1
+        self.display_refreshes += 1
+        self._display_rate.tick(time.perf_counter())
+        r = packet.result
+        self.left_feed.set_frame(packet.left, packet.display_scale, r.left, packet.trail_left)
+        self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right)
+        if self.gl_view is not None:
+            self.gl_view.show_packet(packet)
+        self.plan.show_packet(packet)
+        self.side.show_packet(packet)
+        self.readouts.show_packet(packet, self._display_rate.rate())
+        if self.worker.link_error:
+            self.link_panel.status.setText(self.worker.link_error)
+        if self._tuning is not None and self._tuning.isVisible():
+            self._tuning.show_preview(packet)
+
+    @property
+    def display_rate(self) -> float:
+        return self._display_rate.rate()
+
+    def grab_window(self) -> QPixmap:
+        """The window as an image, with the GL view composited from its framebuffer."""
+        pixmap = self.grab()
+        if self.gl_view is not None and self.gl_view.widget.isVisible():
+            image = self.gl_view.widget.grabFramebuffer()
+            if not image.isNull():
+                painter = QPainter(pixmap)
+                painter.drawImage(self.gl_view.widget.mapTo(self, QPoint(0, 0)), image)
+                painter.end()
+        return pixmap
+
+    def closeEvent(self, event) -> None:  # noqa: N802 - Qt naming
+        self._timer.stop()
+        self.stop_worker()
+        if self.link_panel.link is not None:
+            self.link_panel.disconnect_link()
+        self.settings.setValue("window/geometry", self.saveGeometry())
+        st.save_params(self.settings, self.params)
+        self.settings.sync()
+        super().closeEvent(event)

@@ -1,0 +1,77 @@
+"""Where the application remembers the last source, rig and parameters (QSettings).
+
+Why this file exists: one place decides which settings store is used, so tests can point it at
+a temporary file with ``BADMINTON_GUI_SETTINGS=/tmp/x.ini`` and never touch the user's settings.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict, dataclass
+
+from PySide6.QtCore import QSettings
+
+from ..core.params import ParamError, TrackerParams
+
+SETTINGS_ENV = "BADMINTON_GUI_SETTINGS"
+ORGANISATION = "badminton-gui"
+APPLICATION = "badminton-gui"
+
+
+def open_settings() -> QSettings:
+    """The settings store: an INI file named by $BADMINTON_GUI_SETTINGS, else the user's."""
+    path = os.environ.get(SETTINGS_ENV)
+    if path:
+        return QSettings(path, QSettings.Format.IniFormat)
+    return QSettings(QSettings.Format.IniFormat, QSettings.Scope.UserScope, ORGANISATION, APPLICATION)
+
+
+@dataclass(frozen=True)
+class SourceSpec:
+    """What to open: the demo court, a video pair with its rig, or two cameras with their rig."""
+
+    kind: str = "demo"                 # "demo" / "video" / "cameras"
+    left: str = ""                     # video path or camera index / URL
+    right: str = ""
+    calib: str = ""                    # rig file; optional for the demo (it knows its own rig)
+    left_times: str = ""               # optional timestamp CSVs of a video pair
+    right_times: str = ""
+    realtime: bool = True              # pace file / demo sources to their fps
+
+    def describe(self) -> str:
+        if self.kind == "demo":
+            return "Demo court"
+        if self.kind == "video":
+            return f"Videos {os.path.basename(self.left)} + {os.path.basename(self.right)}"
+        return f"Cameras {self.left} + {self.right}"
+
+
+def load_source_spec(settings: QSettings) -> SourceSpec:
+    raw = settings.value("source/spec", "")
+    if not raw:
+        return SourceSpec()
+    try:
+        data = json.loads(str(raw))
+        return SourceSpec(**{k: v for k, v in data.items() if k in SourceSpec.__dataclass_fields__})
+    except (TypeError, ValueError):
+        return SourceSpec()
+
+
+def save_source_spec(settings: QSettings, spec: SourceSpec) -> None:
+    settings.setValue("source/spec", json.dumps(asdict(spec)))
+
+
+def load_params(settings: QSettings) -> TrackerParams | None:
+    """The parameters of the last session, or None when absent or no longer valid."""
+    raw = settings.value("tracker/params", "")
+    if not raw:
+        return None
+    try:
+        return TrackerParams.from_dict(json.loads(str(raw)))
+    except (ValueError, ParamError, TypeError):
+        return None
+
+
+def save_params(settings: QSettings, params: TrackerParams) -> None:
+    settings.setValue("tracker/params", json.dumps(params.to_dict()))

@@ -1,0 +1,165 @@
+"""Turning a remembered :class:`SourceSpec` into an open source + rig, and the Source dialogs.
+
+Why this file exists: the worker opens sources on its own thread (a camera can take seconds to
+open), so the GUI hands it a plain function built here. The dialogs only collect paths and
+device indices; listing cameras (which opens each device) runs on a background thread.
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+from PySide6.QtCore import QObject, Signal
+from PySide6.QtWidgets import (QComboBox, QDialog, QDialogButtonBox, QFileDialog,
+                               QFormLayout, QHBoxLayout, QLabel, QLineEdit, QPushButton,
+                               QVBoxLayout, QWidget)
+
+from ..core.rig import RigError, StereoRig
+from ..io.sources import FrameSource, SourceError
+from .settings import SourceSpec
+
+
+def open_spec(spec: SourceSpec) -> tuple[FrameSource, StereoRig]:
+    """Open what the spec names; raises SourceError / RigError / OSError with one sentence."""
+    if spec.kind == "demo":
+        try:
+            from ..io.demo_scene import DemoScene
+        except ImportError as exc:
+            raise SourceError(f"the demo court is not available in this installation ({exc})") from None
+        scene = DemoScene()
+        rig = StereoRig.load(spec.calib) if spec.calib else scene.rig
+        return scene, rig
+    if spec.kind == "video":
+        from ..io.labels import CsvFormatError, read_timestamps
+        from ..io.video import VideoPair
+        if not spec.calib:
+            raise RigError("a video pair needs its rig file (Source ▸ Stereo video pair…)")
+        rig = StereoRig.load(spec.calib)
+        lt = rt = None
+        if spec.left_times or spec.right_times:
+            if not (spec.left_times and spec.right_times):
+                raise SourceError("give timestamp files for both videos or for neither")
+            try:
+                lt = read_timestamps(spec.left_times)[1]
+                rt = read_timestamps(spec.right_times)[1]
+            except CsvFormatError as exc:
+                raise SourceError(str(exc)) from None
+        return VideoPair(spec.left, spec.right, lt, rt), rig
+    if spec.kind == "cameras":
+        from ..io.cameras import CameraPair
+        if not spec.calib:
+            raise RigError("two cameras need their rig file: calibrate first (Tools ▸ Calibrate…)")
+        rig = StereoRig.load(spec.calib)
+        return CameraPair(spec.left, spec.right), rig
+    raise SourceError(f"unknown source kind {spec.kind!r}")
+
+
+def _file_row(parent: QWidget, edit: QLineEdit, caption: str, filter_: str) -> QWidget:
+    row = QWidget(parent)
+    lay = QHBoxLayout(row)
+    lay.setContentsMargins(0, 0, 0, 0)
+    lay.addWidget(edit, 1)
+    button = QPushButton("Browse…", row)
+
+    def browse() -> None:
+        path, _ = QFileDialog.getOpenFileName(parent, caption, edit.text() or str(Path.home()), filter_)
+        if path:
+            edit.setText(path)
+
+    button.clicked.connect(browse)
+    lay.addWidget(button)
+    return row
+
+
+class VideoPairDialog(QDialog):
+    """Two video files, the rig file, optional timestamp CSVs."""
+
+    def __init__(self, spec: SourceSpec, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("Stereo video pair")
+        self.setMinimumWidth(560)
+        prev = spec if spec.kind == "video" else SourceSpec()
+        self.left = QLineEdit(prev.left)
+        self.right = QLineEdit(prev.right)
+        self.calib = QLineEdit(prev.calib or spec.calib)
+        self.left_times = QLineEdit(prev.left_times)
+        self.right_times = QLineEdit(prev.right_times)
+        videos = "Videos (*.mp4 *.avi *.mov *.mkv);;All files (*)"
+        form = QFormLayout()
+        form.addRow("Left video", _file_row(self, self.left, "Left camera video", videos))
+        form.addRow("Right video", _file_row(self, self.right, "Right camera video", videos))
+        form.addRow("Rig file", _file_row(self, self.calib, "Rig file", "Rig (*.yaml *.yml *.xml);;All files (*)"))
+        csvs = "CSV (*.csv);;All files (*)"
+        form.addRow("Left timestamps (optional)", _file_row(self, self.left_times, "Left timestamps", csvs))
+        form.addRow("Right timestamps (optional)", _file_row(self, self.right_times, "Right timestamps", csvs))
+        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Open | QDialogButtonBox.StandardButton.Cancel)
+        buttons.accepted.connect(self.accept)
+        buttons.rejected.connect(self.reject)
+        lay = QVBoxLayout(self)
+        lay.addLayout(form)
+        lay.addWidget(buttons)
+
+    def spec(self, realtime: bool) -> SourceSpec:
+        return SourceSpec("video", self.left.text().strip(), self.right.text().strip(),
+                          self.calib.text().strip(), self.left_times.text().strip(),
+                          self.right_times.text().strip(), realtime)
+
+
+class _CameraScan(QObject):
+    done = Signal(list)
+
+    def start(self) -> None:
+        def work() -> None:
+            from ..io.cameras import list_cameras
+            found = list_cameras()
+            try:
+                self.done.emit(found)
+            except RuntimeError:  # the dialog was closed before the scan finished
+                pass
+        threading.Thread(target=work, name="camera-scan", daemon=True).start()
+
+
+class CameraPairDialog(QDialog):
+    """Two device indices (or URLs) and the rig file; lists the devices that open."""
+
+    def __init__(self, spec: SourceSpec, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("Two cameras")
+        self.setMinimumWidth(520)
+        prev = spec if spec.kind == "cameras" else SourceSpec("cameras", "0", "1")
+        self.left = QComboBox(editable=True)
+        self.right = QComboBox(editable=True)
+        self.left.setEditText(prev.left or "0")
+        self.right.setEditText(prev.right or "1")
+        self.calib = QLineEdit(prev.calib or spec.calib)
+        self.found = QLabel("Looking for cameras…")
+        self.found.setWordWrap(True)
+        form = QFormLayout()
+        form.addRow("Left camera", self.left)
+        form.addRow("Right camera", self.right)
+        form.addRow("Rig file", _file_row(self, self.calib, "Rig file", "Rig (*.yaml *.yml *.xml);;All files (*)"))
+        form.addRow("", self.found)
+        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Open | QDialogButtonBox.StandardButton.Cancel)
+        buttons.accepted.connect(self.accept)
+        buttons.rejected.connect(self.reject)
+        lay = QVBoxLayout(self)
+        lay.addLayout(form)
+        lay.addWidget(buttons)
+        self._scan = _CameraScan(self)
+        self._scan.done.connect(self._show_found)
+        self._scan.start()
+
+    def _show_found(self, indices: list) -> None:
+        if not indices:
+            self.found.setText("No camera opened on this machine (indices 0–7); a URL can still be typed.")
+            return
+        self.found.setText("Cameras that open: " + ", ".join(str(i) for i in indices))
+        for combo, current in ((self.left, self.left.currentText()), (self.right, self.right.currentText())):
+            combo.clear()
+            combo.addItems([str(i) for i in indices])
+            combo.setEditText(current)
+
+    def spec(self, realtime: bool) -> SourceSpec:
+        return SourceSpec("cameras", self.left.currentText().strip(), self.right.currentText().strip(),
+                          self.calib.text().strip(), realtime=realtime)

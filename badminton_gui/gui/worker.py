@@ -1,0 +1,385 @@
+"""The tracking worker: reads the source and runs the StereoTracker off the GUI thread.
+
+Why this file exists: the GUI thread must never wait for a camera or for OpenCV (GUIDE §3,
+anti-patterns). A :class:`TrackingWorker` (a QObject moved to a QThread) owns the source and the
+tracker. Everything the GUI sends it (parameters, pause, step, robot link) goes through
+lock-protected setters the loop reads at the top of each iteration (stytra's
+``retrieve_params``), so the blocking loop never needs the Qt event queue. Everything it hands
+back goes into a one-slot :class:`LatestSlot`: newest result wins, never an unbounded queue; the
+GUI polls that slot with a ~30 Hz timer, so the display rate is independent of the tracking rate.
+
+Live cameras get a grabber thread with its own one-slot buffer, so a slow tracker drops old
+camera frames (counted and shown) instead of falling behind; file and demo sources are read
+in step with the tracker and paced to their fps ("as fast as possible" switches that off).
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import cv2
+import numpy as np
+from PySide6.QtCore import QObject, Signal
+
+from ..core.params import ParamError, TrackerParams
+from ..core.rig import RigError, StereoRig
+from ..core.tracker import StereoTracker
+from ..core.types import TrackResult
+from ..io.sources import FrameSource, SourceError
+
+_log = logging.getLogger(__name__)
+
+# Failures that are the user's situation, not a bug: shown as one sentence in the banner.
+USER_ERRORS = (SourceError, RigError, ParamError, OSError, cv2.error)
+
+DISPLAY_MAX_WIDTH = 960        # feeds are shown at most this wide; bigger frames shrink in the worker
+TRAIL_SECONDS = 0.5            # the fading trail behind the red circle
+RESYNC_AFTER = 0.25            # s behind the source clock before real-time pacing gives up catching up
+
+
+class LatestSlot:
+    """A bounded hand-off of capacity one: ``put`` replaces what was not taken yet."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._value: Any = None
+        self.overwritten = 0
+
+    def put(self, value: Any) -> bool:
+        """Store value; True when an untaken value was dropped to make room."""
+        with self._lock:
+            dropped = self._value is not None
+            if dropped:
+                self.overwritten += 1
+            self._value = value
+            return dropped
+
+    def take(self) -> Any:
+        with self._lock:
+            value, self._value = self._value, None
+            return value
+
+    def clear(self) -> None:
+        with self._lock:
+            self._value = None
+
+
+class RateMeter:
+    """Events per second over the last second, on whatever clock the caller passes."""
+
+    def __init__(self, window: float = 1.0) -> None:
+        self.window = window
+        self._times: collections.deque[float] = collections.deque()
+
+    def tick(self, t: float) -> None:
+        self._times.append(t)
+        while self._times and self._times[0] < t - self.window:
+            self._times.popleft()
+
+    def rate(self) -> float:
+        if len(self._times) < 2:
+            return 0.0
+        span = self._times[-1] - self._times[0]
+        return (len(self._times) - 1) / span if span > 0 else 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class WorkerStats:
+    """Figures the readouts show, measured by the worker."""
+
+    frames: int = 0                  # results produced since the source opened
+    processing_fps: float = 0.0      # results per second (wall clock)
+    capture_fps_left: float = 0.0    # frames per second of each camera (source clock)
+    capture_fps_right: float = 0.0
+    dropped: int = 0                 # camera frames never processed (live) — newest frame wins
+    latency_ms: float = 0.0          # frame available → result ready
+    processing_ms: float = 0.0       # tracker time for this pair
+    playback_speed: float = 1.0      # source seconds per wall second (file/demo sources)
+
+
+@dataclass(frozen=True, slots=True)
+class DisplayPacket:
+    """One result with what the GUI needs to draw it (arrays only; never widgets)."""
+
+    left: np.ndarray                 # BGR display image, possibly downscaled (and mask-tinted)
+    right: np.ndarray
+    display_scale: float             # display pixel = full-resolution pixel × scale
+    result: TrackResult
+    trail_left: np.ndarray           # (N, 3) t, x, y of recent detections (full-res px)
+    trail_right: np.ndarray
+    flight: np.ndarray | None        # (N, 4) t, x, y, z of the current flight
+    predicted: np.ndarray | None     # (M, 3) predicted path to the floor
+    stats: WorkerStats
+
+
+SourceOpener = Callable[[], tuple[FrameSource, StereoRig]]
+
+
+class _LiveReader(threading.Thread):
+    """Reads a live source as fast as it delivers; the tracker takes the newest pair."""
+
+    def __init__(self, source: FrameSource) -> None:
+        super().__init__(name="camera-grabber", daemon=True)
+        self.source = source
+        self.slot = LatestSlot()
+        self.error: BaseException | None = None
+        self.ended = False
+        self.stop_flag = threading.Event()
+        self.arrived = threading.Event()
+        self.left_rate = RateMeter()
+        self.right_rate = RateMeter()
+
+    def run(self) -> None:
+        try:
+            while not self.stop_flag.is_set():
+                frame = self.source.read()
+                if frame is None:
+                    self.ended = True
+                    break
+                self.left_rate.tick(frame.t_left)
+                self.right_rate.tick(frame.t_right)
+                self.slot.put((frame, time.perf_counter()))
+                self.arrived.set()
+        except USER_ERRORS as exc:
+            self.error = exc
+        finally:
+            self.arrived.set()
+
+
+class TrackingWorker(QObject):
+    """Source + tracker loop; move to a QThread and connect ``thread.started`` to ``run``."""
+
+    opened = Signal(str, object)      # source name, StereoRig
+    error = Signal(str)               # one sentence for the banner
+    ended = Signal(str)               # the source ran out (not an error)
+    finished = Signal()
+
+    def __init__(self, open_source: SourceOpener, params: TrackerParams, realtime: bool = True,
+                 show_mask: bool = False) -> None:
+        super().__init__()
+        self._open_source = open_source
+        self.output = LatestSlot()
+        self._lock = threading.Lock()
+        self._pending_params: TrackerParams | None = params
+        self._params_in_use = params
+        self._abort = threading.Event()
+        self._paused = False
+        self._steps = 0
+        self._realtime = realtime
+        self._show_mask = show_mask
+        self._link = None
+        self._link_lock = threading.Lock()
+        self.link_error = ""
+
+    # ---- called from the GUI thread (thread-safe) -----------------------------------------
+    def set_params(self, params: TrackerParams) -> None:
+        with self._lock:
+            self._pending_params = params
+
+    @property
+    def params_in_use(self) -> TrackerParams:
+        """The snapshot the tracker runs with now (tests read this)."""
+        return self._params_in_use
+
+    def set_paused(self, paused: bool) -> None:
+        with self._lock:
+            self._paused = paused
+            self._steps = 0
+
+    def step(self) -> None:
+        """Process exactly one more frame pair while paused."""
+        with self._lock:
+            self._steps += 1
+
+    def set_realtime(self, realtime: bool) -> None:
+        with self._lock:
+            self._realtime = realtime
+
+    def set_show_mask(self, show: bool) -> None:
+        with self._lock:
+            self._show_mask = show
+
+    def set_link(self, link) -> None:
+        """Robot link that receives every result at full rate (None to stop sending)."""
+        with self._link_lock:
+            self._link = link
+
+    def abort(self) -> None:
+        self._abort.set()
+
+    # ---- the loop (worker thread) ----------------------------------------------------------
+    def run(self) -> None:
+        source = reader = tracker = None
+        try:
+            source, rig = self._open_source()
+            rig.check_image_size(*source.image_size, what="the source's frames")
+            tracker = StereoTracker(rig, self._params_in_use)
+            self.opened.emit(getattr(source, "name", "source"), rig)
+            if source.fps is None:
+                reader = _LiveReader(source)
+                reader.start()
+            self._loop(source, tracker, reader)
+        except USER_ERRORS as exc:
+            self.error.emit(_one_sentence(exc))
+        except Exception as exc:  # noqa: BLE001 - a bug must not kill the window silently
+            _log.exception("tracking worker failed")
+            self.error.emit(f"internal error in the tracker ({type(exc).__name__}: {exc}); "
+                            f"details are in the log")
+        finally:
+            if reader is not None:
+                reader.stop_flag.set()
+                reader.join(timeout=2.0)
+            if tracker is not None:
+                tracker.close()
+            if source is not None:
+                try:
+                    source.close()
+                except USER_ERRORS:
+                    pass
+            self.finished.emit()
+
+    def _loop(self, source: FrameSource, tracker: StereoTracker, reader: _LiveReader | None) -> None:
+        rate = RateMeter()
+        src_left_rate, src_right_rate = RateMeter(), RateMeter()
+        trails = (collections.deque(), collections.deque())
+        pace_wall = pace_src = None      # wall-clock and source-clock anchors of real-time pacing
+        speed_meter: collections.deque[tuple[float, float]] = collections.deque(maxlen=60)
+        frames = 0
+        while not self._abort.is_set():
+            with self._lock:
+                params, self._pending_params = self._pending_params, None
+                paused, realtime, show_mask = self._paused, self._realtime, self._show_mask
+                stepping = paused and self._steps > 0
+                if stepping:
+                    self._steps -= 1
+            if params is not None:
+                tracker.set_params(params)
+                self._params_in_use = params
+            if paused and not stepping:
+                pace_wall = None
+                time.sleep(0.01)
+                continue
+
+            # -- next frame pair
+            if reader is not None:
+                item = reader.slot.take()
+                if item is None:
+                    if reader.error is not None:
+                        raise reader.error
+                    if reader.ended:
+                        self.ended.emit("the cameras stopped delivering frames")
+                        return
+                    reader.arrived.wait(0.05)
+                    reader.arrived.clear()
+                    continue
+                frame, t_available = item
+            else:
+                frame = source.read()
+                t_available = time.perf_counter()
+                if frame is None:
+                    self.ended.emit("end of the videos: choose Source ▸ Restart to play again")
+                    return
+                src_left_rate.tick(frame.t_left)
+                src_right_rate.tick(frame.t_right)
+                if realtime and not stepping:
+                    if pace_wall is None or frame.t_left < pace_src:
+                        pace_wall, pace_src = t_available, frame.t_left
+                    due = pace_wall + (frame.t_left - pace_src)
+                    lag = t_available - due
+                    if lag > RESYNC_AFTER:          # too slow for real time: play slower
+                        pace_wall, pace_src = t_available, frame.t_left
+                    elif due > t_available:
+                        self._sleep_until(due)
+                        t_available = time.perf_counter()
+
+            result = tracker.process(frame.left, frame.right, frame.t_left, frame.index,
+                                     frame.index_right)
+            t_done = time.perf_counter()
+            frames += 1
+            rate.tick(t_done)
+            speed_meter.append((t_done, frame.t_left))
+            with self._link_lock:
+                if self._link is not None:
+                    try:
+                        self._link.send_result(result)
+                    except USER_ERRORS as exc:
+                        self.link_error = _one_sentence(exc)
+
+            for trail, cam in zip(trails, (result.left, result.right)):
+                if cam.detection is not None:
+                    trail.append((frame.t_left, cam.detection.x, cam.detection.y))
+                while trail and (trail[0][0] < frame.t_left - TRAIL_SECONDS or trail[0][0] > frame.t_left):
+                    trail.popleft()
+
+            if reader is not None:
+                cap_l, cap_r, dropped = reader.left_rate.rate(), reader.right_rate.rate(), reader.slot.overwritten
+            else:
+                cap_l, cap_r, dropped = src_left_rate.rate(), src_right_rate.rate(), 0
+            playback = 1.0
+            if len(speed_meter) >= 2 and speed_meter[-1][0] > speed_meter[0][0]:
+                playback = ((speed_meter[-1][1] - speed_meter[0][1])
+                            / (speed_meter[-1][0] - speed_meter[0][0]))
+            stats = WorkerStats(frames=frames, processing_fps=rate.rate(), capture_fps_left=cap_l,
+                                capture_fps_right=cap_r, dropped=dropped,
+                                latency_ms=(t_done - t_available) * 1000.0,
+                                processing_ms=result.processing_ms, playback_speed=playback)
+            self.output.put(self._packet(frame, result, trails, tracker, stats, show_mask))
+
+    def _sleep_until(self, due: float) -> None:
+        while not self._abort.is_set():
+            left = due - time.perf_counter()
+            if left <= 0:
+                return
+            time.sleep(min(left, 0.02))
+
+    @staticmethod
+    def _packet(frame, result: TrackResult, trails, tracker: StereoTracker, stats: WorkerStats,
+                show_mask: bool) -> DisplayPacket:
+        h, w = frame.left.shape[:2]
+        scale = min(1.0, DISPLAY_MAX_WIDTH / float(w))
+        images = []
+        for img, cam in ((frame.left, result.left), (frame.right, result.right)):
+            if scale < 1.0:
+                img = cv2.resize(img, (int(round(w * scale)), int(round(h * scale))),
+                                 interpolation=cv2.INTER_AREA)
+            if show_mask and cam.mask is not None:
+                img = _tint_mask(img, cam.mask)
+            images.append(np.ascontiguousarray(img))
+        flight = predicted = None
+        trajectory = tracker.trajectory
+        if trajectory is not None:
+            if hasattr(trajectory, "current_flight"):
+                flight = trajectory.current_flight()
+            if hasattr(trajectory, "predicted_path"):
+                predicted = trajectory.predicted_path()
+        return DisplayPacket(
+            left=images[0], right=images[1], display_scale=scale, result=result,
+            trail_left=np.array(trails[0], dtype=float).reshape(-1, 3),
+            trail_right=np.array(trails[1], dtype=float).reshape(-1, 3),
+            flight=None if flight is None else np.asarray(flight, dtype=float),
+            predicted=None if predicted is None else np.asarray(predicted, dtype=float),
+            stats=stats)
+
+
+def _tint_mask(img: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """The display image with foreground pixels tinted green (the foreground-mask overlay)."""
+    h, w = img.shape[:2]
+    if mask.shape[:2] != (h, w):
+        mask = cv2.resize(mask, (w, h), interpolation=cv2.INTER_NEAREST)
+    out = img.copy()
+    fg = mask > 0
+    out[fg] = (out[fg] // 2 + np.array([0, 127, 0], dtype=np.uint8))
+    return out
+
+
+def _one_sentence(exc: BaseException) -> str:
+    """The message of a user-facing error, as one line."""
+    text = str(exc).strip() or type(exc).__name__
+    if isinstance(exc, cv2.error):
+        text = "OpenCV: " + text.splitlines()[-1]
+    return " ".join(text.split())
