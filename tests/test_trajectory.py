@@ -1,0 +1,236 @@
+"""Trajectory: drag fit, speed, landing prediction, outliers and shot segmentation (no Qt).
+
+Synthetic flights come from the drag physics through benchmarks/landing.py (the same generator
+the accuracy benchmark uses); the bounds here are the benchmark's goals on a few fixed shots.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from badminton_gui.core import physics
+from badminton_gui.core.params import TrajectoryParams
+from badminton_gui.core.trajectory import NO_COURT_POSE, Trajectory
+
+_spec = importlib.util.spec_from_file_location(
+    "landing_benchmark", Path(__file__).resolve().parents[1] / "benchmarks" / "landing.py")
+landing = importlib.util.module_from_spec(_spec)
+sys.modules.setdefault("landing_benchmark", landing)   # dataclasses look their module up
+_spec.loader.exec_module(landing)
+
+
+def fly(traj: Trajectory, times, points, t_offset: float = 0.0):
+    """Feed samples; returns the list of (t, FlightInfo)."""
+    return [(t + t_offset, traj.update(t + t_offset, p)) for t, p in zip(times, points)]
+
+
+def prediction_before(history, t_ask):
+    before = [info for t, info in history if t <= t_ask]
+    return before[-1].prediction if before and before[-1].in_flight else None
+
+
+def landing_errors(fps: float, sigma: float, seed: int, lead_s: float = 0.3,
+                   kinds=("clear", "lift", "drop", "drive", "smash")):
+    rng = np.random.default_rng(seed)
+    errors = []
+    for kind in kinds:
+        for _ in range(2):
+            shot = landing.make_shot(rng, kind, rng.uniform(4.4, 5.2), dt=1e-3)
+            if shot.duration < lead_s + 0.15:
+                continue   # too short to be predicted that early (smashes)
+            times, points, _, _ = landing.observe(rng, shot, fps, sigma)
+            traj = Trajectory(TrajectoryParams(measurement_noise=max(sigma, 0.005)), court_frame=True)
+            pred = prediction_before(fly(traj, times, points), shot.duration - lead_s)
+            assert pred is not None, f"{kind}: no prediction {lead_s}s before landing"
+            errors.append(math.hypot(pred.x - shot.landing[0], pred.y - shot.landing[1]))
+    return np.asarray(errors)
+
+
+@pytest.mark.parametrize("fps, sigma", [(120.0, 0.01), (60.0, 0.02)])
+def test_landing_error_bounds_300ms_before_landing(fps, sigma):
+    errors = landing_errors(fps, sigma, seed=11)
+    assert len(errors) >= 8
+    assert np.median(errors) <= 0.10
+    assert errors.max() <= 0.30
+
+
+@pytest.mark.parametrize("aero_length", [4.5, 5.1])
+def test_drag_fit_recovers_aero_length_and_launch_speed(aero_length):
+    p0, v0 = np.array([0.5, -5.0, 2.5]), np.array([0.0, 24.0, 20.0])   # a clear, 31 m/s
+    t, pos, _ = physics.simulate(p0, v0, 5.0, dt=1e-3, aero_length=aero_length)
+    rng = np.random.default_rng(5)
+    times = np.arange(0.0, t[-1], 1 / 120)
+    truth = np.stack([np.interp(times, t, pos[:, i]) for i in range(3)], axis=1)
+    points = [tuple(p) for p in truth + rng.normal(0, 0.01, truth.shape)]
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    history = fly(traj, times, points)
+    last = history[-1][1]
+    assert last.prediction is not None
+    assert abs(last.prediction.aero_length - aero_length) < 0.10
+    launch = float(np.linalg.norm(v0))
+    assert abs(last.peak_speed - launch) / launch < 0.03
+    assert last.shot_index == 0
+
+
+def test_speed_error_within_three_percent():
+    rng = np.random.default_rng(2)
+    rel = []
+    for kind in ("clear", "drop", "drive", "smash"):
+        shot = landing.make_shot(rng, kind, 4.8, dt=1e-3)
+        times, points, _, true_vel = landing.observe(rng, shot, 120.0, 0.01)
+        traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+        for (t, info), tv in zip(fly(traj, times, points), true_vel):
+            if info.prediction is not None and info.velocity is not None and info.in_flight:
+                true_speed = float(np.linalg.norm(tv))
+                rel.append(abs(float(np.linalg.norm(info.velocity)) - true_speed) / true_speed)
+    assert len(rel) > 100
+    assert np.percentile(rel, 95) <= 0.03
+
+
+def test_outliers_are_ignored_and_do_not_split_the_shot():
+    shot = landing.make_shot(np.random.default_rng(4), "clear", 4.8, dt=1e-3)
+    times = np.arange(0.0, shot.duration, 1 / 120)
+    truth, _ = shot.at(times)
+    points = [tuple(p) for p in truth]
+    wild = {30, 31, 70, 100}          # includes two in a row
+    for i in wild:
+        points[i] = tuple(truth[i] + np.array([0.0, 0.6, 0.4]))
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    history = fly(traj, times, points)
+    assert {info.shot_index for _, info in history[10:]} == {0}
+    flight = traj.current_flight()
+    assert flight.shape[1] == 4
+    assert len(flight) == len(times) - len(wild)
+    pred = history[-10][1].prediction
+    assert math.hypot(pred.x - shot.landing[0], pred.y - shot.landing[1]) < 0.05
+
+
+def test_a_hit_starts_a_new_shot_and_reverses_the_prediction():
+    # A clear towards +Y, intercepted mid-air and driven back towards −Y.
+    p0, v0 = np.array([0.0, -5.0, 2.5]), np.array([0.5, 22.0, 18.0])
+    t1, pos1, vel1 = physics.simulate(p0, v0, 5.0, dt=1e-3, aero_length=4.8)
+    cut = np.searchsorted(t1, 1.2)
+    t2, pos2, _ = physics.simulate(pos1[cut], np.array([-1.0, -25.0, 3.0]), 5.0, dt=1e-3, aero_length=4.8)
+    t_all = np.concatenate([t1[:cut], t1[cut] + t2])
+    p_all = np.concatenate([pos1[:cut], pos2])
+    times = np.arange(0.0, t_all[-1], 1 / 120)
+    truth = np.stack([np.interp(times, t_all, p_all[:, i]) for i in range(3)], axis=1)
+    rng = np.random.default_rng(8)
+    points = [tuple(p) for p in truth + rng.normal(0, 0.01, truth.shape)]
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    history = fly(traj, times, points)
+    shots = [info.shot_index for _, info in history]
+    assert shots[-1] == 1 and max(shots) == 1
+    # The new shot was recognised within a few frames of the hit.
+    first_new = next(i for i, s in enumerate(shots) if s == 1)
+    assert times[first_new] - t1[cut] < 0.06
+    pred = history[-20][1].prediction
+    assert pred.y < 0 and math.hypot(pred.x - pos2[-1, 0], pred.y - pos2[-1, 1]) < 0.1
+
+
+def test_a_long_gap_ends_the_flight_and_the_floor_lands_it():
+    shot = landing.make_shot(np.random.default_rng(6), "drop", 4.8, dt=1e-3)
+    times = np.arange(0.0, shot.duration, 1 / 120)
+    truth, _ = shot.at(times)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01, max_gap=0.2), court_frame=True)
+    half = len(times) // 2
+    history = fly(traj, times[:half], [tuple(p) for p in truth[:half]])
+    assert history[-1][1].in_flight
+    assert len(traj.predicted_path()) > 1
+    info = traj.update(times[half - 1] + 0.1, None)     # short gap: coasting on the model
+    assert info.in_flight and info.velocity is not None
+    info = traj.update(times[half - 1] + 0.3, None)     # longer than max_gap
+    assert not info.in_flight and info.prediction is None
+    assert len(traj.predicted_path()) == 0
+    # A whole flight down to the floor: ends by itself, the prediction stays for the robot.
+    traj.reset()
+    history = fly(traj, times, [tuple(p) for p in truth], t_offset=0.0)
+    path_mid = history[len(times) // 2][1]
+    assert path_mid.in_flight
+    final = history[-1][1]
+    assert not final.in_flight and final.prediction is not None
+    assert math.hypot(final.prediction.x - shot.landing[0], final.prediction.y - shot.landing[1]) < 0.03
+
+
+def test_predicted_path_reaches_the_predicted_landing_point():
+    shot = landing.make_shot(np.random.default_rng(9), "clear", 4.8, dt=1e-3)
+    times = np.arange(0.0, shot.duration * 0.5, 1 / 120)
+    truth, _ = shot.at(times)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    info = fly(traj, times, [tuple(p) for p in truth])[-1][1]
+    path = traj.predicted_path()
+    assert path.shape[1] == 3 and path.shape[0] > 10
+    assert abs(path[-1, 2]) < 1e-6
+    assert path[-1, 0] == pytest.approx(info.prediction.x) and path[-1, 1] == pytest.approx(info.prediction.y)
+    assert info.prediction.call in ("in", "out") and info.prediction.radius > 0
+    assert info.prediction.t > times[-1]
+
+
+def test_in_out_call_follows_singles_or_doubles():
+    # A flight landing at x ≈ 2.8 m: in for doubles (3.05), out for singles (2.59).
+    p0 = np.array([2.8, -5.0, 2.5])
+    v0 = np.array([0.0, 24.0, 20.0])
+    t, pos, _ = physics.simulate(p0, v0, 5.0, dt=1e-3)
+    times = np.arange(0.0, t[-1] * 0.7, 1 / 120)
+    pts = [tuple(np.interp(tt, t, pos[:, i]) for i in range(3)) for tt in times]
+    calls = {}
+    for doubles in (True, False):
+        traj = Trajectory(TrajectoryParams(measurement_noise=0.01, doubles=doubles), court_frame=True)
+        calls[doubles] = fly(traj, times, pts)[-1][1].prediction.call
+    assert calls == {True: "in", False: "out"}
+
+
+def test_shuttle_lying_on_the_floor_is_not_a_flight():
+    rng = np.random.default_rng(1)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    for i in range(120):
+        info = traj.update(i / 120, tuple(np.array([1.0, 2.0, 0.02]) + rng.normal(0, 0.005, 3)))
+        assert not info.in_flight and info.prediction is None
+
+
+def test_without_court_pose_predictions_are_withheld_but_speed_is_given():
+    traj = Trajectory(TrajectoryParams(), court_frame=False)
+    velocity = np.array([3.0, -1.0, 12.0])
+    for i in range(20):
+        info = traj.update(i / 120, tuple(np.array([0.1, 0.2, 5.0]) + velocity * i / 120))
+    assert info.prediction is None and info.withheld_reason == NO_COURT_POSE
+    assert np.allclose(info.velocity, velocity, atol=1e-6)
+    assert traj.current_flight().shape == (20, 4)
+
+
+def test_session_prior_learns_aero_length_over_shots():
+    rng = np.random.default_rng(12)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    clock = 0.0
+    for kind in ("clear", "clear", "lift", "clear"):
+        shot = landing.make_shot(rng, kind, 4.5, dt=1e-3)
+        times, points, _, _ = landing.observe(rng, shot, 120.0, 0.01, outlier_rate=0.0)
+        fly(traj, times, points, t_offset=clock)
+        clock += shot.duration + 1.0
+    assert traj.session_aero_length == pytest.approx(4.5, abs=0.1)
+    traj.reset()
+    assert traj.session_aero_length == pytest.approx(physics.DEFAULT_AERO_LENGTH)
+
+
+def test_clock_going_back_resets():
+    traj = Trajectory(TrajectoryParams(), court_frame=True)
+    for i in range(10):
+        traj.update(1.0 + i / 120, (0.0, -3.0 + 0.1 * i, 2.0 + 0.05 * i))
+    assert traj.current_flight().shape[0] > 0
+    info = traj.update(0.0, None)
+    assert info.shot_index == -1 and traj.current_flight().shape[0] == 0
+
+
+def test_none_and_nan_points_are_harmless():
+    traj = Trajectory(TrajectoryParams(), court_frame=True)
+    for i in range(5):
+        info = traj.update(i / 120, None)
+        assert info.velocity is None and not info.in_flight
+    info = traj.update(0.1, (math.nan, 0.0, 1.0))
+    assert not info.in_flight
