@@ -198,16 +198,16 @@ def _target_for(kind: str, receiver: int, rng: np.random.Generator,
         x, y = rng.uniform(-2.2, 2.2), rng.uniform(2.0, 3.0)
     elif kind == "drive":
         x, y = rng.uniform(-2.4, 2.4), rng.uniform(3.6, 5.2)
-    else:                    # smash
-        x, y = rng.uniform(-2.3, 2.3), rng.uniform(2.6, 4.6)
+    else:                    # smash: deeper targets clear the net from the back court
+        x, y = rng.uniform(-2.3, 2.3), rng.uniform(3.0, 6.2)
     return np.array([x, s * y])
 
 
 def _next_kind(incoming: str, rng: np.random.Generator) -> tuple[str, float]:
     """What the receiver plays back, and the contact height that shot is struck at."""
     if incoming in ("serve", "clear"):
-        kind = str(rng.choice(["clear", "drop", "smash"], p=[0.4, 0.3, 0.3]))
-        return kind, float(rng.uniform(2.3, 2.6))
+        kind = str(rng.choice(["clear", "drop", "smash"], p=[0.35, 0.25, 0.4]))
+        return kind, float(rng.uniform(2.6, 2.9) if kind == "smash" else rng.uniform(2.3, 2.6))
     if incoming == "drop":
         kind = str(rng.choice(["clear", "drop"], p=[0.7, 0.3]))
         return kind, float(rng.uniform(0.5, 0.9))
@@ -378,10 +378,15 @@ def _base_position(player: int) -> np.ndarray:
     return np.array([0.0, _side_sign(player) * 3.4])
 
 
+def _jump_height(c: Contact) -> float:
+    """How high the player leaves the floor to reach a contact above the standing reach."""
+    return max(0.0, c.point[2] - SHOULDER_HEIGHT - 0.97 * REACH)
+
+
 def _body_for_contact(player: int, c: Contact) -> np.ndarray:
     """Where the player's feet are so that the straight arm + racket reaches the contact."""
     _, right = _frame_of(player)
-    dz = c.point[2] - SHOULDER_HEIGHT
+    dz = c.point[2] - SHOULDER_HEIGHT - _jump_height(c)
     d_h = math.sqrt(max(REACH ** 2 - dz ** 2, 0.0))
     body = np.asarray(c.point[:2]) - (SHOULDER_HALF_WIDTH + d_h) * right[:2]
     return body
@@ -423,7 +428,12 @@ def player_capsules(script: RallyScript, player: int, t: float) -> list[Capsule]
     body_xy = player_body(script, player, t)
     vel_xy = (player_body(script, player, t + 0.01) - player_body(script, player, t - 0.01)) / 0.02
     speed = float(np.hypot(*vel_xy))
-    body = np.array([body_xy[0], body_xy[1], 0.0])
+    prev, nxt = script.contacts_of(player, t)
+    jump = 0.0
+    for c in (prev, nxt):
+        if c is not None and abs(t - c.t) < 0.25:
+            jump = max(jump, _jump_height(c) * math.cos(math.pi * (t - c.t) / 0.5) ** 2)
+    body = np.array([body_xy[0], body_xy[1], jump])
     stride_dir = np.array([*(_unit(vel_xy) if speed > 0.2 else fwd[:2]), 0.0])
     stride = min(speed / 4.0, 1.0) * 0.28 * math.sin(2 * math.pi * 2.2 * t)
     caps: list[Capsule] = []
@@ -444,14 +454,14 @@ def player_capsules(script: RallyScript, player: int, t: float) -> list[Capsule]
     shoulder = body + SHOULDER_HEIGHT * up + SHOULDER_HALF_WIDTH * right
     rest = _unit(0.55 * fwd + 0.35 * right - 0.45 * up)
     direction = rest
-    prev, nxt = script.contacts_of(player, t)
-    for c, is_next in ((nxt, True), (prev, False)):
+    for c in (nxt, prev):
         if c is None:
             continue
         u = t - c.t
         if not -0.35 <= u <= 0.3:
             continue
-        at_contact = _unit(np.asarray(c.point) - (np.array([*_body_for_contact(player, c), 0.0])
+        at_contact = _unit(np.asarray(c.point) - (np.array([*_body_for_contact(player, c),
+                                                            _jump_height(c)])
                                                   + SHOULDER_HEIGHT * up
                                                   + SHOULDER_HALF_WIDTH * right))
         windup = (_unit(-0.7 * fwd + 0.2 * right + 0.7 * up) if c.overhead

@@ -233,14 +233,19 @@ class ProjectedCapsule:
 
 def project_capsules(cam: PinholeCamera, capsules: list[Capsule], player: int
                      ) -> list[ProjectedCapsule]:
+    if not capsules:
+        return []
+    ends = np.array([[c.a, c.b] for c in capsules], float).reshape(-1, 3)
+    pc = cam.to_camera(ends)
+    in_front = (pc[:, 2] >= NEAR_PLANE).reshape(-1, 2).all(axis=1)
+    uv = cam.project_camera(np.where(pc[:, 2:3] >= NEAR_PLANE, pc, 1.0)).reshape(-1, 2, 2)
+    depth = pc[:, 2].reshape(-1, 2)
     out = []
-    for c in capsules:
-        pc = cam.to_camera([c.a, c.b])
-        if pc[0, 2] < NEAR_PLANE or pc[1, 2] < NEAR_PLANE:
+    for i, c in enumerate(capsules):
+        if not in_front[i]:
             continue
-        uv = cam.project_camera(pc)
-        r = cam.focal * np.array([c.ra, c.rb]) / pc[:, 2]
-        out.append(ProjectedCapsule(uv, r, pc[:, 2], PLAYER_COLOURS[player][c.part], c.part,
+        r = cam.focal * np.array([c.ra, c.rb]) / depth[i]
+        out.append(ProjectedCapsule(uv[i], r, depth[i], PLAYER_COLOURS[player][c.part], c.part,
                                     c.occludes))
     return out
 
