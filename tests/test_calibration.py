@@ -428,3 +428,23 @@ def test_core_calibration_does_not_import_qt():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60)
     assert proc.returncode == 0 and "ok" in proc.stdout, proc.stderr
+
+
+def test_court_clicks_sequence_and_preview(synthetic_views):
+    from badminton_gui.core.calibration import CourtClicks, rectified_preview
+    clicks = CourtClicks()
+    first = clicks.current_name
+    clicks.click(10, 20)
+    clicks.skip()
+    clicks.click(30, 40)
+    assert len(clicks.clicked) == 2 and not clicks.ready
+    clicks.undo()
+    assert len(clicks.clicked) == 1 and clicks.current_name == clicks.order[2]
+    clicks.undo()
+    clicks.undo()
+    assert clicks.current_name == first and not clicks.clicked
+    src, views = synthetic_views
+    res = solve_stereo(views, src.image_size, src.board)
+    left, right = src.render_pair(src.poses[0])
+    preview = rectified_preview(res, left, right)
+    assert preview.shape == (480, 1280, 3)

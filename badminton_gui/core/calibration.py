@@ -342,6 +342,7 @@ def solve_stereo(views: Sequence[StereoView], image_size: tuple[int, int], board
         if cancel is not None and cancel():
             raise CalibrationCancelled("calibration cancelled")
 
+    check_cancel()
     active = list(views)
     rejected: list[RejectedView] = []
     if len(active) < options.min_views:
@@ -503,3 +504,87 @@ def solve_court_pose_detailed(rig: StereoRig, left_image_points, court_points) -
 def solve_court_pose(rig: StereoRig, left_image_points, court_points) -> StereoRig:
     """The rig with R_court, T_court set (X_court = R_court·X_left + T_court)."""
     return solve_court_pose_detailed(rig, left_image_points, court_points).rig
+
+
+class CourtClicks:
+    """The court-pose step's state: which keypoint to click next, what was clicked.
+
+    The operator clicks keypoints in a fixed order and may skip those not visible; the pose
+    can be solved once 4 points are clicked. Mutable, owned by the GUI thread; the wizard draws
+    ``current_name`` highlighted on its court drawing.
+    """
+
+    DEFAULT_ORDER = ("near back corner left", "near back corner right",
+                     "near short service right", "near short service left",
+                     "near short service centre", "near back centre", "net foot left",
+                     "net foot right", "far short service left", "far short service right",
+                     "far back corner left", "far back corner right")
+
+    def __init__(self, order: Sequence[str] = DEFAULT_ORDER) -> None:
+        from .court import court_keypoints
+        self.keypoints = court_keypoints()
+        unknown = [n for n in order if n not in self.keypoints]
+        if unknown:
+            raise ValueError(f"unknown court keypoints: {', '.join(unknown)}")
+        self.order = tuple(order)
+        self.clicked: dict[str, tuple[float, float]] = {}
+        self._history: list[str] = []        # clicked or skipped names, in order
+        self._position = 0
+
+    @property
+    def current_name(self) -> str | None:
+        """The keypoint to click next, or None when the list is exhausted."""
+        return self.order[self._position] if self._position < len(self.order) else None
+
+    def click(self, x: float, y: float) -> None:
+        name = self.current_name
+        if name is None:
+            return
+        self.clicked[name] = (float(x), float(y))
+        self._history.append(name)
+        self._position += 1
+
+    def skip(self) -> None:
+        if self.current_name is not None:
+            self._history.append(self.current_name)
+            self._position += 1
+
+    def undo(self) -> None:
+        if self._history:
+            name = self._history.pop()
+            self.clicked.pop(name, None)
+            self._position -= 1
+
+    @property
+    def ready(self) -> bool:
+        return len(self.clicked) >= 4
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        names = [n for n in self.order if n in self.clicked]
+        return (np.array([self.clicked[n] for n in names], np.float64).reshape(-1, 2),
+                np.array([self.keypoints[n] for n in names], np.float64).reshape(-1, 3))
+
+    def solve(self, rig: StereoRig) -> CourtPoseResult:
+        image_points, court_points = self.arrays()
+        return solve_court_pose_detailed(rig, image_points, court_points)
+
+
+def rectified_preview(result: CalibrationResult, left: np.ndarray, right: np.ndarray,
+                      line_step: int = 32) -> np.ndarray | None:
+    """Side-by-side rectified pair with horizontal lines (BGR), or None without rectification.
+
+    On a good calibration every feature lies on the same line in both halves.
+    """
+    if not result.rectified:
+        return None
+    size = result.image_size
+    halves = []
+    for image, m, d, r, p in ((left, result.M1, result.D1, result.R1, result.P1),
+                              (right, result.M2, result.D2, result.R2, result.P2)):
+        map_x, map_y = cv2.initUndistortRectifyMap(m, d, r, p, size, cv2.CV_32FC1)
+        img = image if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+        halves.append(cv2.remap(img, map_x, map_y, cv2.INTER_LINEAR))
+    out = np.hstack(halves)
+    for y in range(line_step // 2, out.shape[0], line_step):
+        cv2.line(out, (0, y), (out.shape[1] - 1, y), (0, 200, 0), 1)
+    return out
