@@ -585,6 +585,7 @@ def rectified_preview(result: CalibrationResult, left: np.ndarray, right: np.nda
         img = image if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
         halves.append(cv2.remap(img, map_x, map_y, cv2.INTER_LINEAR))
     out = np.hstack(halves)
+    thickness = max(1, round(out.shape[1] / 1000))     # stays visible when shown shrunk
     for y in range(line_step // 2, out.shape[0], line_step):
-        cv2.line(out, (0, y), (out.shape[1] - 1, y), (0, 200, 0), 1)
+        cv2.line(out, (0, y), (out.shape[1] - 1, y), (0, 200, 0), thickness)
     return out

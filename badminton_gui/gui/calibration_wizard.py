@@ -390,6 +390,8 @@ class ImageView(QWidget):
             p.drawText(self.rect(), Qt.AlignmentFlag.AlignCenter | Qt.TextFlag.TextWordWrap,
                        self._placeholder)
         else:
+            # Smooth scaling keeps thin lines (rectification guides, corners) visible.
+            p.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform, True)
             p.drawImage(self.image_rect(), self._qimage)
             p.setRenderHint(QPainter.RenderHint.Antialiasing, True)
             for x, y, colour, label in self._points:
@@ -415,9 +417,9 @@ class CourtDiagram(QWidget):
         return QSize(170, 320)
 
     def _map(self, x: float, y: float) -> QPointF:
-        margin = 16
-        k = min((self.width() - 2 * margin) / 6.1, (self.height() - 2 * margin) / 13.4)
-        cx, cy = self.width() / 2, self.height() / 2
+        margin, label = 12, 18          # room at the bottom for the "near side" caption
+        k = min((self.width() - 2 * margin) / 6.1, (self.height() - 2 * margin - label) / 13.4)
+        cx, cy = self.width() / 2, (self.height() - label) / 2
         return QPointF(cx + x * k, cy - y * k)      # far side (+Y) at the top
 
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt naming
@@ -674,7 +676,7 @@ class CalibrationWizard(QDialog):
         self.thumb_list.setIconSize(QSize(240, 45))
         self.thumb_list.setFlow(QListWidget.Flow.LeftToRight)
         self.thumb_list.setWrapping(False)
-        self.thumb_list.setFixedHeight(110)
+        self.thumb_list.setFixedHeight(84)
         self.thumb_list.setSelectionMode(QListWidget.SelectionMode.ExtendedSelection)
         self.remove_button = QPushButton("Remove selected")
         self.remove_button.clicked.connect(self.remove_selected)
@@ -696,6 +698,7 @@ class CalibrationWizard(QDialog):
         if self._capture_thread is not None:
             return
         self._last_serial = -1
+        self._frames_shown = 0
         self.status_label.setText("starting the cameras…")
         worker = CaptureWorker(self._factory, self.spec, list(self._params), self._next_id,
                                self.auto_check.isChecked())
@@ -754,7 +757,7 @@ class CalibrationWizard(QDialog):
             return (f"<span style='color:#c0392b'>board not found in the {' and '.join(missing)}"
                     f" image</span>: show the whole board to both cameras" + tail)
         if v.reasons:
-            return f"<span style='color:#b07800'>{v.reasons[0]}</span>" + tail
+            return f"<span style='color:#b07800'>{'<br>'.join(v.reasons[:3])}</span>" + tail
         if not v.is_new:
             return ("<span style='color:#b07800'>good view, but too similar to one already "
                     "captured: move, tilt or bring the board closer</span>" + tail)
@@ -957,8 +960,8 @@ class CalibrationWizard(QDialog):
         self.epipolar_label.setToolTip(f"< {EPIPOLAR_ACCEPTABLE_PX} px acceptable, < "
                                        f"{EPIPOLAR_EXCELLENT_PX} px excellent")
         rows = [
-            ("Scale", f"< {EPIPOLAR_ACCEPTABLE_PX} px acceptable, < {EPIPOLAR_EXCELLENT_PX} px "
-                      f"excellent"),
+            ("Scale", f"&lt; {EPIPOLAR_ACCEPTABLE_PX} px acceptable, &lt; "
+                      f"{EPIPOLAR_EXCELLENT_PX} px excellent"),
             ("RMS reprojection", f"left {r.rms_left:.3f} px · right {r.rms_right:.3f} px · "
                                  f"stereo {r.rms_stereo:.3f} px"),
             ("Baseline", f"{r.baseline * 1000:.1f} mm ± {r.baseline_std * 1000:.1f}"),
@@ -1060,15 +1063,25 @@ class CalibrationWizard(QDialog):
         undo.clicked.connect(self.court_undo)
         self.court_solve_button = QPushButton("Solve court pose and save")
         self.court_solve_button.clicked.connect(self.solve_and_save_court)
-        side = QVBoxLayout()
-        side.addWidget(self.court_diagram, 1)
+        self.court_diagram.setFixedHeight(280)
+        # Wrapped labels in a fixed-width column: give them room explicitly (Qt's
+        # height-for-width of rich-text labels under-reports here).
+        self.court_prompt.setMinimumHeight(44)
+        self.court_status.setMinimumHeight(120)
+        self.court_status.setAlignment(Qt.AlignmentFlag.AlignTop | Qt.AlignmentFlag.AlignLeft)
+        side_widget = QWidget()
+        side_widget.setFixedWidth(320)
+        side = QVBoxLayout(side_widget)
+        side.setContentsMargins(0, 0, 0, 0)
+        side.addWidget(self.court_diagram)
         side.addWidget(self.court_prompt)
         for b in (skip, undo, grab, load, self.court_solve_button):
             side.addWidget(b)
         side.addWidget(self.court_status)
+        side.addStretch(1)
         layout = QHBoxLayout(page)
-        layout.addWidget(self.court_view, 3)
-        layout.addLayout(side, 1)
+        layout.addWidget(self.court_view, 1)
+        layout.addWidget(side_widget)
         return page
 
     def _enter_court_page(self) -> None:
