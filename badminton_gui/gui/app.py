@@ -38,11 +38,14 @@ def main(argv: list[str] | None = None) -> int:
         print(f"badminton-gui: --source {args.source} needs --left and --right", file=sys.stderr)
         return 2
 
+    from PySide6.QtCore import QCoreApplication, Qt
     from PySide6.QtWidgets import QApplication
 
     from . import settings as st
     from .main_window import MainWindow
 
+    # Shared GL contexts: pyqtgraph's shaders stay valid if a GL view is ever re-created.
+    QCoreApplication.setAttribute(Qt.ApplicationAttribute.AA_ShareOpenGLContexts)
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setOrganizationName(st.ORGANISATION)
     app.setApplicationName(st.APPLICATION)

@@ -124,7 +124,7 @@ class CourtGLView:
         self._gl = gl
         self.widget = gl.GLViewWidget()
         self.widget.setBackgroundColor((18, 20, 26))
-        self.widget.setCameraPosition(distance=21.0, elevation=24.0, azimuth=-62.0)
+        self.widget.setCameraPosition(distance=17.5, elevation=26.0, azimuth=-62.0)
         self.widget.opts["center"] = pg.Vector(0.0, 0.0, 1.0)
         self.widget.setMinimumSize(280, 200)
         self._court = gl.GLLinePlotItem(pos=_court_segments_3d(), mode="lines",

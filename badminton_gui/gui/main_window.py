@@ -104,13 +104,14 @@ class Readouts(QWidget):
         r, s = packet.result, packet.stats
         v = self.values
         v["distance"].setText(f"{r.distance * 1000:,.0f} mm".replace(",", " ") if r.distance is not None else "—")
-        v["speed"].setText(f"{r.speed * 3.6:.0f} km/h  ({r.speed:.1f} m/s)" if r.speed is not None else "—")
+        v["speed"].setText(f"{r.speed * 3.6:.0f} km/h <span style='font-size:small; font-weight:normal'>"
+                           f"{r.speed:.1f} m/s</span>" if r.speed is not None else "—")
         peak = r.flight.peak_speed
         v["peak"].setText(f"{peak * 3.6:.0f} km/h  ({peak:.1f} m/s)" if peak is not None else "—")
         lp = r.flight.prediction
         if lp is not None:
-            v["landing"].setText(f"x {lp.x:+.2f} m, y {lp.y:+.2f} m, ±{lp.radius:.2f} m\n"
-                                 f"in {max(0.0, lp.t - r.timestamp):.2f} s")
+            v["landing"].setText(f"x {lp.x:+.2f} m  y {lp.y:+.2f} m<br>"
+                                 f"±{lp.radius:.2f} m, lands in {max(0.0, lp.t - r.timestamp):.2f} s")
             colour = "#3c3" if lp.call == "in" else "#e44" if lp.call == "out" else "#ccc"
             v["call"].setText(f"<span style='color:{colour}'>{(lp.call or 'unknown').upper()}</span>")
         else:
@@ -190,7 +191,7 @@ class MainWindow(QMainWindow):
         bottom.addWidget(plots)
         bottom.addWidget(self.readouts)
         if self.gl_view is not None:
-            bottom.setSizes([420, 460, 280])
+            bottom.setSizes([500, 360, 280])
         else:
             bottom.setSizes([800, 280])
 

@@ -1,0 +1,298 @@
+"""The threshold tuning dialog, generated from the parameter dataclasses.
+
+Why this file exists: the operator tunes the pipeline live. Nothing here knows any particular
+parameter: every field of every group in ``core/params.py`` becomes a row (slider + spin box
+with its range and unit, or a check box, or a choice list) with its help as tooltip, one tab
+per group (GUIDE §3.1). Each edit makes a new frozen ``TrackerParams`` snapshot; snapshots are
+sent at most every 50 ms (≈20 Hz) so dragging a slider never floods the worker (GUIDE §3.2).
+Beside the controls, a live preview shows the foreground mask with the candidates coloured by
+the filter that rejected them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from decimal import Decimal
+from pathlib import Path
+
+import cv2
+import numpy as np
+from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDoubleSpinBox, QFileDialog,
+                               QGridLayout, QHBoxLayout, QLabel, QListWidget, QMessageBox, QPushButton,
+                               QScrollArea, QSlider, QSpinBox, QSplitter, QStackedWidget,
+                               QVBoxLayout, QWidget)
+
+from ..core.params import ParamError, TrackerParams, field_info
+from ..io.presets import list_presets, load_preset
+from .feed_view import FeedView
+from .worker import DisplayPacket
+
+SEND_INTERVAL_MS = 50          # at most ~20 snapshots per second while a slider moves
+MAX_SLIDER_POSITIONS = 2000    # a slider finer than this is useless; the spin box keeps the step
+
+
+def _decimals(step: float) -> int:
+    return max(0, -Decimal(str(step)).normalize().as_tuple().exponent)
+
+
+class NumberEditor(QWidget):
+    """Slider + spin box for a numeric field with a declared range."""
+
+    def __init__(self, value: float, lo: float, hi: float, step: float | None, unit: str,
+                 is_int: bool, on_change) -> None:
+        super().__init__()
+        self.lo, self.hi, self.is_int = lo, hi, is_int
+        self._on_change = on_change
+        if step is None:
+            step = 1.0 if is_int else (hi - lo) / 1000.0
+        positions = int(round((hi - lo) / step))
+        self.slider_step = step if positions <= MAX_SLIDER_POSITIONS else (hi - lo) / MAX_SLIDER_POSITIONS
+        self.slider = QSlider(Qt.Orientation.Horizontal)
+        self.slider.setRange(0, int(round((hi - lo) / self.slider_step)))
+        self.slider.setMinimumWidth(160)
+        if is_int:
+            self.spin = QSpinBox()
+            self.spin.setRange(int(lo), int(hi))
+            self.spin.setSingleStep(max(1, int(step)))
+        else:
+            self.spin = QDoubleSpinBox()
+            self.spin.setDecimals(min(6, max(_decimals(step), 1)))
+            self.spin.setRange(lo, hi)
+            self.spin.setSingleStep(step)
+        if unit:
+            self.spin.setSuffix(f" {unit}")
+        self.spin.setMinimumWidth(110)
+        self.spin.setKeyboardTracking(False)
+        lay = QHBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.slider, 1)
+        lay.addWidget(self.spin)
+        self.set_value(value)
+        self.slider.valueChanged.connect(self._slider_moved)
+        self.spin.valueChanged.connect(self._spin_changed)
+
+    def set_value(self, value: float) -> None:
+        for w in (self.slider, self.spin):
+            w.blockSignals(True)
+        self.spin.setValue(int(value) if self.is_int else float(value))
+        self.slider.setValue(int(round((value - self.lo) / self.slider_step)))
+        for w in (self.slider, self.spin):
+            w.blockSignals(False)
+
+    def _slider_moved(self, pos: int) -> None:
+        value = min(self.hi, self.lo + pos * self.slider_step)
+        value = int(round(value)) if self.is_int else value
+        self.spin.blockSignals(True)
+        self.spin.setValue(value)
+        self.spin.blockSignals(False)
+        self._on_change(self.spin.value())
+
+    def _spin_changed(self, value) -> None:
+        self.slider.blockSignals(True)
+        self.slider.setValue(int(round((value - self.lo) / self.slider_step)))
+        self.slider.blockSignals(False)
+        self._on_change(value)
+
+
+class TuningDialog(QDialog):
+    """Live tuning of every tracker parameter; emits whole snapshots, throttled."""
+
+    paramsChanged = Signal(object)      # TrackerParams
+
+    def __init__(self, params: TrackerParams, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("Tuning — detection thresholds")
+        self.params = params
+        self.editors: dict[str, QWidget] = {}     # "group.name" → editor (tests drive these)
+        self._send_timer = QTimer(self)
+        self._send_timer.setSingleShot(True)
+        self._send_timer.timeout.connect(lambda: self.paramsChanged.emit(self.params))
+
+        # -- presets row
+        self.preset_combo = QComboBox()
+        self.preset_combo.addItem("Preset…")
+        for name, description in list_presets().items():
+            self.preset_combo.addItem(name)
+            self.preset_combo.setItemData(self.preset_combo.count() - 1, description, Qt.ItemDataRole.ToolTipRole)
+        self.preset_combo.activated.connect(self._preset_chosen)
+        load_button = QPushButton("Load…")
+        load_button.setToolTip("Load parameters from a JSON preset file")
+        load_button.clicked.connect(self._load_file)
+        save_button = QPushButton("Save as…")
+        save_button.setToolTip("Save the current parameters as a readable JSON preset file")
+        save_button.clicked.connect(self._save_file)
+        reset_button = QPushButton("Reset to defaults")
+        reset_button.clicked.connect(lambda: self.set_params(TrackerParams()))
+        top = QHBoxLayout()
+        top.addWidget(QLabel("Preset"))
+        top.addWidget(self.preset_combo, 1)
+        top.addWidget(load_button)
+        top.addWidget(save_button)
+        top.addStretch(1)
+        top.addWidget(reset_button)
+
+        # -- one page per parameter group, generated; a side list picks the group
+        self.group_list = QListWidget()
+        self.pages = QStackedWidget()
+        for group_name, group in params.groups():
+            self.group_list.addItem(type(group).TITLE or group_name)
+            self.pages.addWidget(self._group_page(group_name, group))
+        self.group_list.currentRowChanged.connect(self.pages.setCurrentIndex)
+        self.group_list.setCurrentRow(0)
+        self.group_list.setFixedWidth(self.group_list.sizeHintForColumn(0) + 24)
+        self.tabs = QWidget()
+        tl = QHBoxLayout(self.tabs)
+        tl.setContentsMargins(0, 0, 0, 0)
+        tl.addWidget(self.group_list)
+        tl.addWidget(self.pages, 1)
+
+        # -- live preview
+        self.preview = FeedView("Mask preview")
+        self.preview.show_rejected = True
+        self.preview.setMinimumSize(360, 240)
+        self.preview_camera = QComboBox()
+        self.preview_camera.addItems(["Left camera", "Right camera"])
+        self.preview_info = QLabel("")
+        self.preview_info.setWordWrap(True)
+        right = QWidget()
+        rl = QVBoxLayout(right)
+        rl.setContentsMargins(0, 0, 0, 0)
+        row = QHBoxLayout()
+        row.addWidget(QLabel("Preview"))
+        row.addWidget(self.preview_camera)
+        row.addStretch(1)
+        rl.addLayout(row)
+        rl.addWidget(self.preview, 1)
+        rl.addWidget(self.preview_info)
+
+        split = QSplitter(Qt.Orientation.Horizontal)
+        split.addWidget(self.tabs)
+        split.addWidget(right)
+        split.setSizes([580, 420])
+        lay = QVBoxLayout(self)
+        lay.addLayout(top)
+        lay.addWidget(split, 1)
+        self.resize(1060, 560)
+
+    def _group_page(self, group_name: str, group) -> QWidget:
+        page = QWidget()
+        grid = QGridLayout(page)
+        grid.setColumnStretch(1, 1)
+        doc = (type(group).__doc__ or "").strip().splitlines()[0] if type(group).__doc__ else ""
+        header = QLabel(f"<b>{type(group).TITLE or group_name}</b> — {doc}")
+        header.setWordWrap(True)
+        header.setStyleSheet("color: #888;")
+        grid.addWidget(header, 0, 0, 1, 2)
+        for row, (name, f) in enumerate(field_info(group), start=1):
+            meta = f.metadata
+            path = f"{group_name}.{name}"
+            value = getattr(group, name)
+            label = QLabel(meta.get("label") or name.replace("_", " "))
+            on_change = (lambda v, path=path: self._edited(path, v))
+            if "range" in meta:
+                lo, hi = meta["range"]
+                editor = NumberEditor(value, lo, hi, meta.get("step"), meta.get("unit", ""),
+                                      isinstance(f.default, int) and not isinstance(f.default, bool),
+                                      on_change)
+            elif "options" in meta:
+                editor = QComboBox()
+                editor.addItems(list(meta["options"]))
+                editor.setCurrentText(str(value))
+                editor.currentTextChanged.connect(on_change)
+            else:
+                editor = QCheckBox()
+                editor.setChecked(bool(value))
+                editor.toggled.connect(on_change)
+            tip = meta.get("help", "")
+            if "range" in meta:
+                lo, hi = meta["range"]
+                unit = meta.get("unit", "")
+                tip = (tip + "\n" if tip else "") + f"Range {lo:g}–{hi:g} {unit}".rstrip()
+            for w in (label, editor):
+                w.setToolTip(tip)
+            grid.addWidget(label, row, 0)
+            grid.addWidget(editor, row, 1)
+            self.editors[path] = editor
+        grid.setRowStretch(grid.rowCount(), 1)
+        scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        scroll.setFrameShape(QScrollArea.Shape.NoFrame)
+        scroll.setWidget(page)
+        return scroll
+
+    # ---- parameters ------------------------------------------------------------------------
+    def _edited(self, path: str, value) -> None:
+        try:
+            self.params = self.params.with_value(path, value)
+        except ParamError as exc:
+            QMessageBox.warning(self, "Tuning", str(exc))
+            return
+        if not self._send_timer.isActive():
+            self._send_timer.start(SEND_INTERVAL_MS)
+
+    def set_params(self, params: TrackerParams) -> None:
+        """Show a whole snapshot (preset, file, defaults) and send it."""
+        self.params = params
+        for path, editor in self.editors.items():
+            value = params.get(path)
+            if isinstance(editor, NumberEditor):
+                editor.set_value(value)
+            elif isinstance(editor, QComboBox):
+                editor.blockSignals(True)
+                editor.setCurrentText(str(value))
+                editor.blockSignals(False)
+            else:
+                editor.blockSignals(True)
+                editor.setChecked(bool(value))
+                editor.blockSignals(False)
+        self._send_timer.stop()
+        self.paramsChanged.emit(self.params)
+
+    def _preset_chosen(self, index: int) -> None:
+        if index <= 0:
+            return
+        name = self.preset_combo.itemText(index)
+        try:
+            self.set_params(load_preset(name))
+        except ParamError as exc:
+            QMessageBox.warning(self, "Preset", str(exc))
+        self.preset_combo.setCurrentIndex(0)
+
+    def _load_file(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Load preset", str(Path.home()), "Presets (*.json)")
+        if not path:
+            return
+        try:
+            self.set_params(TrackerParams.load(path))
+        except (ParamError, OSError) as exc:
+            QMessageBox.warning(self, "Load preset", str(exc))
+
+    def _save_file(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Save preset", str(Path.home() / "preset.json"),
+                                              "Presets (*.json)")
+        if not path:
+            return
+        if not path.endswith(".json"):
+            path += ".json"
+        try:
+            self.params.save(path, description=f"Saved from the tuning dialog ({Path(path).stem})")
+        except OSError as exc:
+            QMessageBox.warning(self, "Save preset", f"Cannot write {path}: {exc.strerror or exc}")
+
+    # ---- preview ---------------------------------------------------------------------------
+    def show_preview(self, packet: DisplayPacket) -> None:
+        cam = packet.result.left if self.preview_camera.currentIndex() == 0 else packet.result.right
+        if cam.mask is None:
+            self.preview.set_message("The tracker kept no mask for this frame")
+            return
+        image = cv2.cvtColor(cam.mask, cv2.COLOR_GRAY2BGR) if cam.mask.ndim == 2 else np.ascontiguousarray(cam.mask)
+        self.preview.set_frame(image, cam.mask_scale, cam, np.zeros((0, 3)))
+        rejected: dict[str, int] = {}
+        for c in cam.candidates:
+            if c.rejected_by is not None:
+                rejected[c.rejected_by] = rejected.get(c.rejected_by, 0) + 1
+        summary = ", ".join(f"{n} {k}" for k, n in sorted(rejected.items())) or "none"
+        self.preview_info.setText(f"{len(cam.candidates)} candidates; "
+                                  f"{'shuttle found' if cam.detection else 'no shuttle'}; rejected: {summary}")
