@@ -48,6 +48,9 @@ NO_COURT_POSE = "no court pose: calibrate the court pose to get landing predicti
 CONFIRM_POINTS = 4          # consecutive agreeing points that start (or restart) a flight
 MIN_FLIGHT_SPEED = 1.0      # m/s: slower "tracks" are shuttles lying on the floor or held in a hand
 LANDED_HEIGHT = 0.03        # m: a flight whose estimate is this low has landed (cork radius ≈ 1.3 cm)
+MIN_START_HEIGHT = 0.15     # m: no flight starts lower (a shuttle rolling or picked up off the floor;
+                            # with noisy points its 4-point "speed" easily exceeds MIN_FLIGHT_SPEED)
+MAX_RADIUS = 2.0            # m: a landing this uncertain is withheld (a fresh, poorly fixed track)
 MAX_FLIGHT_TIME = 6.0       # s: the landing search stops here
 K_MIN = 1.0 / physics.AERO_LENGTH_BOUNDS[1]
 K_MAX = 1.0 / physics.AERO_LENGTH_BOUNDS[0]
@@ -366,7 +369,7 @@ class Trajectory:
 
     def _promote(self, tent: _Filter) -> None:
         """The tentative track becomes the flight: a new shot, or a re-synchronised one."""
-        if tent.speed < MIN_FLIGHT_SPEED:
+        if tent.speed < MIN_FLIGHT_SPEED or tent.x[2] < MIN_START_HEIGHT:
             return      # a shuttle lying on the floor or held in a hand: not a flight
         old = self._flight
         new_shot = True
@@ -512,6 +515,9 @@ class Trajectory:
         reason = ""
         if pred is None:
             reason = f"collecting points: {len(f.points)}/{self.params.min_points}"
+        elif pred.radius > MAX_RADIUS:
+            reason = f"landing too uncertain yet (±{pred.radius:.1f} m)"
+            pred = None
         return FlightInfo(shot_index=self._shot_index, velocity=vel,
                           peak_speed=self._peak_speed_value(), prediction=pred,
                           withheld_reason=reason, in_flight=True)
