@@ -185,3 +185,51 @@ def test_none_refcount_canary(qapp):
     after = sys.getrefcount(None)
     painter.end()
     assert after >= before - 100
+
+
+def test_robot_link_panel_streams_results(main_window, qtbot):
+    window = main_window()
+    window.realtime_action.setChecked(False)
+    window.start_opener(_demo_opener, "demo")
+    panel = window.link_panel
+    panel.port.setEditText("loop://")
+    panel.connect_link()
+    assert panel.link is not None, panel.status.text()
+    qtbot.waitUntil(lambda: panel.link is not None and panel.link.status().messages_sent > 3,
+                    timeout=WAIT_MS)
+    panel.refresh()
+    assert "loop://" in panel.status.text()
+    panel.disconnect_link()
+    assert panel.link is None
+
+
+def test_calibrate_loads_the_saved_rig(main_window, qtbot, tmp_path, monkeypatch):
+    """The wizard is replaced by a stand-in that saves a rig; the window must restart on it."""
+    import badminton_gui.gui.calibration_wizard as wizard_module
+    from PySide6.QtCore import Signal
+    from PySide6.QtWidgets import QDialog
+
+    rig_path = tmp_path / "calibrated.yaml"
+    make_rig("binocular").save(rig_path)
+
+    class FakeWizard(QDialog):
+        rigSaved = Signal(str)
+
+        def __init__(self, source_factory, parent=None, save_dir=None):
+            super().__init__(parent)
+            self.factory = source_factory
+
+        def exec(self):
+            source = self.factory()        # the factory must open the current source
+            source.close()
+            self.rigSaved.emit(str(rig_path))
+            return 1
+
+    monkeypatch.setattr(wizard_module, "CalibrationWizard", FakeWizard)
+    window = main_window()
+    window.start_spec(SourceSpec("demo", realtime=False))
+    qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)
+    window.open_calibration()
+    assert window.spec.calib == str(rig_path)
+    qtbot.waitUntil(lambda: window.rig is not None and window.worker is not None, timeout=WAIT_MS)
+    assert load_source_spec(open_settings()).calib == str(rig_path)

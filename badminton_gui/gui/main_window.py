@@ -427,6 +427,10 @@ class MainWindow(QMainWindow):
         packet = self.worker.output.take()
         if packet is None:
             return
+        # Frames arrive already shrunk to the feeds' size, so painting them is nearly a copy.
+        ratio = self.devicePixelRatioF()
+        self.worker.set_display_size(int(max(self.left_feed.width(), self.right_feed.width()) * ratio),
+                                     int(max(self.left_feed.height(), self.right_feed.height()) * ratio))
         self.latest_packet = packet
         self.results_seen += 1
         self.display_refreshes += 1

@@ -37,7 +37,7 @@ _log = logging.getLogger(__name__)
 # Failures that are the user's situation, not a bug: shown as one sentence in the banner.
 USER_ERRORS = (SourceError, RigError, ParamError, OSError, cv2.error)
 
-DISPLAY_MAX_WIDTH = 960        # feeds are shown at most this wide; bigger frames shrink in the worker
+DISPLAY_MAX_WIDTH = 960        # frame width for the display until the GUI says how wide the feeds are
 TRAIL_SECONDS = 0.5            # the fading trail behind the red circle
 RESYNC_AFTER = 0.25            # s behind the source clock before real-time pacing gives up catching up
 
@@ -172,6 +172,7 @@ class TrackingWorker(QObject):
         self._steps = 0
         self._realtime = realtime
         self._show_mask = show_mask
+        self._display_box = (DISPLAY_MAX_WIDTH, DISPLAY_MAX_WIDTH)
         self._link = None
         self._link_lock = threading.Lock()
         self.link_error = ""
@@ -203,6 +204,11 @@ class TrackingWorker(QObject):
     def set_show_mask(self, show: bool) -> None:
         with self._lock:
             self._show_mask = show
+
+    def set_display_size(self, width: int, height: int) -> None:
+        """Shrink frames to fit this box before handing them over (painting 1:1 is cheap)."""
+        with self._lock:
+            self._display_box = (max(64, int(width)), max(64, int(height)))
 
     def set_link(self, link) -> None:
         """Robot link that receives every result at full rate (None to stop sending)."""
@@ -254,6 +260,7 @@ class TrackingWorker(QObject):
             with self._lock:
                 params, self._pending_params = self._pending_params, None
                 paused, realtime, show_mask = self._paused, self._realtime, self._show_mask
+                display_box = self._display_box
                 stepping = paused and self._steps > 0
                 if stepping:
                     self._steps -= 1
@@ -328,7 +335,7 @@ class TrackingWorker(QObject):
                                 capture_fps_right=cap_r, dropped=dropped,
                                 latency_ms=(t_done - t_available) * 1000.0,
                                 processing_ms=result.processing_ms, playback_speed=playback)
-            self.output.put(self._packet(frame, result, trails, tracker, stats, show_mask))
+            self.output.put(self._packet(frame, result, trails, tracker, stats, show_mask, display_box))
 
     def _sleep_until(self, due: float) -> None:
         while not self._abort.is_set():
@@ -339,9 +346,9 @@ class TrackingWorker(QObject):
 
     @staticmethod
     def _packet(frame, result: TrackResult, trails, tracker: StereoTracker, stats: WorkerStats,
-                show_mask: bool) -> DisplayPacket:
+                show_mask: bool, display_box: tuple[int, int]) -> DisplayPacket:
         h, w = frame.left.shape[:2]
-        scale = min(1.0, DISPLAY_MAX_WIDTH / float(w))
+        scale = min(1.0, display_box[0] / float(w), display_box[1] / float(h))
         images = []
         for img, cam in ((frame.left, result.left), (frame.right, result.right)):
             if scale < 1.0:
