@@ -228,6 +228,7 @@ class RallyScript:
         self._t_generated = 0.0
         self._shot_count = 0
         self._rally_count = 0
+        self._rally = None
         self._add(Segment("off", 0.0, SERVE_DELAY))
 
     # -- generation --
@@ -242,11 +243,21 @@ class RallyScript:
         self._contacts_by_player[c.player].append(c)
 
     def ensure(self, t: float) -> None:
-        """Generate rallies until the script covers time ``t`` (plus look-ahead for players)."""
-        while self._t_generated < t + 3.0:
-            self._generate_rally()
+        """Generate shots until the script covers time ``t`` (plus look-ahead for players).
 
-    def _generate_rally(self) -> None:
+        One shot at a time (a few tens of ms), so a live consumer never stalls for a whole
+        rally's worth of physics.
+        """
+        while self._t_generated < t + 3.0:
+            if self._rally is None:
+                self._rally = self._generate_rally()
+            try:
+                next(self._rally)
+            except StopIteration:
+                self._rally = None
+
+    def _generate_rally(self):
+        """Generator: adds one shot's segments per step until the rally ends."""
         rng = self._rng
         server = self._rally_count % 2
         self._rally_count += 1
@@ -270,7 +281,8 @@ class RallyScript:
                     if v0 is not None:
                         break
             if v0 is None:
-                break
+                self._add(Segment("off", t, t + OFF_BETWEEN_RALLIES))
+                return
             ts, ps, vs = physics.simulate(p0, v0, 6.0, dt=1e-3, aero_length=AERO_LENGTH,
                                           floor_z=0.0)
             last = i == n_shots - 1
@@ -304,6 +316,7 @@ class RallyScript:
                 return
             p0 = ps[cut].copy()
             hitter, kind = receiver, next_kind
+            yield
 
     # -- queries --
     def segment_at(self, t: float) -> Segment:

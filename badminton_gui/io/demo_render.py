@@ -122,6 +122,10 @@ def _hall_polygons() -> list[tuple[np.ndarray, str]]:
             y = sy * (hy - 0.01)
             polys.append((np.array([[x, y, 6.2], [x + 1.2, y, 6.2], [x + 1.2, y, 6.9],
                                     [x, y, 6.9]], float), "light"))
+        for x in (-6.5, -2.5, 1.5, 5.0):        # a lower row of floodlights, seen from the ends
+            y = sy * (hy - 0.01)
+            polys.append((np.array([[x, y, 2.9], [x + 1.4, y, 2.9], [x + 1.4, y, 3.4],
+                                    [x, y, 3.4]], float), "light"))
     for sx in (-1, 1):
         for y in (-8.0, -3.5, 1.0, 5.5):
             x = sx * (hx - 0.01)

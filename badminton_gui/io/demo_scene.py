@@ -184,7 +184,9 @@ class DemoScene:
 
     # -- truth --
     def time_of(self, index: int) -> float:
-        return index / self._fps
+        if int(index) != index or index < 0:
+            raise ValueError(f"frame index must be a non-negative integer, got {index!r}")
+        return int(index) / self._fps
 
     def _players(self, t: float) -> list[list]:
         """Projected body parts of both players, per camera."""
