@@ -27,7 +27,8 @@ from typing import Callable
 import cv2
 import numpy as np
 from PySide6.QtCore import QObject, QPointF, QRectF, QSize, Qt, QThread, QTimer, Signal
-from PySide6.QtGui import QColor, QFont, QIcon, QImage, QPainter, QPen, QPixmap
+from PySide6.QtGui import (QColor, QFont, QIcon, QImage, QKeySequence, QPainter, QPen, QPixmap,
+                           QShortcut)
 from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDoubleSpinBox, QFileDialog,
                                QFormLayout, QGridLayout, QGroupBox, QHBoxLayout, QLabel,
                                QListWidget, QListWidgetItem, QMessageBox, QProgressBar,
@@ -488,6 +489,7 @@ class CalibrationWizard(QDialog):
         self._grabber: FrameGrabber | None = None
         self._last_serial = -1
         self._frames_shown = 0
+        self._notice: tuple[str, float] | None = None
         self._latest_left: np.ndarray | None = None
         self._folders: tuple[Path, Path] | None = None
         self.outcome: SolveOutcome | None = None
@@ -680,6 +682,8 @@ class CalibrationWizard(QDialog):
         self.thumb_list.setSelectionMode(QListWidget.SelectionMode.ExtendedSelection)
         self.remove_button = QPushButton("Remove selected")
         self.remove_button.clicked.connect(self.remove_selected)
+        delete = QShortcut(QKeySequence(QKeySequence.StandardKey.Delete), self.thumb_list)
+        delete.activated.connect(self.remove_selected)
         self.count_label = QLabel("0 views captured")
         thumbs_head = QHBoxLayout()
         thumbs_head.addWidget(self.count_label, 1)
@@ -746,6 +750,12 @@ class CalibrationWizard(QDialog):
         self.status_label.setText(self._status_text(live))
 
     def _status_text(self, live: LiveFrame) -> str:
+        notice = ""
+        if self._notice and time.monotonic() < self._notice[1]:
+            notice = f"<span style='color:#c0392b'><b>{self._notice[0]}</b></span><br>"
+        return notice + self._verdict_text(live)
+
+    def _verdict_text(self, live: LiveFrame) -> str:
         v = live.verdict
         skipped = live.frames_read - self._frames_shown
         tail = f"<br><span style='color:#777'>frames read {live.frames_read}, not displayed " \
@@ -782,6 +792,8 @@ class CalibrationWizard(QDialog):
         self._update_nav()
 
     def _on_refused(self, reason: str) -> None:
+        # Shown for a few seconds on top of the live status, which is redrawn every frame.
+        self._notice = (f"not captured: {reason}", time.monotonic() + 3.0)
         self.status_label.setText(f"<span style='color:#c0392b'>not captured: {reason}</span>")
 
     def _on_capture_failed(self, message: str) -> None:
@@ -925,6 +937,8 @@ class CalibrationWizard(QDialog):
         self.figures_label = QLabel()
         self.figures_label.setWordWrap(True)
         self.figures_label.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.view_errors_label = QLabel()
+        self.view_errors_label.setWordWrap(True)
         self.rejected_label = QLabel()
         self.rejected_label.setWordWrap(True)
         self.preview_view = ImageView("no rectified preview")
@@ -936,6 +950,7 @@ class CalibrationWizard(QDialog):
         left = QVBoxLayout()
         left.addWidget(self.epipolar_label)
         left.addWidget(self.figures_label)
+        left.addWidget(self.view_errors_label)
         left.addWidget(self.rejected_label)
         left.addStretch(1)
         save_row = QHBoxLayout()
@@ -990,6 +1005,11 @@ class CalibrationWizard(QDialog):
             self.preview_view.set_placeholder("no rectified preview: " + r.rectification_note)
         self.save_label.setText(f"not saved yet; will be saved in {self.save_dir.resolve()}")
         self.saved_path = None
+        worst = sorted(r.view_errors, key=lambda v: -v.rms_px)
+        self.view_errors_label.setText(
+            "<b>Per-view error</b> (worst first, px): " + ", ".join(
+                f"{v.view_id} {v.rms_px:.2f}" for v in worst[:12])
+            + (f", … ({len(worst) - 12} more)" if len(worst) > 12 else ""))
         self._annotate_thumbnails(r)
 
     def _annotate_thumbnails(self, r: CalibrationResult) -> None:
