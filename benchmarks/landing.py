@@ -11,7 +11,7 @@ session, one shuttle per session), samples them at a camera rate with stereo-lik
   share of flights that had a prediction by then, for each frame rate and noise level;
 * the speed error (median and p95 of |estimated − true| / true, after the prediction starts);
 * how often the true landing lies inside the predicted radius (calibration of the uncertainty);
-* the update cost per frame (median and mean µs) and the fitted L error at the end of a shot.
+* the update cost per frame (median, mean, p99 µs; wall clock and thread CPU time) and the fitted L error at the end of a shot.
 
 Usage:  python benchmarks/landing.py [--sessions N] [--shots N] [--fps 120 60] [--sigma 0.01 0.02]
 """
@@ -136,9 +136,9 @@ def run_session(rng: np.random.Generator, n_shots: int, fps: float, sigma: float
         shot_before = traj._shot_index
         for t_rel, pt, tv in zip(times, points, true_vel):
             t_abs = clock + t_rel
-            start = time.perf_counter()
+            start, start_cpu = time.perf_counter(), time.thread_time()
             info = traj.update(t_abs, pt)
-            timings.append(time.perf_counter() - start)
+            timings.append((time.perf_counter() - start, time.thread_time() - start_cpu))
             history.append((t_abs, info.prediction if info.in_flight else None, info.velocity, tv))
         lead_errors, lead_inside = {}, {}
         for lead in LEAD_TIMES_MS:
@@ -161,6 +161,18 @@ def run_session(rng: np.random.Generator, n_shots: int, fps: float, sigma: float
         # The shuttle lies on the floor, then the next rally starts (no points meanwhile).
         clock = t_land + rng.uniform(0.5, 1.5)
     return records
+
+
+def reference_landing_cost(rng: np.random.Generator, n: int = 100) -> float:
+    """Median µs of the shared reference integrator core/physics.landing from mid-flight states."""
+    costs = []
+    for _ in range(n):
+        shot = make_shot(rng, "clear", 4.8, dt=2e-3)
+        i = len(shot.t) // 3
+        start = time.perf_counter()
+        physics.landing(shot.pos[i], shot.vel[i], 4.8)
+        costs.append(time.perf_counter() - start)
+    return float(np.median(costs) * 1e6)
 
 
 def percentile(values, q):
@@ -219,14 +231,20 @@ def main(argv: list[str] | None = None) -> int:
             speed = [e for r in records for e in r.speed_rel_errors]
             aero = [r.aero_error for r in records if r.aero_error is not None]
             split = [r.shots_seen for r in records]
-            us = np.asarray(timings) * 1e6
+            us = np.asarray(timings)[:, 0] * 1e6
+            cpu_us = np.asarray(timings)[:, 1] * 1e6
             print(f"speed error: median {percentile(speed, 50):.2%}, p95 {percentile(speed, 95):.2%} "
                   f"({len(speed)} frames with a prediction)")
             print(f"fitted L error at landing: median {percentile(aero, 50) * 100:.1f} cm, "
                   f"p95 {percentile(aero, 95) * 100:.1f} cm")
             print(f"shots counted per true shot: {np.bincount(split).tolist()} (index = count)")
             print(f"update cost: median {np.median(us):.0f} µs, mean {np.mean(us):.0f} µs, "
-                  f"p99 {np.percentile(us, 99):.0f} µs over {len(us)} frames")
+                  f"p99 {np.percentile(us, 99):.0f} µs over {len(us)} frames (wall clock); "
+                  f"thread CPU time: median {np.median(cpu_us):.0f} µs, mean {np.mean(cpu_us):.0f} µs, "
+                  f"p99 {np.percentile(cpu_us, 99):.0f} µs, max {np.max(cpu_us):.0f} µs")
+            ref = reference_landing_cost(np.random.default_rng(args.seed))
+            print(f"  same run, for scale: one physics.landing() call (numpy RK4, 2 ms step) "
+                  f"{ref:.0f} µs median ({ref / np.median(us):.0f}x one update)")
     return 0
 
 
