@@ -271,6 +271,7 @@ class Trajectory:
         self._ended_points: np.ndarray | None = None
         self._recent: list[tuple[float, float, float, float]] = []   # camera-frame mode
         self._velocity_no_model: tuple[float, float, float] | None = None
+        self._misses_no_model = 0     # consecutive points off the local fit (camera-frame mode)
         self.shots_ended = 0
 
     # ---- read-only views for plots and tests ------------------------------------------------
@@ -541,14 +542,14 @@ class Trajectory:
                 pos, _ = self._poly_fit(recent[-8:], t)
                 accepted = float(np.linalg.norm(z - pos)) <= p.outlier_distance
                 if not accepted:
-                    self._seed_no_model = getattr(self, "_seed_no_model", 0) + 1
-                    if self._seed_no_model >= CONFIRM_POINTS:   # the track has really moved on
+                    self._misses_no_model += 1
+                    if self._misses_no_model >= CONFIRM_POINTS:   # the track has really moved on
                         recent.clear()
                         accepted = True
             else:
                 accepted = True
             if accepted:
-                self._seed_no_model = 0
+                self._misses_no_model = 0
                 if not recent:
                     self._shot_index += 1
                 recent.append((t, float(z[0]), float(z[1]), float(z[2])))
