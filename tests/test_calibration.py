@@ -448,3 +448,22 @@ def test_court_clicks_sequence_and_preview(synthetic_views):
     left, right = src.render_pair(src.poses[0])
     preview = rectified_preview(res, left, right)
     assert preview.shape == (480, 1280, 3)
+
+
+@pytest.mark.skipif(not charuco_available(), reason="cv2.aruco.CharucoDetector absent")
+def test_charuco_stereo_on_synthetic_renders():
+    """ChArUco views may be partial: pairs use the ids both cameras saw."""
+    spec = BoardSpec(7, 5, 0.04, kind="charuco")
+    src = SyntheticChessboardSource(spec, n_poses=12, seed=5)
+    views = []
+    for k, pose in enumerate(src.poses):
+        left, right = src.render_pair(pose)
+        det_l, det_r = detect_board(left, spec), detect_board(right, spec)
+        if det_l is not None and det_r is not None:
+            truth = src.ground_truth_corners(0, pose)[det_l.ids]
+            assert float(np.max(np.abs(det_l.corners - truth))) < 0.5
+            views.append(pair_detections(f"p{k}", det_l, det_r, spec))
+    assert len(views) >= 10
+    res = solve_stereo(views, src.image_size, spec)
+    assert abs(res.M1[0, 0] / src.rig.M1[0, 0] - 1) < 0.005
+    assert abs(res.baseline / src.rig.baseline - 1) < 0.005

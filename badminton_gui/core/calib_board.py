@@ -165,7 +165,12 @@ def _subpix_window(corners: np.ndarray, spec: BoardSpec) -> int:
         d = np.linalg.norm(corners[:, None] - corners[None], axis=2)
         d[d == 0] = np.inf
         spacing = float(np.min(d))
-    return int(max(3, min(11, math.ceil(spacing * 0.35))))
+    fraction = 0.35
+    if spec.kind == "charuco":
+        # Only the ring between the corner and its markers is plain chessboard.
+        marker = spec.marker if spec.marker > 0 else 0.7 * spec.square
+        fraction = min(fraction, 0.5 * (1.0 - marker / spec.square))
+    return int(max(2, min(11, math.ceil(spacing * fraction))))
 
 
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 40, 0.001)

@@ -183,10 +183,15 @@ class SyntheticChessboardSource:
         px = 48                                   # texture pixels per square
         n_x, n_y = b.cols + 1, b.rows + 1
         tex = np.full(((n_y + 2) * px, (n_x + 2) * px), 235, np.uint8)
-        for j in range(n_y):
-            for i in range(n_x):
-                if (i + j) % 2 == 0:
-                    tex[(j + 1) * px:(j + 2) * px, (i + 1) * px:(i + 2) * px] = 25
+        if b.kind == "charuco":
+            # OpenCV draws the ChArUco pattern; its inner corner ids run like ours (x fastest).
+            pattern = b.charuco_board().generateImage((n_x * px, n_y * px), marginSize=0)
+            tex[px:(n_y + 1) * px, px:(n_x + 1) * px] = np.where(pattern > 127, 235, 25)
+        else:
+            for j in range(n_y):
+                for i in range(n_x):
+                    if (i + j) % 2 == 0:
+                        tex[(j + 1) * px:(j + 2) * px, (i + 1) * px:(i + 2) * px] = 25
         scale = px / b.square                     # texture px per metre
         # Board coordinate (0, 0) = first inner corner = texture point (2 px-squares in).
         origin = np.array([2 * px - 0.5, 2 * px - 0.5])
