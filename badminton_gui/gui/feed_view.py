@@ -122,20 +122,29 @@ class FeedView(QWidget):
         p.drawEllipse(c, CIRCLE_RADIUS, CIRCLE_RADIUS)
 
     def _paint_trail(self, p: QPainter) -> None:
+        """Recent detections as fading dots, joined where consecutive hits are close.
+
+        A detection that hops to another object and back would otherwise draw long lines
+        across the picture; unjoined dots show the hop for what it is.
+        """
         trail = self._trail
         if len(trail) < 2:
             return
         t_newest = trail[-1, 0]
         pts = [self.image_to_widget(x, y) for _, x, y in trail]
-        for i in range(1, len(pts)):
-            age = (t_newest - trail[i, 0]) / 0.5
-            alpha = int(max(0.0, 1.0 - age) * 220)
+        join_below = 0.12 * max(self.width(), self.height())
+        p.setBrush(Qt.BrushStyle.NoBrush)
+        for i in range(len(pts) - 1):
+            alpha = int(max(0.0, 1.0 - (t_newest - trail[i, 0]) / 0.5) * 220)
             if alpha <= 0:
                 continue
             colour = QColor(TRAIL_COLOUR)
             colour.setAlpha(alpha)
             p.setPen(QPen(colour, 2.5, Qt.PenStyle.SolidLine, Qt.PenCapStyle.RoundCap))
-            p.drawLine(pts[i - 1], pts[i])
+            gap = pts[i + 1] - pts[i]
+            if abs(gap.x()) + abs(gap.y()) < join_below:
+                p.drawLine(pts[i], pts[i + 1])
+            p.drawPoint(pts[i])
 
     def _paint_rejected(self, p: QPainter) -> None:
         p.setBrush(Qt.BrushStyle.NoBrush)

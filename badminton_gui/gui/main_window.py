@@ -93,7 +93,7 @@ class Readouts(QWidget):
             value.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
             if key in ("distance", "speed", "call"):
                 value.setFont(big)
-            value.setWordWrap(key == "landing")
+            value.setTextFormat(Qt.TextFormat.RichText)
             grid.addWidget(name, r, 0, Qt.AlignmentFlag.AlignTop)
             grid.addWidget(value, r, 1)
             self.values[key] = value
@@ -115,7 +115,8 @@ class Readouts(QWidget):
             colour = "#3c3" if lp.call == "in" else "#e44" if lp.call == "out" else "#ccc"
             v["call"].setText(f"<span style='color:{colour}'>{(lp.call or 'unknown').upper()}</span>")
         else:
-            v["landing"].setText(f"withheld: {r.flight.withheld_reason}" if r.flight.withheld_reason else "—")
+            reason = r.flight.withheld_reason
+            v["landing"].setText(f"withheld: {reason}" if reason else "—")
             v["call"].setText("—")
         v["capture"].setText(f"{s.capture_fps_left:.0f} / {s.capture_fps_right:.0f}")
         v["processing"].setText(f"{s.processing_fps:.0f} fps  ({s.processing_ms:.1f} ms/pair)")
@@ -219,6 +220,8 @@ class MainWindow(QMainWindow):
         self.link_dock.hide()
         self.status_source = QLabel("")
         self.statusBar().addWidget(self.status_source, 1)
+        self.status_state = QLabel("")
+        self.statusBar().addPermanentWidget(self.status_state)
         if self.gl_reason:
             self.statusBar().addPermanentWidget(QLabel(self.gl_reason + " — showing the 2D views"))
 
@@ -326,6 +329,7 @@ class MainWindow(QMainWindow):
 
     def _on_opened(self, name: str, rig: StereoRig) -> None:
         self.rig = rig
+        self.setWindowTitle(f"Badminton shuttle tracker — {name}")
         self.status_source.setText(f"{name} — rig {rig.image_size[0]}×{rig.image_size[1]}"
                                    f"{', court pose' if rig.has_court_pose else ', no court pose'}")
         if self.gl_view is not None:
@@ -354,6 +358,7 @@ class MainWindow(QMainWindow):
     # ---- controls --------------------------------------------------------------------------
     def toggle_pause(self) -> None:
         self._paused = self.pause_action.isChecked()
+        self.status_state.setText("<b>❚❚ Paused</b> — Space resumes, → steps one frame" if self._paused else "")
         if self.worker is not None:
             self.worker.set_paused(self._paused)
 

@@ -50,7 +50,7 @@ class NumberEditor(QWidget):
         self.slider_step = step if positions <= MAX_SLIDER_POSITIONS else (hi - lo) / MAX_SLIDER_POSITIONS
         self.slider = QSlider(Qt.Orientation.Horizontal)
         self.slider.setRange(0, int(round((hi - lo) / self.slider_step)))
-        self.slider.setMinimumWidth(160)
+        self.slider.setMinimumWidth(120)
         if is_int:
             self.spin = QSpinBox()
             self.spin.setRange(int(lo), int(hi))
@@ -62,7 +62,7 @@ class NumberEditor(QWidget):
             self.spin.setSingleStep(step)
         if unit:
             self.spin.setSuffix(f" {unit}")
-        self.spin.setMinimumWidth(110)
+        self.spin.setMinimumWidth(105)
         self.spin.setKeyboardTracking(False)
         lay = QHBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
@@ -169,11 +169,11 @@ class TuningDialog(QDialog):
         split = QSplitter(Qt.Orientation.Horizontal)
         split.addWidget(self.tabs)
         split.addWidget(right)
-        split.setSizes([580, 420])
+        split.setSizes([640, 400])
         lay = QVBoxLayout(self)
         lay.addLayout(top)
         lay.addWidget(split, 1)
-        self.resize(1060, 560)
+        self.resize(1080, 580)
 
     def _group_page(self, group_name: str, group) -> QWidget:
         page = QWidget()
@@ -220,6 +220,8 @@ class TuningDialog(QDialog):
         scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         scroll.setFrameShape(QScrollArea.Shape.NoFrame)
         scroll.setWidget(page)
+        # Never squeeze the rows: the scroll area is at least as wide as its page wants.
+        scroll.setMinimumWidth(page.minimumSizeHint().width() + scroll.verticalScrollBar().sizeHint().width())
         return scroll
 
     # ---- parameters ------------------------------------------------------------------------

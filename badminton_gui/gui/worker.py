@@ -374,13 +374,13 @@ class TrackingWorker(QObject):
 
 
 def _tint_mask(img: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """The display image with foreground pixels tinted green (the foreground-mask overlay)."""
+    """The display image with foreground pixels tinted magenta (the foreground-mask overlay)."""
     h, w = img.shape[:2]
     if mask.shape[:2] != (h, w):
         mask = cv2.resize(mask, (w, h), interpolation=cv2.INTER_NEAREST)
     out = img.copy()
     fg = mask > 0
-    out[fg] = (out[fg] // 2 + np.array([0, 127, 0], dtype=np.uint8))
+    out[fg] = out[fg] // 2 + np.array([127, 0, 127], dtype=np.uint8)   # magenta: stands out on a green court
     return out
 
 
