@@ -234,3 +234,30 @@ def test_none_and_nan_points_are_harmless():
         assert info.velocity is None and not info.in_flight
     info = traj.update(0.1, (math.nan, 0.0, 1.0))
     assert not info.in_flight
+
+
+# ---- real flights (NYCU rallies, skipped without ../shared/data) ------------------------------------
+NYCU_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "nycu-stereo"
+
+
+@pytest.mark.shared_data
+@pytest.mark.skipif(not NYCU_DIR.is_dir(), reason="../shared/data is absent")
+@pytest.mark.parametrize("rally", ["rally_11-46-04", "rally_11-48-00"])
+def test_real_rally_every_return_starts_a_shot(rally):
+    folder = NYCU_DIR / rally
+    if not (folder / "CameraReader_1.csv").is_file():
+        pytest.skip(f"{rally} is absent")
+    pts = landing.triangulate_nycu_rally(folder)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.05), court_frame=True)
+    starts, prev = [], -1
+    for row in pts:
+        info = traj.update(float(row[0]), tuple(row[1:]))
+        if info.shot_index != prev and info.shot_index >= 0:
+            starts.append(float(row[0]))
+            prev = info.shot_index
+    reversals = landing.direction_reversals(pts)
+    assert len(reversals) >= 3
+    assert all(any(abs(s - r) < 0.15 for s in starts) for r in reversals)
+    # Returns plus the serve (toss and hit); no stray shots from the shuttle lying on the floor.
+    assert len(starts) <= len(reversals) + 3
+    assert 3.5 <= traj.session_aero_length <= 6.0
