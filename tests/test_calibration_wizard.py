@@ -194,3 +194,25 @@ def test_wizard_board_page_refuses_square_board(qtbot):
     wizard.go_next()
     assert wizard.stack.currentIndex() == wizard.PAGE_BOARD
     assert "square" in wizard.board_error.text()
+
+
+def test_wizard_reports_a_failing_camera_and_restarts(qtbot):
+    from badminton_gui.io.sources import SourceError
+    attempts = []
+
+    def flaky():
+        attempts.append(1)
+        if len(attempts) == 1:
+            raise SourceError("camera 1 is not connected")
+        return _source()
+
+    wizard = CalibrationWizard(flaky)
+    qtbot.addWidget(wizard)
+    wizard.square_spin.setValue(30.0)
+    wizard.go_next()
+    qtbot.waitUntil(lambda: "not connected" in wizard.status_label.text(), timeout=10000)
+    qtbot.waitUntil(lambda: not wizard._capture_thread.isRunning(), timeout=10000)
+    wizard.restart_capture()
+    qtbot.waitUntil(lambda: wizard.left_view._qimage is not None, timeout=30000)
+    assert len(attempts) == 2
+    wizard.close()

@@ -74,6 +74,8 @@ def run(args: argparse.Namespace) -> int:
     for v in result.view_errors:
         print(f"  {v.view_id:<24} left {v.left_px:6.3f}  right {v.right_px:6.3f}  "
               f"epipolar {v.epipolar_px:6.3f}")
+    for w in found.warnings:
+        print(f"warning, {w.view_id} (kept; judged by its error): {w.reason}")
     if found.skipped or result.rejected:
         print("rejected views:")
         for r in found.skipped + result.rejected:

@@ -52,6 +52,7 @@ class FolderViews:
     views: tuple[StereoView, ...]
     skipped: tuple[RejectedView, ...]
     image_size: tuple[int, int]
+    warnings: tuple[RejectedView, ...] = ()     # used, but at the border or blurred
 
 
 def _read(path: Path):
@@ -69,6 +70,7 @@ def views_from_pairs(pairs: list[tuple[Path, Path]], spec: BoardSpec,
     report = progress or (lambda fraction, text: None)
     views: list[StereoView] = []
     skipped: list[RejectedView] = []
+    warnings: list[RejectedView] = []
     size = None
     for index, (left_path, right_path) in enumerate(pairs):
         if cancel is not None and cancel():
@@ -88,15 +90,21 @@ def views_from_pairs(pairs: list[tuple[Path, Path]], spec: BoardSpec,
                              subpix_half_window=subpix_half_window)
         det_r = detect_board(gray_r, spec, fast_check=False,
                              subpix_half_window=subpix_half_window)
-        reasons = []
+        reasons, notes = [], []
         for name, det, gray in (("left", det_l, gray_l), ("right", det_r, gray_r)):
             # Stills have no previous frame: stillness is judged by the blur check alone.
-            reasons += [f"{name}: {r}" for r in check_view(det, gray, spec, None,
-                                                           require_still=False)
-                        if det is None or "corners visible" in r]
+            # A missing board skips the pair; border and blur only warn, because the
+            # outlier rejection of the solve judges such views by their actual error.
+            for reason in check_view(det, gray, spec, None, require_still=False):
+                if det is None or "corners visible" in reason:
+                    reasons.append(f"{name}: {reason}")
+                else:
+                    notes.append(f"{name}: {reason}")
         if reasons:
             skipped.append(RejectedView(view_id, "; ".join(reasons)))
             continue
+        if notes:
+            warnings.append(RejectedView(view_id, "; ".join(notes)))
         try:
             views.append(pair_detections(view_id, det_l, det_r, spec))
         except CalibrationError as exc:
@@ -106,4 +114,4 @@ def views_from_pairs(pairs: list[tuple[Path, Path]], spec: BoardSpec,
         raise CalibrationError(f"the {spec.describe()} was not found in both images of any of "
                                f"the {len(pairs)} pairs: check --board (inner corners, e.g. "
                                f"9x6 for a board of 10×7 squares)")
-    return FolderViews(tuple(views), tuple(skipped), size)
+    return FolderViews(tuple(views), tuple(skipped), size, tuple(warnings))

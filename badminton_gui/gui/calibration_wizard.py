@@ -670,6 +670,10 @@ class CalibrationWizard(QDialog):
         self.folders_button.clicked.connect(self._choose_folders)
         buttons = QHBoxLayout()
         buttons.addWidget(self.auto_check, 1)
+        restart = QPushButton("Restart camera")
+        restart.setToolTip("Close and reopen the cameras (after a camera error)")
+        restart.clicked.connect(self.restart_capture)
+        buttons.addWidget(restart)
         buttons.addWidget(self.capture_button)
         buttons.addWidget(self.folders_button)
 
@@ -699,6 +703,8 @@ class CalibrationWizard(QDialog):
         return page
 
     def _start_capture(self) -> None:
+        if self._capture_thread is not None and not self._capture_thread.isRunning():
+            self._stop_capture()           # the previous worker ended (source failed)
         if self._capture_thread is not None:
             return
         self._last_serial = -1
@@ -723,6 +729,10 @@ class CalibrationWizard(QDialog):
         self._params = self._capture_worker.params_of()
         self._capture_thread = None
         self._capture_worker = None
+
+    def restart_capture(self) -> None:
+        self._stop_capture()
+        self._start_capture()
 
     def _auto_toggled(self, on: bool) -> None:
         if self._capture_worker is not None:
