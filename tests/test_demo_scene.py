@@ -117,9 +117,11 @@ def test_shuttle_is_drawn_at_the_truth(scene_hd):
             drawn += 1
         else:
             # Hidden behind a player: the pixel under the truth is the player's, not white.
-            assert left[vi, ui].min() < 200 and int(left[vi, ui].max()) - int(left[vi, ui].min()) > 20
+            pixel = left[vi, ui].astype(int)
+            assert pixel.min() < 160                                  # not the white shuttle
+            assert np.abs(pixel - bg[vi, ui]).sum() > 20              # but a body part
             hidden += 1
-    assert drawn > 20
+    assert drawn > 20 and hidden >= 1, (drawn, hidden)      # seed 1: 78 drawn, 2 hidden
 
 
 def test_occlusion_marks_are_plausible():

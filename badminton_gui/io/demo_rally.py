@@ -23,7 +23,7 @@ from ..core import court, physics
 AERO_LENGTH = physics.DEFAULT_AERO_LENGTH   # 4.8 m
 SHOT_KINDS = ("serve", "clear", "drop", "drive", "smash")
 NEAR, FAR = 0, 1                      # player 0 defends Y < 0 (the robot's half), player 1 Y > 0
-SERVE_DELAY = 0.25                    # s of empty court before the first serve
+SERVE_DELAY = 0.15                    # s of empty court before the first serve
 REST_ON_FLOOR = 0.4                   # s the shuttle lies where it landed after a rally
 OFF_BETWEEN_RALLIES = 0.6             # s with no shuttle in play before the next serve
 NET_CLEARANCE = court.NET_HEIGHT_POSTS + 0.05
