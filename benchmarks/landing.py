@@ -123,6 +123,7 @@ class ShotRecord:
     lead_errors: dict          # lead ms -> landing error (m) or None (no prediction yet)
     lead_inside: dict          # lead ms -> true landing within the predicted radius
     speed_rel_errors: list     # per frame with a prediction
+    speed_rel_errors_all: list  # per frame with a speed (from the flight's confirmation on)
     aero_error: float | None   # |fitted L − true L| at the last frame, m
     shots_seen: int
 
@@ -162,9 +163,11 @@ def run_session(rng: np.random.Generator, n_shots: int, fps: float, sigma: float
                 lead_inside[lead] = err <= pred.radius
         speed_errors = [abs(float(np.linalg.norm(v)) - float(np.linalg.norm(tv))) / float(np.linalg.norm(tv))
                         for _, pred, v, tv in history if pred is not None and v is not None]
+        speed_errors_all = [abs(float(np.linalg.norm(v)) - float(np.linalg.norm(tv))) / float(np.linalg.norm(tv))
+                            for _, _, v, tv in history if v is not None]
         fitted = traj.current_aero_length
         aero_err = abs(fitted - aero_length) if fitted is not None else None
-        records.append(ShotRecord(kind, lead_errors, lead_inside, speed_errors, aero_err,
+        records.append(ShotRecord(kind, lead_errors, lead_inside, speed_errors, speed_errors_all, aero_err,
                                   traj._shot_index - shot_before))
         # The shuttle lies on the floor, then the next rally starts (no points meanwhile).
         clock = t_land + rng.uniform(0.5, 1.5)
@@ -335,6 +338,10 @@ def main(argv: list[str] | None = None) -> int:
                           f"p95 {percentile(errs, 95) * 100:5.1f} cm, predicted {len(errs)}/{n}; "
                           f"speed error p95 {percentile(sp, 95):.1%}")
             speed = [e for r in records for e in r.speed_rel_errors]
+            speed_all = [e for r in records for e in r.speed_rel_errors_all]
+            print(f"speed error from the first reported speed on: median {percentile(speed_all, 50):.2%}, "
+                  f"p95 {percentile(speed_all, 95):.2%}, p99 {percentile(speed_all, 99):.2%} "
+                  f"({len(speed_all)} frames)")
             aero = [r.aero_error for r in records if r.aero_error is not None]
             split = [r.shots_seen for r in records]
             us = np.asarray(timings)[:, 0] * 1e6
