@@ -136,7 +136,7 @@ def test_2d_fallback_without_opengl(main_window, qtbot, monkeypatch):
     window.start_opener(_demo_opener, "demo")
     qtbot.waitUntil(lambda: window.latest_packet is not None
                     and window.latest_packet.result.point is not None, timeout=WAIT_MS)
-    qtbot.wait(100)
+    window._timer.stop()             # keep the packet with a 3D point on screen
     assert window.plan.widget.isVisible() and window.side.widget.isVisible()
     xs, _ = window.plan._position.getData()
     assert len(xs) == 1
@@ -163,14 +163,27 @@ def test_pause_and_single_step(main_window, qtbot):
 
 def test_screenshot_mode_exits_zero(tmp_path):
     shot = tmp_path / "window.png"
+    preset = tmp_path / "my_preset.json"
+    TrackerParams().with_value("binarize.threshold", 140).save(preset, "test preset")
     env = dict(os.environ, QT_QPA_PLATFORM=os.environ.get("QT_QPA_PLATFORM", "xcb"))
     proc = subprocess.run([sys.executable, "-m", "badminton_gui.gui.app", "--source", "demo",
-                           "--preset", "default", "--screenshot", str(shot), "--quit-after", "3"],
+                           "--preset", str(preset), "--screenshot", str(shot), "--quit-after", "3"],
                           env=env, capture_output=True, text=True, timeout=120,
                           cwd=Path(__file__).resolve().parents[1])
     assert proc.returncode == 0, proc.stderr
     assert "Traceback" not in proc.stderr
     assert shot.stat().st_size > 10_000
+    assert "results shown" in proc.stdout
+
+
+def test_screenshot_mode_fails_when_nothing_is_tracked(tmp_path):
+    env = dict(os.environ, QT_QPA_PLATFORM=os.environ.get("QT_QPA_PLATFORM", "xcb"))
+    proc = subprocess.run([sys.executable, "-m", "badminton_gui.gui.app", "--source", "video",
+                           "--left", str(tmp_path / "l.mp4"), "--right", str(tmp_path / "r.mp4"),
+                           "--calib", str(tmp_path / "rig.yaml"), "--quit-after", "1.5"],
+                          env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1
+    assert "rig file not found" in proc.stderr.lower() and "Traceback" not in proc.stderr
 
 
 def test_none_refcount_canary(qapp):

@@ -76,6 +76,11 @@ def main(argv: list[str] | None = None) -> int:
         from PySide6.QtCore import QTimer
 
         def finish() -> None:
+            if window.results_seen == 0:
+                # Unattended runs must fail loudly when nothing was tracked.
+                reason = window.banner.text or "no result arrived in time"
+                print(f"badminton-gui: nothing tracked: {reason}", file=sys.stderr)
+                status["code"] = 1
             if args.screenshot:
                 path = os.path.abspath(args.screenshot)
                 if not window.grab_window().save(path):

@@ -301,6 +301,7 @@ class MainWindow(QMainWindow):
         worker.finished.connect(thread.quit)
         worker.opened.connect(self._on_opened)
         worker.error.connect(self._on_error)
+        worker.warning.connect(self.banner.show_message)
         worker.ended.connect(self._on_ended)
         worker.set_paused(self._paused)
         worker.set_link(self.link_panel.link)
@@ -318,6 +319,7 @@ class MainWindow(QMainWindow):
             self.banner.show_message("The tracking thread did not stop within 5 s (a camera may hang).")
         # Queued signals of the old worker may still arrive; drop them.
         for sig, slot in ((self.worker.opened, self._on_opened), (self.worker.error, self._on_error),
+                          (self.worker.warning, self.banner.show_message),
                           (self.worker.ended, self._on_ended)):
             try:
                 sig.disconnect(slot)

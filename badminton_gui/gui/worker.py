@@ -35,7 +35,12 @@ from ..io.sources import FrameSource, SourceError
 _log = logging.getLogger(__name__)
 
 # Failures that are the user's situation, not a bug: shown as one sentence in the banner.
-USER_ERRORS = (SourceError, RigError, ParamError, OSError, cv2.error)
+USER_ERRORS: tuple[type[BaseException], ...] = (SourceError, RigError, ParamError, OSError, cv2.error)
+try:  # a missing / malformed classifier model file is the user's situation too
+    from ..core.classifier import ClassifierError
+    USER_ERRORS += (ClassifierError,)
+except ImportError:  # pragma: no cover - the classifier is optional
+    pass
 
 DISPLAY_MAX_WIDTH = 960        # frame width for the display until the GUI says how wide the feeds are
 TRAIL_SECONDS = 0.5            # the fading trail behind the red circle
@@ -155,7 +160,8 @@ class TrackingWorker(QObject):
     """Source + tracker loop; move to a QThread and connect ``thread.started`` to ``run``."""
 
     opened = Signal(str, object)      # source name, StereoRig
-    error = Signal(str)               # one sentence for the banner
+    error = Signal(str)               # one sentence for the banner; the worker has stopped
+    warning = Signal(str)             # one sentence for the banner; the worker goes on
     ended = Signal(str)               # the source ran out (not an error)
     finished = Signal()
 
@@ -265,8 +271,12 @@ class TrackingWorker(QObject):
                 if stepping:
                     self._steps -= 1
             if params is not None:
-                tracker.set_params(params)
-                self._params_in_use = params
+                try:
+                    tracker.set_params(params)
+                    self._params_in_use = params
+                except USER_ERRORS as exc:   # e.g. a classifier model that is not there
+                    tracker.set_params(self._params_in_use)
+                    self.warning.emit("Parameters not applied: " + _one_sentence(exc))
             if paused and not stepping:
                 pace_wall = None
                 time.sleep(0.01)
