@@ -13,7 +13,7 @@ from typing import Callable
 
 import cv2
 
-from .calib_board import BoardSpec, check_view, detect_board, to_gray
+from .calib_board import BoardSpec, check_view, detect_board
 from .calibration import CalibrationCancelled, CalibrationError, RejectedView, StereoView, \
     pair_detections
 

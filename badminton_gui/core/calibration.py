@@ -265,7 +265,8 @@ class CalibrationResult:
         for name, m, std in (("left", self.M1, self.std_left), ("right", self.M2, self.std_right)):
             # Values after the stereo step; ± is the per-camera calibration's one sigma.
             lines.append(
-                f"{name}: fx {m[0, 0]:.2f} ± {std['fx']:.2f}, fy {m[1, 1]:.2f} ± {std['fy']:.2f}, "
+                f"{name}: fx {m[0, 0]:.2f} ± {std['fx']:.2f}, "
+                f"fy {m[1, 1]:.2f} ± {std['fy']:.2f}, "
                 f"cx {m[0, 2]:.2f} ± {std['cx']:.2f}, cy {m[1, 2]:.2f} ± {std['cy']:.2f} px")
         lines.append(f"intrinsics in the stereo step: {self.intrinsics_mode}; ± = one sigma "
                      f"of the per-camera calibration")

@@ -31,7 +31,7 @@ from PySide6.QtGui import (QColor, QFont, QIcon, QImage, QKeySequence, QPainter,
                            QShortcut)
 from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDoubleSpinBox, QFileDialog,
                                QFormLayout, QGridLayout, QGroupBox, QHBoxLayout, QLabel,
-                               QListWidget, QListWidgetItem, QMessageBox, QProgressBar,
+                               QListWidget, QListWidgetItem, QProgressBar,
                                QPushButton, QSizePolicy, QSpinBox, QStackedWidget, QVBoxLayout,
                                QWidget)
 
@@ -993,8 +993,9 @@ class CalibrationWizard(QDialog):
         ]
         for name, m, s in (("Left", r.M1, r.std_left), ("Right", r.M2, r.std_right)):
             rows.append((f"{name} camera",
-                         f"fx {m[0, 0]:.1f} ± {s['fx']:.1f} · fy {m[1, 1]:.1f} ± {s['fy']:.1f} · "
-                         f"cx {m[0, 2]:.1f} ± {s['cx']:.1f} · cy {m[1, 2]:.1f} ± {s['cy']:.1f} px"))
+                         f"fx {m[0, 0]:.1f} ± {s['fx']:.1f} · fy {m[1, 1]:.1f} ± "
+                         f"{s['fy']:.1f} · cx {m[0, 2]:.1f} ± {s['cx']:.1f} · "
+                         f"cy {m[1, 2]:.1f} ± {s['cy']:.1f} px"))
         rows += [("Views used", f"{len(r.view_errors)}"),
                  ("Intrinsics", r.intrinsics_mode),
                  ("Rectification", r.rectification_note)]
