@@ -216,3 +216,34 @@ def test_wizard_reports_a_failing_camera_and_restarts(qtbot):
     qtbot.waitUntil(lambda: wizard.left_view._qimage is not None, timeout=30000)
     assert len(attempts) == 2
     wizard.close()
+
+
+def test_detection_and_solve_never_run_on_the_gui_thread(qtbot, tmp_path, monkeypatch):
+    """The two complaints about other tools: a frozen window during capture and solve."""
+    import threading
+
+    import badminton_gui.gui.calibration_wizard as wiz_module
+    threads = {"detect": set(), "solve": set()}
+    real_detect, real_solve = wiz_module.detect_board, wiz_module.solve_stereo
+
+    def detect(*args, **kwargs):
+        threads["detect"].add(threading.get_ident())
+        return real_detect(*args, **kwargs)
+
+    def solve(*args, **kwargs):
+        threads["solve"].add(threading.get_ident())
+        return real_solve(*args, **kwargs)
+
+    monkeypatch.setattr(wiz_module, "detect_board", detect)
+    monkeypatch.setattr(wiz_module, "solve_stereo", solve)
+    wizard = CalibrationWizard(_source, save_dir=tmp_path)
+    qtbot.addWidget(wizard)
+    wizard.square_spin.setValue(30.0)
+    wizard.go_next()
+    qtbot.waitUntil(lambda: len(wizard.captures) >= 5, timeout=120000)
+    wizard.go_next()
+    qtbot.waitUntil(lambda: wizard.outcome is not None, timeout=60000)
+    gui_thread = threading.get_ident()
+    assert threads["detect"] and gui_thread not in threads["detect"]
+    assert threads["solve"] and gui_thread not in threads["solve"]
+    wizard.close()
