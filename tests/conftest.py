@@ -57,4 +57,5 @@ def main_window(qtbot):
     yield make
     for window in windows:
         window.close()
-        assert window.worker is None, "closing the window must stop the tracking thread"
+        assert window.worker is None and not window._retiring, \
+            "closing the window must stop every tracking thread"

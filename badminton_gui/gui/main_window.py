@@ -147,6 +147,8 @@ class MainWindow(QMainWindow):
         self._display_rate = RateMeter()
         self._tuning = None
         self._paused = False
+        self._pending_start: tuple[SourceOpener, str] | None = None
+        self._retiring: list[tuple[TrackingWorker, QThread]] = []
         self._build_ui()
         self._build_actions()
         self._timer = QTimer(self)
@@ -286,12 +288,27 @@ class MainWindow(QMainWindow):
         self.start_opener(lambda spec=self.spec: open_spec(spec), self.spec.describe())
 
     def start_opener(self, opener: SourceOpener, description: str) -> None:
-        """Stop the current worker and start one on a new source (tests pass stand-ins here)."""
-        self.stop_worker()
+        """Track a new source (tests pass stand-in openers here).
+
+        The old worker is told to stop and retires on its own; the new one starts when the
+        old thread has finished (a camera must be released before it can be reopened), so
+        switching sources never blocks the GUI thread on a slow frame.
+        """
         self.banner.hide()
         self.status_source.setText(f"Opening {description}…")
         for feed in (self.left_feed, self.right_feed):
             feed.set_message(f"Opening {description}…")
+        self._pending_start = (opener, description)
+        if self.worker is not None:
+            self._retire_worker()
+        self._start_pending()
+
+    def _start_pending(self) -> None:
+        if self._retiring or self._pending_start is None or self.worker is not None:
+            return
+        opener, _ = self._pending_start
+        self._pending_start = None
+        self.latest_packet = None
         worker = TrackingWorker(opener, self.params, realtime=self.realtime_action.isChecked(),
                                 show_mask=self.mask_action.isChecked())
         thread = QThread(self)
@@ -308,26 +325,43 @@ class MainWindow(QMainWindow):
         self.worker, self.thread = worker, thread
         thread.start()
 
-    def stop_worker(self) -> None:
-        """Cooperative stop: raise the abort flag, let the loop return, wait for the thread."""
-        if self.worker is None:
-            return
-        self.worker.abort()
-        self.worker.set_link(None)
-        self.thread.quit()
-        if not self.thread.wait(5000):
-            self.banner.show_message("The tracking thread did not stop within 5 s (a camera may hang).")
+    def _retire_worker(self) -> None:
+        """Raise the abort flag of the current worker and forget it; it finishes on its own."""
+        worker, thread = self.worker, self.thread
+        self.worker = self.thread = None
+        worker.abort()
+        worker.set_link(None)
         # Queued signals of the old worker may still arrive; drop them.
-        for sig, slot in ((self.worker.opened, self._on_opened), (self.worker.error, self._on_error),
-                          (self.worker.warning, self.banner.show_message),
-                          (self.worker.ended, self._on_ended)):
+        for sig, slot in ((worker.opened, self._on_opened), (worker.error, self._on_error),
+                          (worker.warning, self.banner.show_message), (worker.ended, self._on_ended)):
             try:
                 sig.disconnect(slot)
             except (RuntimeError, TypeError):
                 pass
-        self.worker.deleteLater()
-        self.thread.deleteLater()
-        self.worker = self.thread = None
+        self._retiring.append((worker, thread))
+        thread.finished.connect(self._reap_retired)
+        if thread.isFinished():          # it had already stopped (source error, end of file)
+            self._reap_retired()
+
+    def _reap_retired(self) -> None:
+        for worker, thread in list(self._retiring):
+            if thread.isFinished():
+                self._retiring.remove((worker, thread))
+                worker.deleteLater()
+                thread.deleteLater()
+        self._start_pending()
+
+    def stop_worker(self) -> None:
+        """Cooperative stop, waited for: abort flag, the loop returns, QThread.wait()."""
+        self._pending_start = None
+        if self.worker is not None:
+            self._retire_worker()
+        for worker, thread in list(self._retiring):
+            thread.quit()
+            if not thread.wait(5000):
+                self.banner.show_message("The tracking thread did not stop within 5 s (a camera may hang).")
+                self._retiring.remove((worker, thread))   # leave it; never delete a running thread
+        self._reap_retired()
 
     def _on_opened(self, name: str, rig: StereoRig) -> None:
         self.rig = rig
