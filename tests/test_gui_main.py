@@ -246,3 +246,30 @@ def test_calibrate_loads_the_saved_rig(main_window, qtbot, tmp_path, monkeypatch
     assert window.spec.calib == str(rig_path)
     qtbot.waitUntil(lambda: window.rig is not None and window.worker is not None, timeout=WAIT_MS)
     assert load_source_spec(open_settings()).calib == str(rig_path)
+
+
+def test_tuning_presets_save_load_and_reset(qtbot, tmp_path, monkeypatch):
+    from PySide6.QtWidgets import QFileDialog
+
+    from badminton_gui.gui.tuning_dialog import TuningDialog
+
+    dialog = TuningDialog(TrackerParams())
+    qtbot.addWidget(dialog)
+    sent = []
+    dialog.paramsChanged.connect(sent.append)
+    dialog.editors["motion.base_radius"].spin.setValue(55.0)
+    qtbot.waitUntil(lambda: bool(sent) and sent[-1].motion.base_radius == 55.0, timeout=2000)
+
+    path = tmp_path / "court3.json"
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (str(path), ""))
+    dialog._save_file()
+    assert '"base_radius": 55.0' in path.read_text(encoding="utf-8")      # readable JSON
+
+    dialog.set_params(TrackerParams())                                     # reset to defaults
+    assert sent[-1] == TrackerParams()
+    assert dialog.editors["motion.base_radius"].spin.value() == TrackerParams().motion.base_radius
+
+    monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(path), ""))
+    dialog._load_file()
+    assert sent[-1].motion.base_radius == 55.0
+    assert dialog.editors["motion.base_radius"].slider.value() > 0

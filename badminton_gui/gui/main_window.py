@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Callable
 
 from PySide6.QtCore import QPoint, QStandardPaths, Qt, QThread, QTimer, Signal
-from PySide6.QtGui import QAction, QFont, QKeySequence, QPainter, QPixmap
+from PySide6.QtGui import QAction, QFont, QFontMetrics, QKeySequence, QPainter, QPixmap
 from PySide6.QtWidgets import (QDockWidget, QFrame, QGridLayout, QHBoxLayout, QLabel,
                                QMainWindow, QMessageBox, QPushButton, QSizePolicy, QSplitter,
                                QVBoxLayout, QWidget)
@@ -99,6 +99,12 @@ class Readouts(QWidget):
             self.values[key] = value
         grid.setRowStretch(len(rows), 1)
         grid.setColumnStretch(1, 1)
+        # Wide enough for the longest values, so no readout is ever clipped.
+        fm_big, fm = QFontMetrics(big), self.fontMetrics()
+        self.setMinimumWidth(fm.horizontalAdvance("Shot peak speed") + 24 +
+                             max(fm_big.horizontalAdvance("888 km/h") + fm.horizontalAdvance(" 88.8 m/s"),
+                                 fm.horizontalAdvance("±0.00 m, lands in 0.00 s"),
+                                 fm.horizontalAdvance("888 fps (888.8 ms/pair)")))
 
     def show_packet(self, packet: DisplayPacket, display_hz: float) -> None:
         r, s = packet.result, packet.stats
@@ -116,7 +122,7 @@ class Readouts(QWidget):
             v["call"].setText(f"<span style='color:{colour}'>{(lp.call or 'unknown').upper()}</span>")
         else:
             reason = r.flight.withheld_reason
-            v["landing"].setText(f"withheld: {reason}" if reason else "—")
+            v["landing"].setText(f"withheld:<br>{reason}" if reason else "—")
             v["call"].setText("—")
         v["capture"].setText(f"{s.capture_fps_left:.0f} / {s.capture_fps_right:.0f}")
         v["processing"].setText(f"{s.processing_fps:.0f} fps  ({s.processing_ms:.1f} ms/pair)")
@@ -181,11 +187,12 @@ class MainWindow(QMainWindow):
                 self.gl_reason = f"3D view unavailable: {exc}"
         self.plan = CourtPlanView()
         self.side = SideView()
-        plots = QSplitter(Qt.Orientation.Vertical)
+        # With the 3D view the two plots stack beside it; without it they share the row side
+        # by side, so the court stays large in the 2D fallback.
+        plots = QSplitter(Qt.Orientation.Vertical if self.gl_view is not None else Qt.Orientation.Horizontal)
         plots.addWidget(self.plan.widget)
         plots.addWidget(self.side.widget)
         self.readouts = Readouts()
-        self.readouts.setMinimumWidth(250)
         self.readouts.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Preferred)
 
         bottom = QSplitter(Qt.Orientation.Horizontal)
@@ -225,7 +232,9 @@ class MainWindow(QMainWindow):
         self.status_state = QLabel("")
         self.statusBar().addPermanentWidget(self.status_state)
         if self.gl_reason:
-            self.statusBar().addPermanentWidget(QLabel(self.gl_reason + " — showing the 2D views"))
+            note = QLabel("2D views only")
+            note.setToolTip(self.gl_reason)
+            self.statusBar().addPermanentWidget(note)
 
     def _build_actions(self) -> None:
         menu = self.menuBar()
