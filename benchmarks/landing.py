@@ -129,7 +129,7 @@ class ShotRecord:
 
 
 def run_session(rng: np.random.Generator, n_shots: int, fps: float, sigma: float,
-                params: TrajectoryParams, timings: list[float]) -> list[ShotRecord]:
+                params: TrajectoryParams, timings: list, outlier_rate: float = 0.03) -> list[ShotRecord]:
     """One shuttle (one L), several shots separated by pauses, fed to one Trajectory."""
     aero_length = rng.uniform(4.4, 5.2)
     traj = Trajectory(params, court_frame=True)
@@ -139,7 +139,7 @@ def run_session(rng: np.random.Generator, n_shots: int, fps: float, sigma: float
     for _ in range(n_shots):
         kind = kinds[rng.integers(len(kinds))]
         shot = make_shot(rng, kind, aero_length)
-        times, points, true_pos, true_vel = observe(rng, shot, fps, sigma)
+        times, points, true_pos, true_vel = observe(rng, shot, fps, sigma, outlier_rate)
         t_land = clock + shot.duration
         history = []   # (t, prediction, velocity)
         shot_before = traj._shot_index
@@ -283,7 +283,8 @@ def percentile(values, q):
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+    head, _, rest = __doc__.partition("\n\n")
+    parser = argparse.ArgumentParser(description=head, epilog=rest,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sessions", type=int, default=30, help="sessions (one L each), default 30")
     parser.add_argument("--shots", type=int, default=6, help="shots per session, default 6")
@@ -319,7 +320,7 @@ def main(argv: list[str] | None = None) -> int:
             timings: list[float] = []
             records: list[ShotRecord] = []
             for _ in range(args.sessions):
-                records += run_session(rng, args.shots, fps, sigma, params, timings)
+                records += run_session(rng, args.shots, fps, sigma, params, timings, args.outliers)
             print(f"\n## fps {fps:g}, σ = {sigma * 100:g} cm: {len(records)} shots")
             print(f"{'before landing':>15} | {'median cm':>9} | {'p95 cm':>7} | {'with pred.':>10} | "
                   f"{'inside r':>8}")
