@@ -273,3 +273,36 @@ def test_tuning_presets_save_load_and_reset(qtbot, tmp_path, monkeypatch):
     dialog._load_file()
     assert sent[-1].motion.base_radius == 55.0
     assert dialog.editors["motion.base_radius"].slider.value() > 0
+
+
+class _UnpluggedCameras:
+    """A live (fps None) stand-in: demo frames as fast as they render, then the camera is gone."""
+
+    def __init__(self, frames_before_unplug: int) -> None:
+        self.scene = DemoScene(seed=0)
+        self.name = "stand-in cameras"
+        self.left_after = frames_before_unplug
+        self.image_size = self.scene.image_size
+        self.fps = None
+
+    def read(self):
+        from badminton_gui.io.sources import SourceError
+        if self.left_after <= 0:
+            raise SourceError("the left camera (0) stopped delivering frames: was it unplugged?")
+        self.left_after -= 1
+        return self.scene.read()
+
+    def close(self) -> None:
+        self.scene.close()
+
+
+def test_live_source_drops_old_frames_and_reports_unplugging(main_window, qtbot):
+    window = main_window()
+    window.start_opener(lambda: ((s := _UnpluggedCameras(150)), s.scene.rig), "stand-in cameras")
+    qtbot.waitUntil(lambda: window.banner.text != "", timeout=WAIT_MS)
+    assert window.banner.text == "The left camera (0) stopped delivering frames: was it unplugged?"
+    stats = window.latest_packet.stats if window.latest_packet is not None else None
+    # The tracker is slower than the stand-in renders: newest frame wins and drops are counted.
+    assert stats is not None and stats.frames + stats.dropped <= 150 and stats.dropped > 0
+    window.start_opener(_demo_opener, "demo")              # and the operator can go on
+    qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)
