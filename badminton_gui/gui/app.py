@@ -34,6 +34,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    # Scanning for cameras makes OpenCV warn once per absent device; the dialog says it better.
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
     if args.source in ("video", "cameras") and not (args.left and args.right):
         print(f"badminton-gui: --source {args.source} needs --left and --right", file=sys.stderr)
         return 2
