@@ -24,6 +24,8 @@ class BackgroundModel:
         self._bin = binarize
         self._mog: cv2.BackgroundSubtractorMOG2 | None = None
         self._previous: deque[np.ndarray] = deque(maxlen=2)
+        self._average: np.ndarray | None = None
+        self.last_difference: np.ndarray | None = None  # signed difference (bright_diff only)
         self._kernel: np.ndarray | None = None
         self._configure()
 
@@ -43,6 +45,7 @@ class BackgroundModel:
     def reset(self) -> None:
         self._mog = None
         self._previous.clear()
+        self._average = None
 
     def _configure(self) -> None:
         b = self._bg
@@ -64,12 +67,41 @@ class BackgroundModel:
             raw = self._mog.apply(gray, learningRate=float(self._bg.learning_rate))
             # MOG2 marks foreground 255 and shadows 127: the threshold T drops the shadows.
             _, mask = cv2.threshold(raw, int(self._bin.threshold), 255, cv2.THRESH_BINARY)
+        elif self._bg.method == "bright_diff":
+            mask = self._brighter_than_average(gray)
         else:
             mask = self._three_frame_difference(gray)
         if self._kernel is not None:
             mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._kernel)
         if self._bin.dilate_iterations > 0:
             mask = cv2.dilate(mask, None, iterations=int(self._bin.dilate_iterations))
+        return mask
+
+    def _brighter_than_average(self, gray: np.ndarray) -> np.ndarray:
+        """Pixels brighter than a running average of the scene by more than the threshold.
+
+        The shuttle is white in a dark hall: it is brighter than what lies behind it, while the
+        players' dark clothes, hair and shadows are darker, so a *signed* difference keeps the
+        shuttle and drops most of the player. The average learns at α everywhere except under
+        the foreground (so a slow shuttle is not absorbed at once); flickering lights stay in
+        the mask but never travel, which the association step rejects.
+        """
+        if self._average is None or self._average.shape != gray.shape:
+            self._average = gray.astype(np.float32)
+            return np.zeros_like(gray)
+        diff = cv2.subtract(gray.astype(np.float32), self._average)
+        if self._bin.max_background < 255:
+            # Lights: a shuttle in front of them is invisible anyway, and they flicker.
+            diff[self._average >= float(self._bin.max_background)] = 0
+        self.last_difference = diff
+        _, mask = cv2.threshold(diff, float(self._bin.diff_threshold), 255, cv2.THRESH_BINARY)
+        mask = mask.astype(np.uint8)
+        alpha = float(self._bg.learning_rate)
+        if alpha > 0:
+            cv2.accumulateWeighted(gray, self._average, alpha, mask=cv2.bitwise_not(mask))
+            # Slow leak under the foreground too, so a change that stays (a light switched on)
+            # is absorbed eventually.
+            cv2.accumulateWeighted(gray, self._average, alpha * 0.1, mask=mask)
         return mask
 
     def _three_frame_difference(self, gray: np.ndarray) -> np.ndarray:

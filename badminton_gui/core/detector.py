@@ -25,7 +25,9 @@ import math
 import cv2
 import numpy as np
 
+from .association import TrackletAssociator
 from .background import BackgroundModel
+from .classifier import load_classifier
 from .params import TrackerParams
 from .types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SIDE,
                     REJECT_WHITENESS, CameraResult, Candidate)
@@ -34,23 +36,13 @@ from .types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SID
 # beyond it the largest blobs are dropped first (players, not shuttles).
 MAX_COLOUR_CHECKS = 64
 # Margin (full-res px) around a blob's box for the sub-pixel refinement window.
-REFINE_MARGIN = 3
-
-
-@dataclasses.dataclass(slots=True)
-class _TrackState:
-    """Where the shuttle was, how fast it moved in the image, and when."""
-
-    x: float
-    y: float
-    t: float
-    vx: float = 0.0
-    vy: float = 0.0
-    hits: int = 1
-
-    def predict(self, t: float) -> tuple[float, float]:
-        dt = t - self.t
-        return self.x + self.vx * dt, self.y + self.vy * dt
+REFINE_MARGIN = 5
+# Appearance features measured in the full-resolution window (order matters: the classifier).
+APPEARANCE_NAMES = ("contrast", "background", "log_bright_area", "spill", "whiteness",
+                    "saturation", "log_mask_area", "peak_saturation", "window_std")
+N_APPEARANCE = len(APPEARANCE_NAMES)
+# Shape features from the contour, then the appearance features: the classifier's input.
+FEATURE_NAMES = ("log_length", "log_short_side", "log_area", "aspect") + APPEARANCE_NAMES
 
 
 class CameraDetector:
@@ -59,22 +51,36 @@ class CameraDetector:
     def __init__(self, params: TrackerParams | None = None) -> None:
         self.params = params or TrackerParams()
         self._background = BackgroundModel(self.params.background, self.params.binarize)
-        self._track: _TrackState | None = None
+        self._associator = TrackletAssociator(self.params.motion, self.params.association)
+        self._tracklet_of: dict[int, int] = {}   # id(candidate) → tracklet ident, this frame
+        self.last_features: list = []   # (x, y, features, rejected_by) of the last frame's blobs
+        self._classifier = None
+        self._load_classifier()
         self._previous_positions = np.zeros((0, 2))
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
         self.params = params
         self._background.set_params(params.background, params.binarize)
+        self._associator.set_params(params.motion, params.association)
+        self._load_classifier()
 
     def reset(self) -> None:
         self._background.reset()
-        self._track = None
+        self._associator.reset()
+        self._tracklet_of = {}
         self._previous_positions = np.zeros((0, 2))
 
     @property
     def tracking(self) -> bool:
-        return self._track is not None
+        return self._associator.selected is not None
+
+    def _load_classifier(self) -> None:
+        cp = self.params.classifier
+        if not cp.enabled:
+            self._classifier = None
+        elif self._classifier is None or self._classifier.name != cp.model:
+            self._classifier = load_classifier(cp.model)
 
     # ---- the whole chain for one camera (CLI `detect`) --------------------------------------
     def process(self, frame_bgr: np.ndarray, t: float, keep_mask: bool = True) -> CameraResult:
@@ -101,16 +107,6 @@ class CameraDetector:
         sy = h / mask.shape[0]
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
 
-        predicted = None
-        gate = math.inf
-        if self._track is not None:
-            if t - self._track.t > p.motion.lost_after:
-                self._track = None
-            else:
-                predicted = self._track.predict(t)
-                dt = max(t - self._track.t, 0.0)
-                gate = p.motion.base_radius + p.motion.max_image_speed * dt
-
         geometric: list[tuple[int, float, float, float, tuple[int, int, int, int]]] = []
         candidates: list[Candidate] = []
         s_mean = 0.5 * (sx + sy)
@@ -134,30 +130,75 @@ class CameraDetector:
                 candidates.append(Candidate(cx, cy, length, short_side, math.nan, area,
                                             math.nan, 0.0, reason))
 
-        if len(geometric) > MAX_COLOUR_CHECKS:
-            geometric.sort(key=lambda g: g[3])
-            for _, length, short_side, area, box in geometric[MAX_COLOUR_CHECKS:]:
+        limit = min(int(p.association.max_measured), MAX_COLOUR_CHECKS)
+        if len(geometric) > limit:
+            # Cheap ranking at the processing scale: blobs near a live tracklet first, then
+            # the strongest brightening; only the best get the full-resolution measurement.
+            diff = self._background.last_difference
+            live = self._associator.live_predictions(t)
+            ranked = []
+            for g in geometric:
+                box = g[4]
+                cx, cy = box[0] + box[2] / 2, box[1] + box[3] / 2
+                if diff is not None:
+                    bx0, by0 = int(box[0] / sx), int(box[1] / sy)
+                    strength = float(diff[by0:by0 + max(int(box[3] / sy), 1),
+                                          bx0:bx0 + max(int(box[2] / sx), 1)].max())
+                else:
+                    strength = -g[3]   # MOG2 gives no strength: smaller blobs first
+                near = bool(len(live)) and bool(np.any(
+                    np.hypot(live[:, 0] - cx, live[:, 1] - cy) <= live[:, 2]))
+                ranked.append((near, strength, g))
+            ranked.sort(key=lambda r: (r[0], r[1]), reverse=True)
+            for _, _, (_, length, short_side, area, box) in ranked[limit:]:
                 candidates.append(Candidate(box[0] + box[2] / 2, box[1] + box[3] / 2, length,
                                             short_side, math.nan, area, math.nan, 0.0,
-                                            REJECT_LENGTH))
-            geometric = geometric[:MAX_COLOUR_CHECKS]
+                                            REJECT_WHITENESS))
+            geometric = [r[2] for r in ranked[:limit]]
 
-        positions = []
+        measured = []
         for _, length, short_side, area, box in geometric:
-            x, y, whiteness, saturation = self._measure(frame_bgr, mask, box, sx, sy)
-            positions.append((x, y))
-            motion = math.nan if predicted is None else math.hypot(x - predicted[0], y - predicted[1])
+            x, y, whiteness, saturation, appearance = self._measure(frame_bgr, mask, box, sx, sy)
+            contrast = float(appearance[0])
             reason = None
-            if whiteness < p.colour.min_whiteness or saturation > p.colour.max_saturation:
+            if (whiteness < p.colour.min_whiteness or saturation > p.colour.max_saturation
+                    or contrast < p.colour.min_contrast):
                 reason = REJECT_WHITENESS
-            elif motion > gate:
-                reason = REJECT_MOTION
             elif p.motion.min_displacement > 0 and self._is_stationary(x, y):
                 reason = REJECT_MOTION
-            score = self._score(whiteness, motion, gate)
-            candidates.append(Candidate(x, y, length, short_side, whiteness, area, motion,
-                                        score, reason))
-        self._previous_positions = np.asarray(positions, dtype=float).reshape(-1, 2)
+            long_side = max(length / 2.0 - short_side, short_side)
+            feats = np.concatenate([[math.log1p(length), math.log1p(short_side), math.log1p(area),
+                                     long_side / max(short_side, 1e-3)], appearance])
+            quality = self._quality(length, contrast, feats)
+            if reason is None and quality < p.association.min_quality:
+                reason = REJECT_SCORE
+            measured.append([x, y, length, short_side, whiteness, area, quality, reason, feats])
+        self._previous_positions = np.asarray([(m[0], m[1]) for m in measured],
+                                              dtype=float).reshape(-1, 2)
+
+        # Filter 4, multi-frame: only candidates on a confirmed, travelling, smooth tracklet
+        # pass (the speed-aware gate lives in the associator).
+        self.last_features = [(m[0], m[1], m[8], m[7]) for m in measured]
+        live = [m for m in measured if m[7] is None]
+        positions = np.asarray([(m[0], m[1]) for m in live], dtype=float).reshape(-1, 2)
+        qualities = np.asarray([m[6] for m in live], dtype=float)
+        links = self._associator.update(t, positions, qualities)
+        self._tracklet_of = {}
+        k = 0
+        for m in measured:
+            x, y, length, short_side, whiteness, area, quality, reason, _ = m
+            motion, score, ident = math.nan, quality, None
+            if reason is None:
+                ident, motion, merit = links[k]
+                k += 1
+                if merit < 0:
+                    reason = REJECT_MOTION
+                else:
+                    score = merit
+            c = Candidate(x, y, length, short_side, whiteness, area, motion, score, reason)
+            if ident is not None:
+                self._tracklet_of[id(c)] = ident
+            candidates.append(c)
         return CameraResult(detection=None, candidates=tuple(candidates),
                             mask=mask if keep_mask else None,
                             mask_scale=mask.shape[1] / w, image_size=(w, h))
@@ -172,23 +213,10 @@ class CameraDetector:
 
     def commit(self, detection: Candidate | None, t: float,
                candidates: tuple[Candidate, ...] = ()) -> None:
-        """Update the track with this frame's decision."""
+        """Follow the chosen candidate's tracklet (hysteresis in the next frames' choice)."""
         if detection is None:
-            return  # the track coasts on its velocity until `lost_after`
-        tr = self._track
-        if tr is None:
-            self._track = _TrackState(detection.x, detection.y, t)
-            return
-        dt = t - tr.t
-        if dt > 1e-6:
-            vx = (detection.x - tr.x) / dt
-            vy = (detection.y - tr.y) / dt
-            # Light smoothing: trust a fresh velocity more once the track is established.
-            a = 0.7 if tr.hits >= 2 else 1.0
-            tr.vx = a * vx + (1 - a) * tr.vx
-            tr.vy = a * vy + (1 - a) * tr.vy
-        tr.x, tr.y, tr.t = detection.x, detection.y, t
-        tr.hits += 1
+            return  # the followed tracklet keeps its bonus while it coasts
+        self._associator.select(self._tracklet_of.get(id(detection)))
 
     @staticmethod
     def finalise(result: CameraResult, chosen: Candidate | None,
@@ -202,12 +230,18 @@ class CameraDetector:
         return dataclasses.replace(result, detection=chosen, candidates=tuple(cands))
 
     # ---- measurements ----------------------------------------------------------------------
-    @staticmethod
-    def _score(whiteness: float, motion: float, gate: float) -> float:
-        score = whiteness / 255.0
-        if not math.isnan(motion) and math.isfinite(gate) and gate > 0:
-            score += 1.0 - min(motion / gate, 1.0)
-        return score
+    def _quality(self, length: float, contrast: float, features: np.ndarray) -> float:
+        """Shape/contrast score of a lone candidate in [0, 1] (the soft side of filters 1 and 3).
+
+        With the learned classifier enabled this is its probability that the blob is the
+        shuttle; otherwise a hand-made blend of contrast and size.
+        """
+        if self._classifier is not None:
+            return float(self._classifier.probability(features[None, :])[0])
+        c = self.params.colour
+        bright = min(max(contrast - c.min_contrast, 0.0) / max(c.contrast_reference - c.min_contrast, 1.0), 1.0)
+        size = min(length / max(self.params.contour_length.min_length * 2.0, 1.0), 1.0)
+        return 0.7 * bright + 0.3 * size
 
     def _is_stationary(self, x: float, y: float) -> bool:
         prev = self._previous_positions
@@ -218,12 +252,14 @@ class CameraDetector:
 
     @staticmethod
     def _measure(frame: np.ndarray, mask: np.ndarray, box: tuple[int, int, int, int],
-                 sx: float, sy: float) -> tuple[float, float, float, float]:
-        """(x, y, whiteness, saturation) of a blob from a full-resolution window.
+                 sx: float, sy: float) -> tuple[float, float, float, float, np.ndarray]:
+        """(x, y, whiteness, saturation, appearance features) of a blob, full-resolution window.
 
         The position is the intensity-weighted centroid of the blob's brightest part above the
         window's local background (median of the window border), which locates the white cork
         head rather than the middle of head + skirt, to a fraction of a pixel.
+        The appearance features (see ``FEATURE_NAMES``) describe how small, bright, isolated
+        and white the blob is; the candidate classifier and the hand-made score read them.
         """
         h, w = frame.shape[:2]
         x0 = max(box[0] - REFINE_MARGIN, 0)
@@ -231,8 +267,9 @@ class CameraDetector:
         x1 = min(box[0] + box[2] + REFINE_MARGIN, w)
         y1 = min(box[1] + box[3] + REFINE_MARGIN, h)
         crop = frame[y0:y1, x0:x1]
+        features = np.zeros(N_APPEARANCE, dtype=np.float32)
         if crop.size == 0:
-            return box[0] + box[2] / 2, box[1] + box[3] / 2, 0.0, 255.0
+            return box[0] + box[2] / 2, box[1] + box[3] / 2, 0.0, 255.0, features
         # The blob's pixels at full resolution: the mask window, resized.
         mx0, my0 = int(x0 / sx), int(y0 / sy)
         mx1, my1 = max(int(math.ceil(x1 / sx)), mx0 + 1), max(int(math.ceil(y1 / sy)), my0 + 1)
@@ -252,14 +289,21 @@ class CameraDetector:
         background = float(np.median(border))
         excess = gray - background
         peak = float(excess.max())
+        bright = excess > 0.5 * peak
+        n_bright = int(bright.sum())
+        border_bright = np.concatenate([bright[0], bright[-1], bright[:, 0], bright[:, -1]])
+        spill = float(border_bright.mean())
+        peak_sat = float(cmax.max()) - float(cmin.max())
+        features[:] = (peak, background, math.log1p(n_bright), spill, whiteness, saturation,
+                       math.log1p(inside.sum()), peak_sat, float(gray.std()))
         if peak <= 0:
             ys, xs = np.nonzero(inside)
             if len(xs) == 0:
-                return box[0] + box[2] / 2, box[1] + box[3] / 2, whiteness, saturation
-            return x0 + xs.mean(), y0 + ys.mean(), whiteness, saturation
+                return box[0] + box[2] / 2, box[1] + box[3] / 2, whiteness, saturation, features
+            return x0 + xs.mean(), y0 + ys.mean(), whiteness, saturation, features
         # Keep the brighter half of the blob: the cork is whiter than the feathers.
         weights = np.clip(excess - 0.5 * peak, 0, None)
-        weights *= inside | (excess > 0.5 * peak)
+        weights *= inside | bright
         total = float(weights.sum())
         if total <= 0:
             weights = np.clip(excess, 0, None)
@@ -268,4 +312,4 @@ class CameraDetector:
         # OpenCV's convention: integer coordinates are pixel centres (as projectPoints gives).
         cx = float((weights * xs).sum() / total) + x0
         cy = float((weights * ys).sum() / total) + y0
-        return cx, cy, whiteness, saturation
+        return cx, cy, whiteness, saturation, features

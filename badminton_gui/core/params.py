@@ -64,9 +64,10 @@ class BackgroundParams(ParamGroup):
     """The paper's Gaussian-mixture background difference (OpenCV MOG2), or a frame difference."""
 
     TITLE: ClassVar[str] = "Background model"
-    method: str = choice("mog2", ("mog2", "frame_diff"), label="Method",
-                         help="Gaussian mixture (MOG2) or three-frame difference")
-    learning_rate: float = param(0.03, 0.0, 1.0, step=0.005, label="Learning rate α",
+    method: str = choice("bright_diff", ("mog2", "frame_diff", "bright_diff"), label="Method",
+                         help="Gaussian mixture (MOG2), three-frame difference, or brighter-than-"
+                              "running-average (a white shuttle in a dark hall; dark players drop out)")
+    learning_rate: float = param(0.05, 0.0, 1.0, step=0.005, label="Learning rate α",
                                  help="How fast the background absorbs change (paper: ≈0.03)")
     history: int = param(200, 2, 5000, step=10, unit="frames", label="History",
                          help="MOG2 history length (used for initial learning)")
@@ -76,7 +77,7 @@ class BackgroundParams(ParamGroup):
                                  help="Squared Mahalanobis distance for a pixel to match a Gaussian")
     detect_shadows: bool = flag(False, label="Detect shadows",
                                 help="Mark shadows (grey 127) so binarization can drop them")
-    processing_scale: float = param(1.0, 0.125, 1.0, step=0.125, label="Processing scale",
+    processing_scale: float = param(0.5, 0.125, 1.0, step=0.125, label="Processing scale",
                                     help="Background model runs on the image scaled by this factor")
 
 
@@ -87,12 +88,15 @@ class BinarizeParams(ParamGroup):
     TITLE: ClassVar[str] = "Binarization"
     threshold: int = param(150, 0, 254, step=1, label="Threshold T",
                            help="Mask values above T are foreground (paper: 140–160; drops shadows)")
-    diff_threshold: int = param(20, 1, 254, step=1, label="Frame-difference threshold",
+    diff_threshold: int = param(12, 1, 254, step=1, label="Frame-difference threshold",
                                 help="Grey-level change counted as motion by the frame difference")
-    open_kernel: int = param(3, 0, 15, step=1, unit="px", label="Opening kernel",
+    open_kernel: int = param(0, 0, 15, step=1, unit="px", label="Opening kernel",
                              help="Morphological opening removes specks smaller than this (0 = off)")
     dilate_iterations: int = param(1, 0, 5, step=1, label="Dilate iterations",
                                    help="Joins the broken pieces of a blurred shuttle")
+    max_background: int = param(170, 0, 255, step=1, label="Ignore lights above",
+                                help="Brighter-than-average method: pixels whose average is at least this bright "
+                                     "(ceiling lights, windows) are never foreground (255 = off)")
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,7 +104,7 @@ class ContourLengthParams(ParamGroup):
     """Filter 1: contour length (perimeter)."""
 
     TITLE: ClassVar[str] = "Contour length"
-    min_length: float = param(4.0, 0.0, 2000.0, step=1.0, unit="px", label="Minimum length")
+    min_length: float = param(10.0, 0.0, 2000.0, step=1.0, unit="px", label="Minimum length")
     max_length: float = param(250.0, 1.0, 5000.0, step=5.0, unit="px", label="Maximum length")
 
 
@@ -118,10 +122,14 @@ class ColourParams(ParamGroup):
     """Filter 3: whiteness of the pixels inside the contour."""
 
     TITLE: ClassVar[str] = "Colour"
-    min_whiteness: float = param(100.0, 0.0, 255.0, step=1.0, label="Whiteness ≥",
+    min_whiteness: float = param(0.0, 0.0, 255.0, step=1.0, label="Whiteness ≥",
                                  help="Mean of min(B, G, R) inside the contour")
     max_saturation: float = param(255.0, 0.0, 255.0, step=1.0, label="Saturation ≤",
                                   help="Mean of max(B,G,R) − min(B,G,R) inside the contour")
+    min_contrast: float = param(10.0, 0.0, 255.0, step=1.0, label="Contrast ≥",
+                                help="Brightest pixel of the blob above its surroundings (grey levels)")
+    contrast_reference: float = param(40.0, 1.0, 255.0, step=1.0, label="Contrast for full score",
+                                      help="Contrast at which a candidate's colour score saturates")
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,7 +156,9 @@ class AssociationParams(ParamGroup):
     min_hits: int = param(4, 1, 50, step=1, unit="frames", label="Confirm after",
                           help="Frames a tracklet must be seen before it may supply the detection")
     min_travel: float = param(12.0, 0.0, 500.0, step=1.0, unit="px", label="Minimum travel",
-                              help="A tracklet must have moved this far from its start (lights, a shuttle on the floor do not)")
+                              help="A tracklet must have moved this far over the travel window (lights, a shuttle on the floor do not)")
+    travel_window: int = param(12, 1, 60, step=1, unit="frames", label="Travel window",
+                               help="Minimum travel is measured as the net displacement over this many hits")
     max_misses: int = param(3, 0, 50, step=1, unit="frames", label="Coast for",
                             help="Frames a tracklet survives without a candidate")
     max_tracklets: int = param(80, 1, 500, step=1, label="Tracklets kept",
@@ -159,12 +169,29 @@ class AssociationParams(ParamGroup):
                                    help="Extra gate radius per frame for changes of velocity")
     velocity_smoothing: float = param(0.6, 0.05, 1.0, step=0.05, label="Velocity update",
                                       help="Weight of the newest velocity measurement")
-    residual_scale: float = param(20.0, 0.1, 500.0, step=1.0, unit="px", label="Residual scale",
+    residual_scale: float = param(5.0, 0.1, 500.0, step=1.0, unit="px", label="Residual scale",
                                   help="Prediction residual that costs one unit of merit (smooth paths win)")
+    hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
+                                 help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
                               help="Merit bonus of the tracklet already followed")
+    max_measured: int = param(24, 1, 500, step=1, label="Blobs measured",
+                              help="At most this many blobs per frame get the full-resolution measurement: "
+                                   "those near a live tracklet first, then the strongest differences")
     min_quality: float = param(0.0, 0.0, 1.0, step=0.01, label="Minimum candidate quality",
                                help="Candidates below this shape/contrast score are not associated")
+
+
+@dataclass(frozen=True, slots=True)
+class ClassifierParams(ParamGroup):
+    """The learned candidate classifier (core/classifier.py) that scores a blob by its looks."""
+
+    TITLE: ClassVar[str] = "Candidate classifier"
+    enabled: bool = flag(False, label="Use the classifier",
+                         help="Score candidates with the learned classifier instead of contrast + size")
+    model: str = choice("candidate_classifier", ("candidate_classifier",
+                                                 "candidate_classifier_broadcast"),
+                        label="Model", help="Classifier file in resources/")
 
 
 @dataclass(frozen=True, slots=True)
@@ -220,6 +247,7 @@ class TrackerParams:
     colour: ColourParams = field(default_factory=ColourParams)
     motion: MotionParams = field(default_factory=MotionParams)
     association: AssociationParams = field(default_factory=AssociationParams)
+    classifier: ClassifierParams = field(default_factory=ClassifierParams)
     stereo: StereoParams = field(default_factory=StereoParams)
     trajectory: TrajectoryParams = field(default_factory=TrajectoryParams)
 

@@ -1,0 +1,198 @@
+"""Multi-frame association: candidates of successive frames joined into smooth image paths.
+
+Why this file exists: on real courts most blobs that pass the paper's three shape/colour filters
+are *not* the shuttle (hands, rackets, shoes, flickering lights, a shuttle lying on the floor).
+What sets the shuttle apart is its motion over several frames: it moves on a smooth, nearly
+ballistic image path and never stays put for long while in play. The paper's filter 4 ("distance
+from the previous frame's shuttle") is the one-frame version of that idea; here every candidate
+can start a *tracklet*, tracklets are extended by speed-aware gating (the gate grows with the
+tracklet's own image speed, so a smash is not lost), and only tracklets that are confirmed (hit
+in enough frames, smooth, and actually travelling) may supply the detection. The choice between
+confirmed tracklets has hysteresis: the one being followed keeps the lead while it is hit.
+
+Everything is causal: a tracklet is confirmed after ``min_hits`` frames, which costs those first
+frames of each flight (no look-ahead, no latency).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import deque
+
+import numpy as np
+
+from .params import AssociationParams, MotionParams
+
+
+@dataclasses.dataclass(slots=True)
+class Tracklet:
+    """One hypothesis of an object moving on a smooth image path."""
+
+    ident: int
+    x: float
+    y: float
+    t: float
+    start_x: float
+    start_y: float
+    vx: float = 0.0
+    vy: float = 0.0
+    hits: int = 1
+    misses: int = 0            # consecutive frames without a candidate
+    residual: float = 0.0      # running mean of |measured - predicted| (px)
+    quality: float = 0.0       # running mean of the candidates' own scores
+    travel: float = 0.0        # largest distance from the start point (px)
+    hit_now: bool = True
+    recent: deque = dataclasses.field(default_factory=lambda: deque(maxlen=64))
+
+    def recent_travel(self, frames: int) -> float:
+        """Net displacement (px) over the last ``frames`` hits: static clutter stays near 0."""
+        if len(self.recent) < 2:
+            return 0.0
+        k = min(frames, len(self.recent) - 1)
+        x0, y0 = self.recent[-1 - k]
+        return math.hypot(self.x - x0, self.y - y0)
+
+    @property
+    def speed(self) -> float:
+        return math.hypot(self.vx, self.vy)
+
+    def predict(self, t: float) -> tuple[float, float]:
+        dt = t - self.t
+        return self.x + self.vx * dt, self.y + self.vy * dt
+
+
+class TrackletAssociator:
+    """Keeps the tracklets of one camera and says which candidates lie on a confirmed one."""
+
+    def __init__(self, motion: MotionParams, association: AssociationParams) -> None:
+        self.motion = motion
+        self.params = association
+        self.tracklets: list[Tracklet] = []
+        self.selected: int | None = None
+        self._next_id = 0
+
+    def set_params(self, motion: MotionParams, association: AssociationParams) -> None:
+        self.motion = motion
+        self.params = association
+
+    def reset(self) -> None:
+        self.tracklets = []
+        self.selected = None
+
+    # ---------------------------------------------------------------------------------------
+    def gate(self, tr: Tracklet, dt: float) -> float:
+        """Speed-aware gate radius (px): grows with the tracklet's own speed and the time step."""
+        m = self.motion
+        if tr.hits < 2:
+            # Unknown velocity: anything up to the fastest plausible image speed.
+            return m.base_radius + m.max_image_speed * dt
+        return (m.base_radius + self.params.speed_gate_gain * tr.speed * dt
+                + self.params.acceleration_px * (1 + tr.misses))
+
+    def live_predictions(self, t: float) -> np.ndarray:
+        """(N, 3) predicted x, y and gate of the tracklets seen at least twice."""
+        rows = [(*tr.predict(t), self.gate(tr, max(t - tr.t, 1e-3)))
+                for tr in self.tracklets if tr.hits >= 2]
+        return np.asarray(rows, dtype=float).reshape(-1, 3)
+
+    def update(self, t: float, positions: np.ndarray, scores: np.ndarray
+               ) -> list[tuple[int, float, float]]:
+        """Associate this frame's candidates; return per candidate (tracklet id, motion, merit).
+
+        ``merit`` is ≥ 0 when the candidate continues a confirmed, travelling tracklet (the
+        larger the better) and negative otherwise; ``motion`` is its distance from the
+        tracklet's prediction (nan for a new tracklet).
+        """
+        p = self.params
+        n = len(positions)
+        for tr in self.tracklets:
+            tr.hit_now = False
+        assigned_track = [-1] * n
+        motion = [math.nan] * n
+        if self.tracklets and n:
+            preds = np.array([tr.predict(t) for tr in self.tracklets])
+            gates = np.array([self.gate(tr, max(t - tr.t, 1e-3)) for tr in self.tracklets])
+            d = np.hypot(preds[:, None, 0] - positions[None, :, 0],
+                         preds[:, None, 1] - positions[None, :, 1])
+            cost = d / gates[:, None]
+            # Established tracklets claim their candidates first (greedy by normalised cost,
+            # with a bonus for history), so a new blob cannot steal a long track's point.
+            cost = cost - 0.5 * np.minimum(np.array([tr.hits for tr in self.tracklets]), 20)[:, None] / 20
+            order = np.argsort(cost, axis=None)
+            used_t = set()
+            used_c = set()
+            for flat in order:
+                i, j = divmod(int(flat), n)
+                if i in used_t or j in used_c:
+                    continue
+                if d[i, j] > gates[i]:
+                    continue
+                used_t.add(i)
+                used_c.add(j)
+                assigned_track[j] = self.tracklets[i].ident
+                motion[j] = float(d[i, j])
+                self._extend(self.tracklets[i], t, positions[j], scores[j], float(d[i, j]))
+        # Drop lost tracklets; start new ones from unassigned candidates.
+        kept = []
+        for tr in self.tracklets:
+            if not tr.hit_now:
+                tr.misses += 1
+            if tr.misses <= p.max_misses:
+                kept.append(tr)
+        self.tracklets = kept
+        ids = []
+        for j in range(n):
+            if assigned_track[j] >= 0:
+                ids.append(assigned_track[j])
+            else:
+                tr = Tracklet(self._next_id, float(positions[j, 0]), float(positions[j, 1]), t,
+                              float(positions[j, 0]), float(positions[j, 1]),
+                              quality=float(scores[j]))
+                tr.recent.append((tr.x, tr.y))
+                self._next_id += 1
+                self.tracklets.append(tr)
+                ids.append(tr.ident)
+        if len(self.tracklets) > p.max_tracklets:
+            self.tracklets.sort(key=lambda tr: (tr.hit_now, tr.hits), reverse=True)
+            self.tracklets = self.tracklets[:p.max_tracklets]
+        by_id = {tr.ident: tr for tr in self.tracklets}
+        out = []
+        for j in range(n):
+            tr = by_id.get(ids[j])
+            merit = self.merit(tr) if tr is not None else -1.0
+            out.append((ids[j], motion[j], merit))
+        return out
+
+    def _extend(self, tr: Tracklet, t: float, pos: np.ndarray, score: float, dist: float) -> None:
+        dt = t - tr.t
+        x, y = float(pos[0]), float(pos[1])
+        if dt > 1e-6:
+            vx, vy = (x - tr.x) / dt, (y - tr.y) / dt
+            a = self.params.velocity_smoothing if tr.hits >= 2 else 1.0
+            tr.vx = a * vx + (1 - a) * tr.vx
+            tr.vy = a * vy + (1 - a) * tr.vy
+        if tr.hits >= 2:
+            tr.residual = 0.8 * tr.residual + 0.2 * dist
+        tr.quality = 0.8 * tr.quality + 0.2 * score
+        tr.x, tr.y, tr.t = x, y, t
+        tr.hits += 1
+        tr.misses = 0
+        tr.hit_now = True
+        tr.travel = max(tr.travel, math.hypot(x - tr.start_x, y - tr.start_y))
+        tr.recent.append((x, y))
+
+    def merit(self, tr: Tracklet) -> float:
+        """How shuttle-like a tracklet is; negative when it may not supply a detection."""
+        p = self.params
+        if (not tr.hit_now or tr.hits < p.min_hits
+                or tr.recent_travel(p.travel_window) < p.min_travel):
+            return -1.0
+        merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation + tr.quality
+                 - tr.residual / max(p.residual_scale, 1e-6))
+        if tr.ident == self.selected:
+            merit += p.hysteresis
+        return max(merit, 0.0)
+
+    def select(self, ident: int | None) -> None:
+        self.selected = ident

@@ -1,0 +1,115 @@
+"""A small learned candidate classifier: is this blob the shuttle, judged by its looks alone?
+
+Why this file exists: the paper's filters 1–3 (contour length, tilted-rectangle short side,
+whiteness) are hard cut-offs on one measurement each; on real courts the shuttle differs from
+hands, shoes, shirts, rackets and lights by a *combination* of them (small, bright above its own
+surroundings, isolated, not saturated). A tiny multilayer perceptron on hand-crafted features
+(``detector.FEATURE_NAMES``) turns them into one probability that the association step uses
+as the candidate's quality. It is numpy-only (OpenCV 5 ships no ``ml`` module) and its weights
+live in a small JSON file in ``resources/`` written by ``benchmarks/train_classifier.py``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+RESOURCES_DIR = Path(__file__).resolve().parents[2] / "resources"
+
+
+class ClassifierError(ValueError):
+    """A classifier file that is missing or malformed."""
+
+
+@dataclass(frozen=True)
+class CandidateClassifier:
+    """Standardise → (dense + tanh)* → dense → sigmoid."""
+
+    name: str
+    mean: np.ndarray
+    scale: np.ndarray
+    weights: tuple[np.ndarray, ...]
+    biases: tuple[np.ndarray, ...]
+    feature_names: tuple[str, ...] = ()
+
+    def probability(self, features: np.ndarray) -> np.ndarray:
+        """(N, F) features → (N,) probabilities that each candidate is the shuttle."""
+        h = (np.asarray(features, dtype=np.float64) - self.mean) / self.scale
+        for k, (w, b) in enumerate(zip(self.weights, self.biases)):
+            h = h @ w + b
+            if k < len(self.weights) - 1:
+                h = np.tanh(h)
+        return 1.0 / (1.0 + np.exp(-np.clip(h[:, 0], -30, 30)))
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "feature_names": list(self.feature_names),
+                "mean": self.mean.tolist(), "scale": self.scale.tolist(),
+                "weights": [w.tolist() for w in self.weights],
+                "biases": [b.tolist() for b in self.biases]}
+
+    def save(self, path: str | Path) -> None:
+        Path(path).write_text(json.dumps(self.to_dict()) + "\n", encoding="utf-8")
+
+
+def load_classifier(name_or_path: str) -> CandidateClassifier:
+    """A classifier by name (``resources/<name>.json``) or by path."""
+    path = Path(name_or_path)
+    if path.suffix != ".json":
+        path = RESOURCES_DIR / f"{name_or_path}.json"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        return CandidateClassifier(
+            name=str(name_or_path), mean=np.asarray(data["mean"], float),
+            scale=np.asarray(data["scale"], float),
+            weights=tuple(np.asarray(w, float) for w in data["weights"]),
+            biases=tuple(np.asarray(b, float) for b in data["biases"]),
+            feature_names=tuple(data.get("feature_names", ())))
+    except FileNotFoundError:
+        raise ClassifierError(f"candidate classifier not found: {path}") from None
+    except (KeyError, ValueError, TypeError) as exc:
+        raise ClassifierError(f"candidate classifier {path} is malformed: {exc}") from None
+
+
+def train_mlp(features: np.ndarray, labels: np.ndarray, hidden: int = 16, epochs: int = 300,
+              learning_rate: float = 0.05, positive_weight: float | None = None,
+              seed: int = 0, name: str = "candidate_classifier",
+              feature_names: tuple[str, ...] = ()) -> CandidateClassifier:
+    """Full-batch Adam on the weighted cross-entropy; small enough for a few 100k samples."""
+    rng = np.random.default_rng(seed)
+    x = np.asarray(features, float)
+    y = np.asarray(labels, float)
+    mean = x.mean(axis=0)
+    scale = x.std(axis=0) + 1e-6
+    xs = (x - mean) / scale
+    if positive_weight is None:
+        positive_weight = max((1 - y.mean()) / max(y.mean(), 1e-6), 1.0) ** 0.5
+    sw = np.where(y > 0.5, positive_weight, 1.0)
+    sw /= sw.mean()
+    n_in = x.shape[1]
+    params = [rng.normal(0, 1 / np.sqrt(n_in), (n_in, hidden)), np.zeros(hidden),
+              rng.normal(0, 1 / np.sqrt(hidden), (hidden, 1)), np.zeros(1)]
+    m = [np.zeros_like(p) for p in params]
+    v = [np.zeros_like(p) for p in params]
+    for step in range(1, epochs + 1):
+        w1, b1, w2, b2 = params
+        a1 = np.tanh(xs @ w1 + b1)
+        z = (a1 @ w2 + b2)[:, 0]
+        prob = 1 / (1 + np.exp(-np.clip(z, -30, 30)))
+        dz = (prob - y) * sw / len(y)
+        g_w2 = a1.T @ dz[:, None]
+        g_b2 = np.array([dz.sum()])
+        da1 = dz[:, None] @ w2.T * (1 - a1 ** 2)
+        g_w1 = xs.T @ da1
+        g_b1 = da1.sum(axis=0)
+        grads = [g_w1 + 1e-4 * w1, g_b1, g_w2 + 1e-4 * w2, g_b2]
+        for k, g in enumerate(grads):
+            m[k] = 0.9 * m[k] + 0.1 * g
+            v[k] = 0.999 * v[k] + 0.001 * g * g
+            mh = m[k] / (1 - 0.9 ** step)
+            vh = v[k] / (1 - 0.999 ** step)
+            params[k] = params[k] - learning_rate * mh / (np.sqrt(vh) + 1e-8)
+    w1, b1, w2, b2 = params
+    return CandidateClassifier(name, mean, scale, (w1, w2), (b1, b2), tuple(feature_names))

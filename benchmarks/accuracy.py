@@ -1,0 +1,259 @@
+"""Accuracy of `badminton-track track` and `detect` on the real clips (GUIDE §5, protocol §6).
+
+Why this file exists: every figure about detection quality in the README must be regenerable
+by one command. For each clip it runs the real CLI (`track` with both cameras of a stereo clip,
+paired by the label files' timestamps; `detect` on each camera alone; `detect --preset
+broadcast` on the TV clips), scores the output with the five-outcome protocol (TP, TN, FP1,
+FP2, FN at 4 px @ 512 px width), and prints one row per clip and camera, marked tuned-on or
+held-out, with the processing speed of the run. On the NYCU rallies it also triangulates the
+labels (rig from the .cfg files) and reports the median / p90 distance of our 3D points.
+
+    .venv/bin/python benchmarks/accuracy.py            # everything (~15–25 min on 2 cores)
+    .venv/bin/python benchmarks/accuracy.py --quick    # 3 clips, first 500 frames
+
+Two CLI runs go in parallel (one per core); each `track` run also uses two camera threads,
+so the speeds printed are under full load (pessimistic), not isolated measurements.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from badminton_gui.core.evaluation import Outcomes, evaluate, tolerance_px  # noqa: E402
+from badminton_gui.core.rig import StereoRig  # noqa: E402
+from badminton_gui.io.labels import read_point_labels  # noqa: E402
+from clips import broadcast_clips, nycu_cfgs, stereo_clips  # noqa: E402
+
+CLI = [sys.executable, "-m", "badminton_gui.cli"]
+
+
+@dataclass
+class Row:
+    clip: str
+    camera: str
+    mode: str
+    held_out: bool
+    kind: str
+    outcomes: Outcomes
+    rate: float          # frames (or pairs) per second of the CLI run, decoding included
+    unit: str
+
+
+def run_cli(argv: list[str]) -> tuple[float, str]:
+    start = time.perf_counter()
+    proc = subprocess.run(CLI + argv, cwd=ROOT, capture_output=True, text=True)
+    elapsed = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(argv)} failed:\n{proc.stderr}")
+    m = re.search(r"([\d.]+) (?:pairs|frames)/s", proc.stdout)
+    return (float(m.group(1)) if m else float("nan")), proc.stdout
+
+
+def score(pred: dict, labels_path: Path, width: int, max_frames: int | None) -> Outcomes:
+    labels = read_point_labels(labels_path).as_dict()
+    if max_frames is not None:
+        last = max(pred) if pred else -1
+        labels = {f: v for f, v in labels.items() if f <= last}
+    return evaluate(pred, labels, tolerance_px(width))
+
+
+def read_track(path: Path):
+    left, right, rows = {}, {}, []
+    with path.open() as fh:
+        for r in csv.DictReader(fh):
+            f, fr = int(r["Frame"]), int(r["FrameR"])
+            left[f] = (r["VisL"] == "1", float(r["XL"] or 0), float(r["YL"] or 0))
+            right.setdefault(fr, (r["VisR"] == "1", float(r["XR"] or 0), float(r["YR"] or 0)))
+            rows.append(r)
+    return left, right, rows
+
+
+def read_detect(path: Path) -> dict:
+    return read_point_labels(path).as_dict()
+
+
+def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path):
+    """(label, callable) jobs for one stereo clip."""
+    out_track = tmp / f"{clip.name}_track.csv"
+    extra = ["--max-frames", str(max_frames)] if max_frames else []
+
+    def track():
+        rate, _ = run_cli(["track", "--left", str(clip.left), "--right", str(clip.right),
+                           "--calib", str(rig_path), "-o", str(out_track), "--quiet",
+                           "--left-times", str(clip.left_labels),
+                           "--right-times", str(clip.right_labels)] + extra)
+        t0 = time.perf_counter()
+        left, right, rows = read_track(out_track)
+        rows_out = [Row(clip.name, "left", "track", clip.held_out, "stereo",
+                        score(left, clip.left_labels, 2048, max_frames), rate, "pairs/s"),
+                    Row(clip.name, "right", "track", clip.held_out, "stereo",
+                        score(right, clip.right_labels, 2048, max_frames), rate, "pairs/s")]
+        return rows_out, three_d_errors(rows, clip, rig_path)
+
+    def detect(camera: str, video: Path, labels: Path):
+        def job():
+            out = tmp / f"{clip.name}_{camera}_detect.csv"
+            if max_frames:
+                rate = detect_in_process(video, out, max_frames, None)
+            else:
+                rate, _ = run_cli(["detect", str(video), "-o", str(out), "--quiet"])
+                rate = rate if rate == rate else _rate_from_elapsed(video)
+            return [Row(clip.name, camera, "detect", clip.held_out, "stereo",
+                        score(read_detect(out), labels, 2048, max_frames), rate, "frames/s")], None
+        return job
+
+    return [track, detect("left", clip.left, clip.left_labels),
+            detect("right", clip.right, clip.right_labels)]
+
+
+def _rate_from_elapsed(video: Path) -> float:
+    return float("nan")
+
+
+def detect_in_process(video: Path, out: Path, max_frames: int, preset: str | None) -> float:
+    """`detect` limited to the first frames (the CLI has no --max-frames)."""
+    import cv2
+
+    from badminton_gui.core.detector import CameraDetector
+    from badminton_gui.io.labels import write_point_labels
+    from badminton_gui.io.presets import load_preset
+    from badminton_gui.io.video import VideoFile
+    v = VideoFile(video)
+    det = CameraDetector(load_preset(preset))
+    frames, vis, xy = [], [], []
+    start = time.perf_counter()
+    for i in range(max_frames):
+        frame = v.read()
+        if frame is None:
+            break
+        d = det.process(frame, i / v.fps, keep_mask=False).detection
+        frames.append(i)
+        vis.append(d is not None)
+        xy.append((d.x, d.y) if d else (0.0, 0.0))
+    v.close()
+    write_point_labels(out, frames, vis, xy)
+    del cv2
+    return len(frames) / (time.perf_counter() - start)
+
+
+def three_d_errors(rows, clip, rig_path: Path) -> np.ndarray | None:
+    """Distances (m) between our 3D points and the triangulated labels, NYCU rallies only."""
+    if not clip.name.startswith("rally_"):
+        return None
+    rig = StereoRig.load(rig_path)
+    ll = read_point_labels(clip.left_labels).as_dict()
+    rl = read_point_labels(clip.right_labels).as_dict()
+    ours, pl, pr = [], [], []
+    for r in rows:
+        if r["Vis3D"] != "1":
+            continue
+        a = ll.get(int(r["Frame"]))
+        b = rl.get(int(r["FrameR"]))
+        if not (a and b and a[0] and b[0]):
+            continue
+        ours.append((float(r["X"]), float(r["Y"]), float(r["Z"])))
+        pl.append(a[1:])
+        pr.append(b[1:])
+    if not ours:
+        return np.zeros(0)
+    truth = rig.to_output(rig.triangulate(np.array(pl), np.array(pr)))
+    return np.linalg.norm(np.array(ours) - truth, axis=1)
+
+
+def broadcast_job(clip, tmp: Path, max_frames: int | None):
+    def job():
+        out = tmp / f"{clip.name}_detect.csv"
+        if max_frames:
+            rate = detect_in_process(clip.video, out, max_frames, "broadcast")
+        else:
+            rate, _ = run_cli(["detect", str(clip.video), "-o", str(out), "--preset", "broadcast"])
+        return [Row(clip.name, "-", "detect", clip.held_out, "broadcast",
+                    score(read_detect(out), clip.labels, 1280, max_frames), rate, "frames/s")], None
+    return job
+
+
+def fmt_row(r: Row) -> str:
+    o = r.outcomes
+    mark = "held-out" if r.held_out else "tuned-on"
+    return (f"{r.clip:16s} {r.camera:5s} {r.mode:6s} {mark:8s} {o.tp:5d} {o.tn:5d} {o.fp1:5d} "
+            f"{o.fp2:5d} {o.fn:5d}  {o.accuracy:6.3f} {o.precision:6.3f} {o.recall:6.3f} "
+            f"{o.f1:6.3f}  {r.rate:6.1f} {r.unit}")
+
+
+HEADER = (f"{'clip':16s} {'cam':5s} {'mode':6s} {'set':8s} {'TP':>5s} {'TN':>5s} {'FP1':>5s} "
+          f"{'FP2':>5s} {'FN':>5s}  {'acc':>6s} {'prec':>6s} {'recall':>6s} {'F1':>6s}  speed")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description="accuracy of track/detect on the real clips")
+    ap.add_argument("--quick", action="store_true", help="3 clips, first 500 frames each")
+    ap.add_argument("--jobs", type=int, default=2, help="CLI runs in parallel")
+    ap.add_argument("--only", default=None, help="regex on clip names")
+    args = ap.parse_args()
+    stereo = stereo_clips()
+    broadcast = broadcast_clips()
+    if not stereo and not broadcast:
+        print("no data found under", ROOT.parent / "shared" / "data")
+        return 1
+    max_frames = None
+    if args.quick:
+        stereo = [c for c in stereo if c.name in ("rally_11-46-04", "rally_11-49-21")]
+        broadcast = [c for c in broadcast if c.name == "bwf_00041"]
+        max_frames = 500
+    if args.only:
+        stereo = [c for c in stereo if re.search(args.only, c.name)]
+        broadcast = [c for c in broadcast if re.search(args.only, c.name)]
+    with tempfile.TemporaryDirectory(prefix="accuracy_") as tmpdir:
+        tmp = Path(tmpdir)
+        rig_path = tmp / "nycu_rig.yaml"
+        cfg1, cfg2 = nycu_cfgs()
+        run_cli(["import-calib", "--nycu", str(cfg1), str(cfg2), "-o", str(rig_path)])
+        jobs = []
+        for c in stereo:
+            jobs += stereo_jobs(c, tmp, max_frames, rig_path)
+        jobs += [broadcast_job(c, tmp, max_frames) for c in broadcast]
+        start = time.perf_counter()
+        with ThreadPoolExecutor(args.jobs) as pool:
+            results = list(pool.map(lambda j: j(), jobs))
+    rows = [r for rs, _ in results for r in rs]
+    errs = [e for _, e in results if e is not None]
+    print(HEADER)
+    for r in rows:
+        print(fmt_row(r))
+    print()
+    print("totals (summed outcomes):")
+    for kind, mode in (("stereo", "track"), ("stereo", "detect"), ("broadcast", "detect")):
+        for held in (False, True):
+            sel = [r for r in rows if r.kind == kind and r.mode == mode and r.held_out == held]
+            if not sel:
+                continue
+            tot = sum((r.outcomes for r in sel), Outcomes())
+            rates = [r.rate for r in sel if r.rate == r.rate]
+            print(f"  {kind:9s} {mode:6s} {'held-out' if held else 'tuned-on':8s} {tot.summary()}"
+                  f"  median speed {np.median(rates) if rates else float('nan'):.1f} {sel[0].unit}")
+    if errs:
+        d = np.concatenate(errs)
+        if len(d):
+            print(f"3D vs triangulated labels (NYCU rallies, {len(d)} pairs): median "
+                  f"{np.median(d):.3f} m, p90 {np.percentile(d, 90):.3f} m")
+    print(f"wall time {time.perf_counter() - start:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,117 @@
+"""Train the candidate classifier (core/classifier.py) on the *tuned-on* clips only.
+
+Why this file exists: the classifier's weights in ``resources/`` must be reproducible. This
+script runs the detector (classifier disabled, so the candidates do not depend on an earlier
+model) over every frame of the tuned-on clips of one kind of set-up, labels each candidate
+positive when its frame is labelled visible and it lies within the protocol tolerance (GUIDE §6)
+of the label, trains a small MLP and writes it as JSON. Held-out clips are never read.
+
+    .venv/bin/python benchmarks/train_classifier.py --kind stereo      # → resources/candidate_classifier.json
+    .venv/bin/python benchmarks/train_classifier.py --kind broadcast   # → resources/candidate_classifier_broadcast.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from badminton_gui.core.classifier import RESOURCES_DIR, train_mlp  # noqa: E402
+from badminton_gui.core.detector import FEATURE_NAMES, CameraDetector  # noqa: E402
+from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
+from badminton_gui.io.labels import read_point_labels, read_timestamps  # noqa: E402
+from badminton_gui.io.presets import load_preset  # noqa: E402
+from clips import broadcast_clips, stereo_clips  # noqa: E402
+
+
+def dump(job: tuple[str, str, str, int]) -> tuple[np.ndarray, np.ndarray]:
+    """(features, is_shuttle) of every measured candidate of one video."""
+    video, labels_path, preset, max_frames = job
+    cv2.setNumThreads(1)
+    params = load_preset(preset).with_value("classifier.enabled", False)
+    labels = read_point_labels(labels_path).as_dict()
+    try:
+        times = dict(zip(*read_timestamps(labels_path)))
+    except ValueError:
+        times = None
+    cap = cv2.VideoCapture(video)
+    fps = cap.get(cv2.CAP_PROP_FPS) or 30.0
+    tol = tolerance_px(int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)))
+    det = CameraDetector(params)
+    xs, ys = [], []
+    i = 0
+    while i < max_frames:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        t = times.get(i, i / fps) if times else i / fps
+        res = det.process(frame, t, keep_mask=False)
+        vis, lx, ly = labels.get(i, (False, 0.0, 0.0))
+        for x, y, feats, _reason in det.last_features:
+            xs.append(feats)
+            ys.append(bool(vis) and np.hypot(x - lx, y - ly) <= tol)
+        i += 1
+    cap.release()
+    return np.asarray(xs, float).reshape(-1, len(FEATURE_NAMES)), np.asarray(ys, bool)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--kind", choices=("stereo", "broadcast"), default="stereo")
+    ap.add_argument("--max-frames", type=int, default=100000)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--hidden", type=int, default=16)
+    args = ap.parse_args()
+    if args.kind == "stereo":
+        preset, out_name = "default", "candidate_classifier"
+        jobs = []
+        for c in stereo_clips():
+            if not c.held_out:
+                jobs += [(str(c.left), str(c.left_labels), preset, args.max_frames),
+                         (str(c.right), str(c.right_labels), preset, args.max_frames)]
+    else:
+        preset, out_name = "broadcast", "candidate_classifier_broadcast"
+        jobs = [(str(c.video), str(c.labels), preset, args.max_frames)
+                for c in broadcast_clips() if not c.held_out]
+    print(f"{len(jobs)} videos (tuned-on only), preset {preset}")
+    with ProcessPoolExecutor(args.jobs) as pool:
+        parts = list(pool.map(dump, jobs))
+    x = np.vstack([p[0] for p in parts])
+    y = np.concatenate([p[1] for p in parts])
+    # Hold the last video out of training to report an honest validation figure.
+    n_val = len(parts[-1][1])
+    model = train_mlp(x[:-n_val], y[:-n_val], hidden=args.hidden, name=out_name,
+                      feature_names=FEATURE_NAMES)
+    pv = model.probability(x[-n_val:])
+    yv = y[-n_val:]
+    auc = _auc(pv, yv)
+    print(f"{len(y)} candidates, {int(y.sum())} shuttles; validation on the last video: "
+          f"AUC {auc:.3f}, recall@0.5 {np.mean(pv[yv] > 0.5):.3f}, "
+          f"false-positive rate@0.5 {np.mean(pv[~yv] > 0.5):.3f}")
+    model = train_mlp(x, y, hidden=args.hidden, name=out_name, feature_names=FEATURE_NAMES)
+    out = RESOURCES_DIR / f"{out_name}.json"
+    model.save(out)
+    print(f"→ {out}")
+    return 0
+
+
+def _auc(scores: np.ndarray, positive: np.ndarray) -> float:
+    if positive.all() or not positive.any():
+        return float("nan")
+    order = np.argsort(scores)
+    ranks = np.empty(len(scores))
+    ranks[order] = np.arange(1, len(scores) + 1)
+    n_pos = positive.sum()
+    return float((ranks[positive].sum() - n_pos * (n_pos + 1) / 2) / (n_pos * (len(scores) - n_pos)))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
