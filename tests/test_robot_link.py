@@ -294,6 +294,26 @@ def test_loop_url_and_newest_wins_rate_limit():
         link.close()
 
 
+def test_robot_not_reading_drops_messages_without_killing_the_link():
+    # loop:// holds 4 KB and raises queue.Full when nobody reads it: like a stalled Bluetooth link.
+    link = RobotLink("loop://", max_rate_hz=1000.0, heartbeat_s=0.05, write_timeout_s=0.01)
+    try:
+        assert wait_for(lambda: link.status().connected)
+        for i in range(400):
+            link.send_result(make_result(i, i / 120.0))
+            time.sleep(0.001)
+        assert wait_for(lambda: link.status().errors >= 1)
+        assert link._thread.is_alive()
+        assert "timeout" in link.status().last_error
+        sent_before = link.status().messages_sent
+        link._serial.read(1 << 16)        # the robot reads again: sending resumes
+        link.send_result(make_result(999, 9.0))
+        assert wait_for(lambda: link.status().messages_sent > sent_before)
+    finally:
+        link.close()
+    assert not link._thread.is_alive()
+
+
 def test_missing_port_never_blocks_or_raises():
     link = RobotLink("/dev/this-port-does-not-exist", heartbeat_s=0.1)
     try:

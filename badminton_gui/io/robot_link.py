@@ -22,6 +22,7 @@ after garbage, lost bytes or corrupted frames and never raises on bad input.
 from __future__ import annotations
 
 import math
+import queue
 import struct
 import threading
 import time
@@ -294,14 +295,16 @@ class RobotLink:
 
     RETRY_MIN_S = 0.2
     RETRY_MAX_S = 2.0
-    WRITE_TIMEOUT_S = 0.5
 
     def __init__(self, port: str, baud: int = 115200, max_rate_hz: float = 200.0,
-                 heartbeat_s: float = 0.5) -> None:
+                 heartbeat_s: float = 0.5, write_timeout_s: float = 0.5) -> None:
         if not port:
             raise ValueError("robot link: empty port name")
-        if baud <= 0 or max_rate_hz <= 0 or heartbeat_s <= 0:
-            raise ValueError("robot link: baud, max_rate_hz and heartbeat_s must be positive")
+        if baud <= 0 or max_rate_hz <= 0 or heartbeat_s <= 0 or write_timeout_s <= 0:
+            raise ValueError("robot link: baud, max_rate_hz, heartbeat_s and write_timeout_s "
+                             "must be positive")
+        # A write that cannot finish in this time (robot not reading) drops the message.
+        self.write_timeout_s = float(write_timeout_s)
         self.port = port
         self.baud = int(baud)
         self.min_interval = 1.0 / float(max_rate_hz)
@@ -414,8 +417,8 @@ class RobotLink:
 
         try:
             ser = serial.serial_for_url(self.port, baudrate=self.baud, timeout=0,
-                                        write_timeout=self.WRITE_TIMEOUT_S)
-        except (serial.SerialException, OSError, ValueError) as exc:
+                                        write_timeout=self.write_timeout_s)
+        except Exception as exc:  # noqa: BLE001 - a bad URL or handler must not kill the I/O thread
             self._record_error(f"open {self.port}: {exc}")
             return False
         self._serial = ser
@@ -434,13 +437,15 @@ class RobotLink:
             if written is not None and written != len(frame):
                 raise serial.SerialTimeoutException(f"wrote {written} of {len(frame)} bytes")
             return True
-        except serial.SerialTimeoutException as exc:
-            # The device is there but not reading (full buffer, Bluetooth stall): drop the message.
-            self._record_error(f"write timeout on {self.port}: {exc}")
+        except (serial.SerialTimeoutException, queue.Full) as exc:
+            # The device is there but not reading (full buffer, Bluetooth stall; loop:// raises
+            # queue.Full): drop the message.
+            self._record_error(f"write timeout on {self.port}: {exc or type(exc).__name__}")
             return False
-        except (serial.SerialException, OSError, ValueError, TypeError, AttributeError) as exc:
-            # Gone (unplugged, out of range, pty closed): reopen in the background.
-            self._record_error(f"write to {self.port}: {exc}")
+        except Exception as exc:  # noqa: BLE001 - any handler error must not kill the I/O thread
+            # Gone (unplugged, out of range, pty closed) or a URL handler's own error: reopen in
+            # the background.
+            self._record_error(f"write to {self.port}: {exc or type(exc).__name__}")
             self._close_port()
             return False
 
@@ -456,5 +461,5 @@ class RobotLink:
         if ser is not None:
             try:
                 ser.close()
-            except (OSError, ValueError) as exc:   # closing a vanished device may fail: ignore
+            except Exception as exc:  # noqa: BLE001 - closing a vanished device may fail: ignore
                 self._record_error(f"close {self.port}: {exc}")
