@@ -328,6 +328,16 @@ def test_missing_port_never_blocks_or_raises():
     assert not link._thread.is_alive()
 
 
+def test_a_malformed_result_is_counted_not_raised():
+    link = RobotLink("loop://", heartbeat_s=10.0)
+    try:
+        bad = TrackResult(index=1, timestamp=0.0, left=EMPTY, right=EMPTY, point=(1.0, 2.0))
+        link.send_result(bad)
+        assert link.status().errors == 1 and "cannot encode" in link.status().last_error
+    finally:
+        link.close()
+
+
 def test_bad_arguments():
     with pytest.raises(ValueError):
         RobotLink("", 115200)

@@ -331,7 +331,13 @@ class RobotLink:
         with self._cond:
             if self._closing:
                 return
-            frame = encode_track(result, self._seq)
+            try:
+                frame = encode_track(result, self._seq)
+            except (struct.error, TypeError, ValueError, OverflowError) as exc:
+                # A malformed result must not stop tracking: count it and carry on.
+                self._errors += 1
+                self._last_error = f"cannot encode frame {getattr(result, 'index', '?')}: {exc}"
+                return
             self._last_timestamp = float(result.timestamp)
             self._seq = (self._seq + 1) & 0xFFFFFFFF
             if self._pending is not None:
