@@ -145,8 +145,10 @@ def test_a_long_gap_ends_the_flight_and_the_floor_lands_it():
     assert len(traj.predicted_path()) > 1
     info = traj.update(times[half - 1] + 0.1, None)     # short gap: coasting on the model
     assert info.in_flight and info.velocity is not None
+    last_prediction = info.prediction
     info = traj.update(times[half - 1] + 0.3, None)     # longer than max_gap
-    assert not info.in_flight and info.prediction is None
+    assert not info.in_flight and info.velocity is None
+    assert info.prediction == last_prediction           # kept for the robot until the next shot
     assert len(traj.predicted_path()) == 0
     # A whole flight down to the floor: ends by itself, the prediction stays for the robot.
     traj.reset()
@@ -155,6 +157,14 @@ def test_a_long_gap_ends_the_flight_and_the_floor_lands_it():
     assert path_mid.in_flight
     final = history[-1][1]
     assert not final.in_flight and final.prediction is not None
+    # Without any point near the floor, the model's landing time ends the flight.
+    traj.reset()
+    history = fly(traj, times[:-12], [tuple(p) for p in truth[:-12]])
+    assert history[-1][1].in_flight
+    landed_at = history[-1][1].prediction.t
+    info = traj.update(landed_at + 0.05, None)
+    assert not info.in_flight and info.prediction is not None
+    assert traj.shots_ended == 1
     assert math.hypot(final.prediction.x - shot.landing[0], final.prediction.y - shot.landing[1]) < 0.03
 
 

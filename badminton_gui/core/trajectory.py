@@ -22,7 +22,12 @@ How (court frame, Z up):
   replaces the flight. If its velocity differs from the flight's by more than
   ``hit_acceleration`` × the time step, that is a hit: a new shot starts. Otherwise the flight was
   only re-synchronised (model mismatch) and keeps its shot number and its L.
-* A flight ends when the shuttle reaches the floor, or after ``max_gap`` seconds without a point.
+* The points' noise: ``measurement_noise`` is a floor; the filter measures the real scatter from
+  the innovations of established flights (robust median) and uses the larger of the two, so a
+  rig noisier than declared does not get its good points rejected and its shots chopped up.
+* A flight ends when the shuttle reaches the floor (a point, or the model's landing time, says
+  so), or after ``max_gap`` seconds without a usable point; its last landing prediction stays
+  available (``in_flight`` False) until the next shot starts.
 * The landing point is the drag model integrated (RK4, adaptive step) from the current state down
   to Z = 0; its uncertainty is the filter covariance carried along that path by the linearised
   dynamics (state-transition matrices) and projected onto the floor. The in/out call uses
@@ -50,6 +55,9 @@ MIN_FLIGHT_SPEED = 1.0      # m/s: slower "tracks" are shuttles lying on the flo
 LANDED_HEIGHT = 0.03        # m: a flight whose estimate is this low has landed (cork radius ≈ 1.3 cm)
 MIN_START_HEIGHT = 0.15     # m: no flight starts lower (a shuttle rolling or picked up off the floor;
                             # with noisy points its 4-point "speed" easily exceeds MIN_FLIGHT_SPEED)
+LANDING_GRACE_S = 0.03      # s: a flight past its predicted landing time by this much has landed
+NOISE_WINDOW = 120          # innovations kept for the measured-noise estimate (~1 s at 120 fps)
+NOISE_MIN_SAMPLES = 30      # before that many, the parameter alone sets the noise
 MAX_RADIUS = 2.0            # m: a landing this uncertain is withheld (a fresh, poorly fixed track)
 MAX_FLIGHT_TIME = 6.0       # s: the landing search stops here
 K_MIN = 1.0 / physics.AERO_LENGTH_BOUNDS[1]
@@ -254,6 +262,7 @@ class Trajectory:
     def set_params(self, params: TrajectoryParams) -> None:
         """Apply a new parameter snapshot; the current flight continues."""
         self.params = params
+        self._noise_dirty = True
 
     def reset(self) -> None:
         """Forget every flight and the session's estimate of L."""
@@ -272,6 +281,10 @@ class Trajectory:
         self._recent: list[tuple[float, float, float, float]] = []   # camera-frame mode
         self._velocity_no_model: tuple[float, float, float] | None = None
         self._misses_no_model = 0     # consecutive points off the local fit (camera-frame mode)
+        self._noise_samples: list[tuple[float, float]] = []   # (|ν|², state variance) per point
+        self._noise_count = 0
+        self._noise_dirty = True
+        self._sigma_cache = self.params.measurement_noise
         self.shots_ended = 0
 
     # ---- read-only views for plots and tests ------------------------------------------------
@@ -311,8 +324,12 @@ class Trajectory:
             return self._update_no_model(t, point)
 
         p = self.params
-        if self._flight is not None and t - self._flight.t > p.max_gap:
-            self._end_flight()
+        if self._flight is not None:
+            if self._landing is not None and t > self._landing.prediction.t + LANDING_GRACE_S:
+                # The model says it is on the floor by now even if the last points were not usable.
+                self._end_flight(keep_landing=True)
+            elif t - self._flight.t > p.max_gap:
+                self._end_flight(keep_landing=True)   # lost: the robot keeps the last prediction
         if self._tentative is not None and t - self._tentative.t > p.max_gap:
             self._tentative = None
         if self._seed is not None and t - self._seed[0] > p.max_gap:
@@ -330,13 +347,15 @@ class Trajectory:
     def _feed(self, t: float, z: np.ndarray) -> bool:
         """Use one point; True when it extended the current flight."""
         p = self.params
-        sigma = p.measurement_noise
+        sigma = self.measurement_sigma
         flight = self._flight
         if flight is not None and t > flight.t:
             # Gate against a copy of the prediction: a rejected point must leave the flight as it was.
             saved = (flight.x, flight.P, flight.t)
             flight.predict(t, p.model_noise)
             nu, S, d2 = flight.innovation(z, sigma)
+            if len(flight.points) >= p.min_points:
+                self._observe_noise(nu, flight.P)
             if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
                 flight.correct(t, z, nu, S, sigma)
                 self._after_flight_update()
@@ -347,10 +366,41 @@ class Trajectory:
         self._feed_tentative(t, z)
         return self._flight is not None and self._flight.t == t
 
+    def _observe_noise(self, nu: np.ndarray, P: np.ndarray) -> None:
+        """Collect one innovation of an established flight for the measured-noise estimate."""
+        nu2 = float(nu @ nu)
+        if nu2 <= self.params.outlier_distance ** 2:
+            self._noise_samples.append((nu2, float(P[0, 0] + P[1, 1] + P[2, 2]) / 3.0))
+            if len(self._noise_samples) > NOISE_WINDOW:
+                del self._noise_samples[:-NOISE_WINDOW]
+            self._noise_count += 1
+            if self._noise_count % 8 == 0:       # re-estimate every few points: a median costs
+                self._noise_dirty = True
+
+    @property
+    def measurement_sigma(self) -> float:
+        """σ of a 3D point used by the filter: the parameter, or more if the points say so.
+
+        The points' real scatter is estimated from recent innovations of established flights:
+        |ν|² ~ (σ² + state variance) χ²₃, whose median is 2.366 (σ² + state variance). The
+        parameter is a floor: a rig worse than declared (wide range, short baseline) must not
+        see its good points rejected as outliers and its shots chopped into pieces.
+        """
+        if self._noise_dirty:
+            self._noise_dirty = False
+            floor = self.params.measurement_noise
+            if len(self._noise_samples) >= NOISE_MIN_SAMPLES:
+                arr = np.asarray(self._noise_samples)
+                var = float(np.median(arr[:, 0])) / 2.366 - float(np.median(arr[:, 1]))
+                self._sigma_cache = max(floor, math.sqrt(max(var, 0.0)))
+            else:
+                self._sigma_cache = floor
+        return self._sigma_cache
+
     def _feed_tentative(self, t: float, z: np.ndarray) -> None:
         """A point the flight could not explain: grow (or restart) the tentative track."""
         p = self.params
-        sigma = p.measurement_noise
+        sigma = self.measurement_sigma
         tent = self._tentative
         if tent is not None and t > tent.t:
             saved = (tent.x, tent.P, tent.t)
@@ -508,8 +558,13 @@ class Trajectory:
                               peak_speed=self._peak_speed_value(), prediction=pred,
                               withheld_reason="" if pred is not None else reason,
                               in_flight=False)
+        tent = self._tentative
         if accepted or t <= f.t:
             vel = tuple(float(v) for v in f.x[3:6])
+        elif tent is not None and tent.t == t and len(tent.points) >= 3:
+            # The flight no longer explains the points but a new track does (a hit being
+            # confirmed): its velocity is the better readout meanwhile.
+            vel = tuple(float(v) for v in tent.x[3:6])
         else:
             vel = tuple(float(v) for v in f.predicted(t)[3:6])   # coasting through a short gap
         pred = self._landing.prediction if self._landing is not None else None
