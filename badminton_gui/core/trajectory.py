@@ -55,6 +55,8 @@ MIN_FLIGHT_SPEED = 1.0      # m/s: slower "tracks" are shuttles lying on the flo
 LANDED_HEIGHT = 0.03        # m: a flight whose estimate is this low has landed (cork radius ≈ 1.3 cm)
 MIN_START_HEIGHT = 0.15     # m: no flight starts lower (a shuttle rolling or picked up off the floor;
                             # with noisy points its 4-point "speed" easily exceeds MIN_FLIGHT_SPEED)
+VELOCITY_SIGMA_MIN = 0.5     # m/s: a velocity this uncertain (or 10 % of the speed) is not shown
+VELOCITY_SIGMA_FRACTION = 0.10
 LANDING_GRACE_S = 0.03      # s: a flight past its predicted landing time by this much has landed
 NOISE_WINDOW = 120          # innovations kept for the measured-noise estimate (~1 s at 120 fps)
 NOISE_MIN_SAMPLES = 30      # before that many, the parameter alone sets the noise
@@ -236,6 +238,13 @@ class _Filter:
     @property
     def speed(self) -> float:
         return float(np.linalg.norm(self.x[3:6]))
+
+
+def _velocity_is_sure(f: _Filter) -> bool:
+    """Is the filter's velocity known well enough to be shown as the speed (σ ≤ 10 %, or 0.5 m/s)?"""
+    var = float(f.P[3, 3] + f.P[4, 4] + f.P[5, 5]) / 3.0
+    limit = max(VELOCITY_SIGMA_MIN, VELOCITY_SIGMA_FRACTION * f.speed)
+    return var <= limit * limit
 
 
 @dataclass(frozen=True, slots=True)
@@ -420,8 +429,11 @@ class Trajectory:
 
     def _promote(self, tent: _Filter) -> None:
         """The tentative track becomes the flight: a new shot, or a re-synchronised one."""
-        if tent.speed < MIN_FLIGHT_SPEED or tent.x[2] < MIN_START_HEIGHT:
-            return      # a shuttle lying on the floor or held in a hand: not a flight
+        sigma_v = math.sqrt(max(float(tent.P[3, 3] + tent.P[4, 4] + tent.P[5, 5]) / 3.0, 0.0))
+        if tent.speed - 2.0 * sigma_v < MIN_FLIGHT_SPEED or tent.x[2] < MIN_START_HEIGHT:
+            # Not (yet) surely moving: a shuttle lying on the floor or held in a hand, or a track
+            # too short to tell. It keeps growing and is promoted once it is sure.
+            return
         old = self._flight
         new_shot = True
         if old is not None:
@@ -559,14 +571,17 @@ class Trajectory:
                               withheld_reason="" if pred is not None else reason,
                               in_flight=False)
         tent = self._tentative
+        vel: tuple[float, float, float] | None
         if accepted or t <= f.t:
-            vel = tuple(float(v) for v in f.x[3:6])
+            vel = tuple(float(v) for v in f.x[3:6]) if _velocity_is_sure(f) else None
         elif tent is not None and tent.t == t and len(tent.points) >= 3:
-            # The flight no longer explains the points but a new track does (a hit being
-            # confirmed): its velocity is the better readout meanwhile.
-            vel = tuple(float(v) for v in tent.x[3:6])
-        else:
+            # The flight no longer explains the points but a new track does: probably a hit being
+            # confirmed. Neither velocity can be trusted yet: better no speed than a wrong one.
+            vel = None
+        elif _velocity_is_sure(f):
             vel = tuple(float(v) for v in f.predicted(t)[3:6])   # coasting through a short gap
+        else:
+            vel = None
         pred = self._landing.prediction if self._landing is not None else None
         reason = ""
         if pred is None:
