@@ -20,13 +20,23 @@ rally's direction reversals (every return of the shuttle reverses its along-cour
 error of the position predicted 300 ms ahead against the labelled point then (same shot), and
 the session's fitted L. The labels carry no landing ground truth.
 
+With ``--demo-track DIR`` it scores the whole pipeline's 3D points on the demo court: DIR holds
+``truth.csv`` from ``badminton-track demo`` and ``track.csv`` from ``badminton-track track`` on
+those videos; the CSV's 3D points are fed to :class:`Trajectory` again and its speed is compared
+with the true velocity, its landing predictions with the true landings.
+
 Usage:  python benchmarks/landing.py [--sessions N] [--shots N] [--fps 120 60] [--sigma 0.01 0.02]
         python benchmarks/landing.py --real ../shared/data/nycu-stereo [--real-noise 0.05]
+        badminton-track demo --frames 1200 --out /tmp/demo --size 640x360 --seed 2
+        badminton-track track --left /tmp/demo/left.mp4 --right /tmp/demo/right.mp4 \
+            --calib /tmp/demo/rig.yaml -o /tmp/demo/track.csv
+        python benchmarks/landing.py --demo-track /tmp/demo
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from dataclasses import dataclass
@@ -278,6 +288,69 @@ def run_real(folder: Path, noise: float, ahead: float = 0.3) -> int:
     return 0
 
 
+def run_demo_track(folder: Path) -> int:
+    """Speed and landing of Trajectory on the pipeline's own 3D points (demo court truth)."""
+    import csv
+
+    def num(row, key):
+        value = row.get(key, "")
+        return float(value) if value not in ("", None) else math.nan
+
+    try:
+        truth = list(csv.DictReader(open(folder / "truth.csv", encoding="utf-8")))
+        track = list(csv.DictReader(open(folder / "track.csv", encoding="utf-8")))
+    except FileNotFoundError as exc:
+        print(f"--demo-track: {exc}", file=sys.stderr)
+        return 2
+    by_frame = {int(r["Frame"]): r for r in truth}
+    traj = Trajectory(TrajectoryParams(), court_frame=True)
+    history = []
+    points_3d = []
+    for row in track:
+        t = num(row, "Timestamp")
+        point = None
+        if row.get("Vis3D") == "1":
+            point = (num(row, "X"), num(row, "Y"), num(row, "Z"))
+        history.append((t, traj.update(t, point), by_frame.get(int(row["Frame"]))))
+        true_row = by_frame.get(int(row["Frame"]))
+        if point is not None and true_row is not None and true_row["X"]:
+            points_3d.append(np.linalg.norm(np.subtract(point, [num(true_row, k) for k in "XYZ"])))
+    speed_err, shown, moving = [], 0, 0
+    for t, info, true_row in history:
+        if true_row is None or true_row.get("Visible") != "1" or not true_row["VX"]:
+            continue
+        v = float(np.linalg.norm([num(true_row, k) for k in ("VX", "VY", "VZ")]))
+        if v < 0.5:
+            continue
+        moving += 1
+        if info.velocity is not None:
+            shown += 1
+            speed_err.append(abs(float(np.linalg.norm(info.velocity)) - v) / v)
+    print(f"# demo pipeline: {folder}, {len(track)} frames, {len(points_3d)} 3D points "
+          f"(error vs truth: median {percentile(points_3d, 50) * 100:.1f} cm, "
+          f"p90 {percentile(points_3d, 90) * 100:.1f} cm)")
+    print(f"speed shown in {shown}/{moving} frames with a moving visible shuttle; relative error "
+          f"median {percentile(speed_err, 50):.1%}, p75 {percentile(speed_err, 75):.1%}, "
+          f"p95 {percentile(speed_err, 95):.1%}")
+    shots: dict[int, list] = {}
+    for r in truth:
+        if int(r["Shot"]) >= 0 and r["X"]:
+            shots.setdefault(int(r["Shot"]), []).append([num(r, k) for k in ("Timestamp", "X", "Y", "Z")])
+    for shot, rows in sorted(shots.items()):
+        arr = np.asarray(rows)
+        if arr[-1, 3] > 0.1:
+            continue   # intercepted, not landed
+        for lead in LEAD_TIMES_MS:
+            before = [(t, info) for t, info, _ in history
+                      if arr[0, 0] <= t <= arr[-1, 0] - lead / 1000.0]
+            pred = before[-1][1].prediction if before else None
+            text = "no prediction" if pred is None else (
+                f"error {math.hypot(pred.x - arr[-1, 1], pred.y - arr[-1, 2]) * 100:.1f} cm "
+                f"(±{pred.radius * 100:.0f} cm)")
+            print(f"shot {shot} landing ({arr[-1, 1]:.2f}, {arr[-1, 2]:.2f}), {lead} ms before: {text}")
+    return 0
+
+
 def percentile(values, q):
     return float(np.percentile(values, q)) if len(values) else float("nan")
 
@@ -302,7 +375,11 @@ def main(argv: list[str] | None = None) -> int:
                         help="check on the NYCU stereo rallies under DIR instead of synthetic flights")
     parser.add_argument("--real-noise", type=float, default=0.05,
                         help="measurement_noise for --real, m (default 0.05)")
+    parser.add_argument("--demo-track", type=Path, default=None, metavar="DIR",
+                        help="score the pipeline's 3D points: DIR/truth.csv (demo) and DIR/track.csv (track)")
     args = parser.parse_args(argv)
+    if args.demo_track is not None:
+        return run_demo_track(args.demo_track)
     if args.real is not None:
         return run_real(args.real, args.real_noise)
 

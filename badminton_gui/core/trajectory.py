@@ -240,6 +240,12 @@ class _Filter:
         return float(np.linalg.norm(self.x[3:6]))
 
 
+def _chi2_999(dof: int) -> float:
+    """99.9 % quantile of χ² with ``dof`` degrees of freedom (Wilson–Hilferty, within ~1 %)."""
+    a = 2.0 / (9.0 * dof)
+    return dof * (1.0 - a + 3.090 * math.sqrt(a)) ** 3
+
+
 def _velocity_is_sure(f: _Filter) -> bool:
     """Is the filter's velocity known well enough to be shown as the speed (σ ≤ 10 %, or 0.5 m/s)?"""
     var = float(f.P[3, 3] + f.P[4, 4] + f.P[5, 5]) / 3.0
@@ -434,6 +440,13 @@ class Trajectory:
             # Not (yet) surely moving: a shuttle lying on the floor or held in a hand, or a track
             # too short to tell. It keeps growing and is promoted once it is sure.
             return
+        if not self._consistent(tent):
+            # Its points do not lie on one drag-model path (the 2-point start took an outlier):
+            # start again from the newest point.
+            self._tentative = None
+            last = tent.points[-1]
+            self._seed = (last[0], np.asarray(last[1:], dtype=float))
+            return
         old = self._flight
         new_shot = True
         if old is not None:
@@ -461,6 +474,26 @@ class Trajectory:
             self._peak_speed = None
             self._launch_speed = None
         self._after_flight_update()
+
+    def _consistent(self, tent: _Filter) -> bool:
+        """Do the track's points lie on the path its final state implies (χ² test at 99.9 %)?
+
+        A 2-point start can take an outlier and the filter then compromises between it and the
+        good points; each point may pass the gate while together they do not fit one path.
+        """
+        state = tuple(tent.x[:6].tolist())
+        k = float(tent.x[6])
+        sigma = self.measurement_sigma
+        limit = self.params.outlier_sigma * sigma
+        total = 0.0
+        for t_i, x_i, y_i, z_i in tent.points:
+            px, py, pz = _propagate(state, k, t_i - tent.t)[:3]
+            r2 = (px - x_i) ** 2 + (py - y_i) ** 2 + (pz - z_i) ** 2
+            if r2 > limit * limit:
+                return False
+            total += r2
+        dof = max(3 * len(tent.points) - 6, 1)
+        return total / (sigma * sigma) <= _chi2_999(dof)
 
     def _after_flight_update(self) -> None:
         """Bookkeeping after the flight took a point: landing, peak speed, end on the floor."""
