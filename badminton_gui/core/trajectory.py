@@ -17,9 +17,9 @@ How (court frame, Z up):
   posterior minus the prior it started with) is added to a session estimate, which is the prior of
   the next shot. A variance floor keeps it adaptable (feathers wear, shuttles are changed).
 * Outliers: a point whose innovation is beyond ``outlier_sigma`` standard deviations (or farther
-  than ``outlier_distance``) is not used. Rejected points seed a *tentative* track; when
-  ``CONFIRM_POINTS`` consecutive rejected points agree with each other, the tentative track
-  replaces the flight. If its velocity differs from the flight's by more than
+  than ``outlier_distance``) is not used. Rejected points seed a *tentative* track; when at least
+  ``CONFIRM_POINTS`` consecutive rejected points lie on one drag path (χ² test), are surely moving
+  (speed − 2σ ≥ 1 m/s) and start above the floor, the tentative track replaces the flight. If its velocity differs from the flight's by more than
   ``hit_acceleration`` × the time step, that is a hit: a new shot starts. Otherwise the flight was
   only re-synchronised (model mismatch) and keeps its shot number and its L.
 * The points' noise: ``measurement_noise`` is a floor; the filter measures the real scatter from
