@@ -9,7 +9,7 @@ held-out, with the processing speed of the run. On the NYCU rallies it also tria
 labels (rig from the .cfg files) and reports the median / p90 distance of our 3D points.
 
     .venv/bin/python benchmarks/accuracy.py            # everything (~15–25 min on 2 cores)
-    .venv/bin/python benchmarks/accuracy.py --quick    # 3 clips, first 500 frames
+    .venv/bin/python benchmarks/accuracy.py --quick    # 3 clips, first 900 frames
 
 Two CLI runs go in parallel (one per core); each `track` run also uses two camera threads,
 so the speeds printed are under full load (pessimistic), not isolated measurements.
@@ -201,7 +201,7 @@ HEADER = (f"{'clip':16s} {'cam':5s} {'mode':6s} {'set':8s} {'TP':>5s} {'TN':>5s}
 
 def main() -> int:
     ap = argparse.ArgumentParser(description="accuracy of track/detect on the real clips")
-    ap.add_argument("--quick", action="store_true", help="3 clips, first 500 frames each")
+    ap.add_argument("--quick", action="store_true", help="3 clips, first 900 frames each")
     ap.add_argument("--jobs", type=int, default=2, help="CLI runs in parallel")
     ap.add_argument("--only", default=None, help="regex on clip names")
     args = ap.parse_args()
@@ -214,7 +214,7 @@ def main() -> int:
     if args.quick:
         stereo = [c for c in stereo if c.name in ("rally_11-46-04", "rally_11-49-21")]
         broadcast = [c for c in broadcast if c.name == "bwf_00041"]
-        max_frames = 500
+        max_frames = 900
     if args.only:
         stereo = [c for c in stereo if re.search(args.only, c.name)]
         broadcast = [c for c in broadcast if re.search(args.only, c.name)]

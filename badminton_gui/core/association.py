@@ -43,6 +43,8 @@ class Tracklet:
     quality: float = 0.0       # running mean of the candidates' own scores
     travel: float = 0.0        # largest distance from the start point (px)
     hit_now: bool = True
+    velocity_known: bool = False
+    still_for: int = 0         # hits since the tracklet last travelled min_travel in the window
     recent: deque = dataclasses.field(default_factory=lambda: deque(maxlen=64))
 
     def recent_travel(self, frames: int) -> float:
@@ -84,7 +86,7 @@ class TrackletAssociator:
     def gate(self, tr: Tracklet, dt: float) -> float:
         """Speed-aware gate radius (px): grows with the tracklet's own speed and the time step."""
         m = self.motion
-        if tr.hits < 2:
+        if not tr.velocity_known:
             # Unknown velocity: anything up to the fastest plausible image speed.
             return m.base_radius + m.max_image_speed * dt
         return (m.base_radius + self.params.speed_gate_gain * tr.speed * dt
@@ -141,10 +143,13 @@ class TrackletAssociator:
             if tr.misses <= p.max_misses:
                 kept.append(tr)
         self.tracklets = kept
+        heir = self._heir(t, positions, assigned_track)
         ids = []
         for j in range(n):
             if assigned_track[j] >= 0:
                 ids.append(assigned_track[j])
+            elif j == heir:
+                ids.append(self._inherit(t, positions[j], float(scores[j])))
             else:
                 tr = Tracklet(self._next_id, float(positions[j, 0]), float(positions[j, 1]), t,
                               float(positions[j, 0]), float(positions[j, 1]),
@@ -164,16 +169,54 @@ class TrackletAssociator:
             out.append((ids[j], motion[j], merit))
         return out
 
+    def _followed(self) -> Tracklet | None:
+        for tr in self.tracklets:
+            if tr.ident == self.selected:
+                return tr
+        return None
+
+    def _heir(self, t: float, positions: np.ndarray, assigned: list[int]) -> int | None:
+        """The unassigned candidate that continues the followed tracklet after a hit.
+
+        A racket contact changes the velocity abruptly, so the followed tracklet misses; the
+        nearest free candidate close to where it was inherits its history instead of
+        waiting ``min_hits`` frames to be confirmed again.
+        """
+        old = self._followed()
+        if old is None or old.hit_now or not len(positions) or self.params.rebirth_radius <= 0:
+            return None
+        best, best_d = None, self.params.rebirth_radius
+        for j, (x, y) in enumerate(positions):
+            if assigned[j] >= 0:
+                continue
+            d = math.hypot(x - old.x, y - old.y)
+            if d <= best_d:
+                best, best_d = j, d
+        return best
+
+    def _inherit(self, t: float, pos: np.ndarray, score: float) -> int:
+        old = self._followed()
+        tr = Tracklet(self._next_id, float(pos[0]), float(pos[1]), t, old.start_x, old.start_y,
+                      hits=old.hits, quality=0.5 * (old.quality + score), travel=old.travel)
+        tr.recent.extend(old.recent)
+        tr.recent.append((tr.x, tr.y))
+        self._next_id += 1
+        self.tracklets.append(tr)
+        self.tracklets.remove(old)
+        self.selected = tr.ident
+        return tr.ident
+
     def _extend(self, tr: Tracklet, t: float, pos: np.ndarray, score: float, dist: float) -> None:
         dt = t - tr.t
         x, y = float(pos[0]), float(pos[1])
+        if tr.velocity_known:   # the prediction meant something: a smoothness measurement
+            tr.residual = 0.8 * tr.residual + 0.2 * dist
         if dt > 1e-6:
             vx, vy = (x - tr.x) / dt, (y - tr.y) / dt
-            a = self.params.velocity_smoothing if tr.hits >= 2 else 1.0
+            a = self.params.velocity_smoothing if tr.velocity_known else 1.0
             tr.vx = a * vx + (1 - a) * tr.vx
             tr.vy = a * vy + (1 - a) * tr.vy
-        if tr.hits >= 2:
-            tr.residual = 0.8 * tr.residual + 0.2 * dist
+            tr.velocity_known = True
         tr.quality = 0.8 * tr.quality + 0.2 * score
         tr.x, tr.y, tr.t = x, y, t
         tr.hits += 1
@@ -181,14 +224,25 @@ class TrackletAssociator:
         tr.hit_now = True
         tr.travel = max(tr.travel, math.hypot(x - tr.start_x, y - tr.start_y))
         tr.recent.append((x, y))
+        if tr.recent_travel(self.params.travel_window) >= self.params.min_travel:
+            tr.still_for = 0
+        else:
+            tr.still_for += 1
 
     def merit(self, tr: Tracklet) -> float:
         """How shuttle-like a tracklet is; negative when it may not supply a detection."""
         p = self.params
-        if (not tr.hit_now or tr.hits < p.min_hits
-                or tr.recent_travel(p.travel_window) < p.min_travel):
+        if not tr.hit_now or tr.hits < p.min_hits or tr.quality < p.min_track_quality:
             return -1.0
-        merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation + tr.quality
+        # Moving now, or a shuttle that flew far and slows down for a moment (apex, the far
+        # court); clutter (lights, screens) never flies far, a shuttle on the floor stays
+        # still for longer than the allowance.
+        moving = tr.recent_travel(p.travel_window) >= p.min_travel
+        pausing = tr.travel >= p.flight_travel and tr.still_for <= p.pause_frames
+        if not (moving or pausing):
+            return -1.0
+        merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation
+                 + p.quality_weight * tr.quality
                  - tr.residual / max(p.residual_scale, 1e-6))
         if tr.ident == self.selected:
             merit += p.hysteresis

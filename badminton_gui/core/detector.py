@@ -2,19 +2,26 @@
 
 Why this file exists: it is the per-camera half of the pipeline (GUIDE §1). It keeps every
 candidate with the measurement of each filter and the name of the filter that rejected it, so
-the tuning view can show *why* a blob is not the shuttle, and it keeps a small track state so
-that it follows the shuttle rather than the last thing that moved.
+the tuning view can show *why* a blob is not the shuttle, and it follows the shuttle over
+frames rather than the last thing that moved.
 
-The chain per frame:
-1. grey image at the processing scale → :class:`BackgroundModel` → binary mask;
+The chain per frame (coarse to fine, GUIDE §4):
+1. grey image at the processing scale → :class:`BackgroundModel` → binary mask (default: the
+   pixels *brighter* than a running average: a white shuttle in a dark hall; lights ignored);
 2. external contours; filter 1 (contour length) and filter 2 (shortest side of the tilted
    rectangle) at the processing scale, converted to full-resolution pixels;
-3. for the survivors, a small full-resolution window: filter 3 (whiteness) and a sub-pixel
-   position of the head (intensity-weighted centroid of the brightest part of the blob);
-4. filter 4 (distance from the position predicted by the track, speed-aware gate);
-5. the best surviving candidate by score is the detection.
+3. the ``association.max_measured`` most promising blobs (near a live tracklet first, then the
+   strongest brightening) get a small full-resolution window: filter 3 (whiteness, saturation,
+   contrast above the local background), appearance features and a sub-pixel head position;
+   the features give each candidate a quality in [0, 1] (the learned classifier of
+   ``core/classifier.py``, or a hand-made contrast + size score);
+4. filter 4, multi-frame (``core/association.py``): candidates are joined into tracklets with
+   a speed-aware gate; only candidates on a confirmed, travelling, smooth tracklet of good
+   mean quality pass, scored by the tracklet's merit;
+5. the best surviving candidate by score is the detection (the tracker may override this with
+   a stereo-consistent choice, ``choose`` / ``commit``).
 
-The tracker may override step 5 with a stereo-consistent choice (``choose`` / ``commit``).
+Latency: none (causal); a flight costs its first ``association.min_hits`` frames.
 """
 
 from __future__ import annotations
@@ -142,8 +149,11 @@ class CameraDetector:
                 cx, cy = box[0] + box[2] / 2, box[1] + box[3] / 2
                 if diff is not None:
                     bx0, by0 = int(box[0] / sx), int(box[1] / sy)
-                    strength = float(diff[by0:by0 + max(int(box[3] / sy), 1),
-                                          bx0:bx0 + max(int(box[2] / sx), 1)].max())
+                    window = (slice(by0, by0 + max(int(box[3] / sy), 1)),
+                              slice(bx0, bx0 + max(int(box[2] / sx), 1)))
+                    # Brightening, plus plain brightness: a shuttle held still before the
+                    # serve fades into the average but stays the brightest thing around.
+                    strength = float(diff[window].max()) + 0.5 * float(gray[window].max())
                 else:
                     strength = -g[3]   # MOG2 gives no strength: smaller blobs first
                 near = bool(len(live)) and bool(np.any(
@@ -202,6 +212,14 @@ class CameraDetector:
         return CameraResult(detection=None, candidates=tuple(candidates),
                             mask=mask if keep_mask else None,
                             mask_scale=mask.shape[1] / w, image_size=(w, h))
+
+    def tracklet_hits(self, candidate: Candidate) -> int:
+        """Frames the candidate's tracklet has been seen (0 when it is on none)."""
+        ident = self._tracklet_of.get(id(candidate))
+        for tr in self._associator.tracklets:
+            if tr.ident == ident:
+                return tr.hits
+        return 0
 
     def choose(self, candidates: tuple[Candidate, ...]) -> Candidate | None:
         """The best candidate that passed every filter, or None."""

@@ -104,7 +104,7 @@ class ContourLengthParams(ParamGroup):
     """Filter 1: contour length (perimeter)."""
 
     TITLE: ClassVar[str] = "Contour length"
-    min_length: float = param(10.0, 0.0, 2000.0, step=1.0, unit="px", label="Minimum length")
+    min_length: float = param(20.0, 0.0, 2000.0, step=1.0, unit="px", label="Minimum length")
     max_length: float = param(250.0, 1.0, 5000.0, step=5.0, unit="px", label="Maximum length")
 
 
@@ -159,6 +159,17 @@ class AssociationParams(ParamGroup):
                               help="A tracklet must have moved this far over the travel window (lights, a shuttle on the floor do not)")
     travel_window: int = param(12, 1, 60, step=1, unit="frames", label="Travel window",
                                help="Minimum travel is measured as the net displacement over this many hits")
+    flight_travel: float = param(100.0, 0.0, 5000.0, step=5.0, unit="px", label="Flight travel",
+                                 help="A tracklet that has travelled this far may pause (apex, far court)")
+    pause_frames: int = param(40, 0, 1000, step=1, unit="frames", label="Pause allowance",
+                              help="How long such a tracklet may stay below the minimum travel")
+    min_track_quality: float = param(0.3, 0.0, 1.0, step=0.01, label="Tracklet quality ≥",
+                                     help="Running mean of the candidates' quality a tracklet needs to be the shuttle")
+    quality_weight: float = param(2.0, 0.0, 10.0, step=0.1, label="Quality weight",
+                                  help="Weight of the tracklet's quality in its merit (history counts 1)")
+    rebirth_radius: float = param(60.0, 0.0, 2000.0, step=1.0, unit="px", label="Hit continuity",
+                                  help="When the followed tracklet misses (a racket hit), a new blob this close "
+                                       "to its last position inherits its history (0 = off)")
     max_misses: int = param(3, 0, 50, step=1, unit="frames", label="Coast for",
                             help="Frames a tracklet survives without a candidate")
     max_tracklets: int = param(80, 1, 500, step=1, label="Tracklets kept",
@@ -175,7 +186,7 @@ class AssociationParams(ParamGroup):
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
                               help="Merit bonus of the tracklet already followed")
-    max_measured: int = param(24, 1, 500, step=1, label="Blobs measured",
+    max_measured: int = param(32, 1, 500, step=1, label="Blobs measured",
                               help="At most this many blobs per frame get the full-resolution measurement: "
                                    "those near a live tracklet first, then the strongest differences")
     min_quality: float = param(0.0, 0.0, 1.0, step=0.01, label="Minimum candidate quality",
@@ -187,7 +198,7 @@ class ClassifierParams(ParamGroup):
     """The learned candidate classifier (core/classifier.py) that scores a blob by its looks."""
 
     TITLE: ClassVar[str] = "Candidate classifier"
-    enabled: bool = flag(False, label="Use the classifier",
+    enabled: bool = flag(True, label="Use the classifier",
                          help="Score candidates with the learned classifier instead of contrast + size")
     model: str = choice("candidate_classifier", ("candidate_classifier",
                                                  "candidate_classifier_broadcast"),
@@ -207,6 +218,16 @@ class StereoParams(ParamGroup):
     max_distance: float = param(40.0, 0.5, 500.0, step=0.5, unit="m", label="Farthest")
     max_candidates: int = param(6, 1, 50, step=1, label="Candidates per camera",
                                 help="How many best candidates per camera are tried for a stereo pair")
+    adaptive_epipolar: bool = flag(True, label="Learn the epipolar tolerance",
+                                   help="Widen the tolerance to what the rig really achieves, measured online on "
+                                        "long, confident tracklets seen by both cameras (a rig calibrated by "
+                                        "clicking court points is off by tens of pixels)")
+    adaptive_factor: float = param(2.5, 1.0, 10.0, step=0.1, label="Learnt tolerance × median",
+                                   help="The learnt tolerance is this multiple of the running median error")
+    max_learnt_tolerance: float = param(250.0, 1.0, 2000.0, step=5.0, unit="px",
+                                        label="Learnt tolerance ≤")
+    confident_hits: int = param(15, 2, 500, step=1, unit="frames", label="Confident after",
+                                help="Tracklets followed this long in both cameras feed the learnt tolerance")
 
 
 @dataclass(frozen=True, slots=True)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 
 import cv2
@@ -48,6 +49,9 @@ class StereoTracker:
         self._last_point: tuple[float, np.ndarray] | None = None
         self._speed: float | None = None
         self._checked_size = False
+        # Epipolar errors of long, confident tracklets seen by both cameras: what the rig
+        # really achieves (a rig calibrated by clicking court points is off by tens of px).
+        self._epipolar_samples: deque[float] = deque(maxlen=600)
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -65,6 +69,29 @@ class StereoTracker:
             self._trajectory.reset()
         self._last_point = None
         self._speed = None
+        self._epipolar_samples.clear()
+
+    def epipolar_tolerance(self) -> float:
+        """The epipolar gate in use: the configured one, widened to the rig's measured error."""
+        sp = self.params.stereo
+        tol = float(sp.max_epipolar_error)
+        if sp.adaptive_epipolar and len(self._epipolar_samples) >= 20:
+            learnt = sp.adaptive_factor * float(np.median(self._epipolar_samples))
+            tol = max(tol, min(learnt, sp.max_learnt_tolerance))
+        return tol
+
+    def _learn_epipolar(self, res_left: CameraResult, res_right: CameraResult) -> None:
+        sp = self.params.stereo
+        if not sp.adaptive_epipolar:
+            return
+        own_left = self.left.choose(res_left.candidates)
+        own_right = self.right.choose(res_right.candidates)
+        if own_left is None or own_right is None:
+            return
+        if min(self.left.tracklet_hits(own_left), self.right.tracklet_hits(own_right)) < sp.confident_hits:
+            return
+        err = float(self.rig.epipolar_errors([[own_left.x, own_left.y]], [[own_right.x, own_right.y]])[0, 0])
+        self._epipolar_samples.append(err)
 
     def close(self) -> None:
         if self._pool is not None:
@@ -95,6 +122,7 @@ class StereoTracker:
             res_left = self.left.find_candidates(left_bgr, timestamp, keep_masks)
             res_right = self.right.find_candidates(right_bgr, timestamp, keep_masks)
 
+        self._learn_epipolar(res_left, res_right)
         det_left, det_right, point_left, epi = self._choose_pair(res_left, res_right)
         if point_left is None:
             # No stereo pair: each camera keeps its own best guess for the 2D readout.
@@ -130,6 +158,7 @@ class StereoTracker:
                      ) -> tuple[Candidate | None, Candidate | None, np.ndarray | None, float | None]:
         """The most plausible stereo-consistent pair of surviving candidates, if any."""
         sp = self.params.stereo
+        tolerance = self.epipolar_tolerance()
         k = int(sp.max_candidates)
         left = sorted((c for c in res_left.candidates if c.rejected_by is None),
                       key=lambda c: -c.score)[:k]
@@ -144,7 +173,7 @@ class StereoTracker:
         order = np.argsort(epi, axis=None)
         for flat in order:
             i, j = np.unravel_index(flat, epi.shape)
-            if epi[i, j] > sp.max_epipolar_error:
+            if epi[i, j] > tolerance:
                 break
             point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
             dist = float(np.linalg.norm(point))
@@ -152,7 +181,7 @@ class StereoTracker:
             if not depth_ok or not (sp.min_distance <= dist <= sp.max_distance):
                 continue
             # Prefer shuttle-like blobs; the epipolar error breaks near ties.
-            merit = left[i].score + right[j].score - epi[i, j] / max(sp.max_epipolar_error, 1e-6)
+            merit = left[i].score + right[j].score - epi[i, j] / max(tolerance, 1e-6)
             if best is None or merit > best[0]:
                 best = (merit, i, j, point, float(epi[i, j]))
         if best is None:

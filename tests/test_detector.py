@@ -1,0 +1,129 @@
+"""The per-camera detector and its multi-frame association, on small synthetic sequences.
+
+A white dot flies a parabola over a dark, noisy background while a light flickers in place and
+a bright blob lies still (a shuttle on the floor): the detector must follow the dot, and every
+candidate it drops must say which filter dropped it.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from badminton_gui.core.association import TrackletAssociator
+from badminton_gui.core.classifier import load_classifier, train_mlp
+from badminton_gui.core.detector import FEATURE_NAMES, CameraDetector
+from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.types import REJECT_REASONS
+
+import cv2
+
+FPS = 120.0
+
+
+def _scene(n=160, seed=0):
+    rng = np.random.default_rng(seed)
+    frames, truth = [], []
+    for i in range(n):
+        img = np.full((480, 640, 3), 25, np.uint8)
+        img = cv2.add(img, rng.integers(0, 6, img.shape, dtype=np.uint8))
+        # A flickering light (static) and a bright blob lying still.
+        level = 255 if i % 2 else 150
+        cv2.circle(img, (80, 60), 6, (level, level, level), -1)
+        cv2.circle(img, (560, 420), 4, (230, 230, 230), -1)
+        t = i / FPS
+        x = 100 + 300 * t
+        y = 400 - 600 * t + 500 * t * t
+        cv2.circle(img, (int(round(x)), int(round(y))), 3, (235, 235, 235), -1)
+        frames.append(img)
+        truth.append((x, y))
+    return frames, truth
+
+
+def _params(**overrides):
+    p = TrackerParams().with_value("classifier.enabled", False)
+    for k, v in overrides.items():
+        p = p.with_value(k.replace("__", "."), v)
+    return p
+
+
+def test_follows_the_flying_dot_not_the_clutter():
+    frames, truth = _scene()
+    det = CameraDetector(_params())
+    hits = wrong = 0
+    for i, (img, (x, y)) in enumerate(zip(frames, truth)):
+        res = det.process(img, i / FPS, keep_mask=False)
+        if i < 20:
+            continue  # background warm-up and confirmation
+        d = res.detection
+        if d is None:
+            continue
+        if math.hypot(d.x - x, d.y - y) <= 6:
+            hits += 1
+        else:
+            wrong += 1
+    assert wrong == 0
+    assert hits >= 0.9 * (len(frames) - 20)
+
+
+def test_every_dropped_candidate_names_its_filter():
+    frames, _ = _scene(60)
+    det = CameraDetector(_params())
+    for i, img in enumerate(frames):
+        res = det.process(img, i / FPS, keep_mask=False)
+    assert res.candidates
+    accepted = [c for c in res.candidates if c.rejected_by is None]
+    assert len(accepted) <= 1 and (res.detection is None or accepted == [res.detection])
+    assert all(c.rejected_by in REJECT_REASONS for c in res.candidates if c.rejected_by)
+    # The flickering light never travels: the association (filter 4) rejects it.
+    light = [c for c in res.candidates if math.hypot(c.x - 80, c.y - 60) < 12]
+    assert light and all(c.rejected_by is not None for c in light)
+
+
+def test_stationary_blob_is_never_the_detection():
+    frames, _ = _scene(120)
+    det = CameraDetector(_params())
+    for i, img in enumerate(frames):
+        d = det.process(img, i / FPS, keep_mask=False).detection
+        assert d is None or math.hypot(d.x - 560, d.y - 420) > 10
+
+
+def test_association_speed_aware_gate_keeps_a_fast_track():
+    p = TrackerParams()
+    assoc = TrackletAssociator(p.motion, p.association)
+    # 40 px per frame at 120 fps (4800 px/s), plus a static distractor.
+    for i in range(12):
+        pos = np.array([[100.0 + 40 * i, 300.0], [500.0, 100.0]])
+        out = assoc.update(i / FPS, pos, np.array([0.9, 0.9]))
+    ident_fast, _, merit_fast = out[0]
+    _, _, merit_static = out[1]
+    assert merit_fast >= 0 and merit_static < 0
+    track = next(t for t in assoc.tracklets if t.ident == ident_fast)
+    assert track.hits == 12
+
+
+def test_shipped_classifier_loads_and_scores_in_unit_interval():
+    clf = load_classifier(TrackerParams().classifier.model)
+    assert clf.mean.shape == (len(FEATURE_NAMES),)
+    p = clf.probability(np.tile(clf.mean, (3, 1)))
+    assert np.all((p >= 0) & (p <= 1))
+
+
+def test_mlp_training_separates_a_simple_rule(tmp_path):
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=(2000, 3))
+    y = x[:, 0] + 0.5 * x[:, 1] > 0.3
+    clf = train_mlp(x, y, hidden=8, epochs=200)
+    assert np.mean((clf.probability(x) > 0.5) == y) > 0.95
+    clf.save(tmp_path / "m.json")
+    again = load_classifier(str(tmp_path / "m.json"))
+    assert np.allclose(again.probability(x[:5]), clf.probability(x[:5]))
+
+
+@pytest.mark.parametrize("method", ["mog2", "frame_diff", "bright_diff"])
+def test_every_background_method_runs(method):
+    frames, _ = _scene(30)
+    det = CameraDetector(_params(background__method=method))
+    for i, img in enumerate(frames):
+        res = det.process(img, i / FPS)
+    assert res.mask is not None and res.mask.dtype == np.uint8
