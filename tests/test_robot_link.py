@@ -215,7 +215,7 @@ def test_pseudo_terminal_messages_arrive_intact():
         assert len(tracks) == link.status().messages_sent >= 1
         assert all(m.position == pytest.approx((0.25, -3.5, 2.75)) for m in tracks)
         seqs = [m.seq for m in reader.messages]
-        assert seqs == sorted(seqs)
+        assert seqs == sorted(seqs) and len(set(seqs)) == len(seqs)   # in writing order, unique
         assert reader.decoder.crc_errors == 0
         status = link.status()
         assert status.port == name and status.baud == 115200 and status.errors == 0
@@ -290,6 +290,10 @@ def test_loop_url_and_newest_wins_rate_limit():
         tracks = [m for m in msgs if isinstance(m, TrackMessage)]
         assert tracks and tracks[-1].frame_index == 99          # the newest one went out
         assert len(tracks) == status.messages_sent
+        # Numbered when written: gaps in seq count exactly the dropped messages.
+        seqs = [m.seq for m in msgs]
+        assert seqs == sorted(seqs)
+        assert seqs[-1] + 1 - len(seqs) == status.messages_dropped     # numbering starts at 0
     finally:
         link.close()
 

@@ -198,6 +198,14 @@ def encode_track(result: TrackResult, seq: int) -> bytes:
     return encode_frame(MSG_TRACK, seq, float(result.timestamp), payload)
 
 
+def _renumber(frame: bytes, seq: int) -> bytes:
+    """The same frame with another sequence number (and its CRC recomputed)."""
+    buf = bytearray(frame)
+    struct.pack_into("<I", buf, 6, seq & 0xFFFFFFFF)
+    struct.pack_into("<H", buf, len(buf) - CRC_SIZE, _crc16_fast(bytes(buf[len(SYNC):-CRC_SIZE])))
+    return bytes(buf)
+
+
 def encode_heartbeat(seq: int, timestamp: float, sent: int, dropped: int, errors: int) -> bytes:
     payload = _HEARTBEAT.pack(sent & 0xFFFFFFFF, dropped & 0xFFFFFFFF, errors & 0xFFFFFFFF, 1)
     return encode_frame(MSG_HEARTBEAT, seq, timestamp, payload)
@@ -332,16 +340,16 @@ class RobotLink:
             if self._closing:
                 return
             try:
-                frame = encode_track(result, self._seq)
+                frame = encode_track(result, 0)   # the I/O thread numbers it when writing
             except (struct.error, TypeError, ValueError, OverflowError) as exc:
                 # A malformed result must not stop tracking: count it and carry on.
                 self._errors += 1
                 self._last_error = f"cannot encode frame {getattr(result, 'index', '?')}: {exc}"
                 return
             self._last_timestamp = float(result.timestamp)
-            self._seq = (self._seq + 1) & 0xFFFFFFFF
             if self._pending is not None:
                 self._dropped += 1
+                self._seq = (self._seq + 1) & 0xFFFFFFFF   # a gap in seq marks the dropped one
             self._pending = frame
             self._cond.notify()
 
@@ -406,6 +414,9 @@ class RobotLink:
                     time.sleep(delay)
                 with self._cond:
                     frame, self._pending = self._pending, None
+                    if frame is not None:
+                        frame = _renumber(frame, self._seq)
+                        self._seq = (self._seq + 1) & 0xFFFFFFFF
                 if frame is not None and self._write(frame):
                     last_send = time.monotonic()
                     with self._cond:
