@@ -94,7 +94,7 @@ def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path):
 
     def track():
         rate, _ = run_cli(["track", "--left", str(clip.left), "--right", str(clip.right),
-                           "--calib", str(rig_path), "-o", str(out_track), "--quiet",
+                           "--calib", str(rig_path), "-o", str(out_track),
                            "--left-times", str(clip.left_labels),
                            "--right-times", str(clip.right_labels)] + extra)
         t0 = time.perf_counter()

@@ -217,7 +217,8 @@ class TrackletAssociator:
             tr.vx = a * vx + (1 - a) * tr.vx
             tr.vy = a * vy + (1 - a) * tr.vy
             tr.velocity_known = True
-        tr.quality = 0.8 * tr.quality + 0.2 * score
+        # Plain mean over the first hits, then an exponential memory of ~5 frames.
+        tr.quality += (score - tr.quality) * max(0.2, 1.0 / (tr.hits + 1))
         tr.x, tr.y, tr.t = x, y, t
         tr.hits += 1
         tr.misses = 0

@@ -89,7 +89,26 @@ class BackgroundModel:
         if self._average is None or self._average.shape != gray.shape:
             self._average = gray.astype(np.float32)
             return np.zeros_like(gray)
-        diff = cv2.subtract(gray.astype(np.float32), self._average)
+        current = gray.astype(np.float32)
+        # Lights flicker (mains frequency seen by a 119 fps camera) and the hall's exposure
+        # drifts: the whole scene brightens or darkens by a common *gain*. Estimated robustly
+        # (median ratio on a sparse grid of reasonably lit pixels) and divided out, so a
+        # flicker frame does not turn every textured surface into foreground.
+        gain = 1.0
+        if self._bg.compensate_gain:
+            avg_s = self._average[::8, ::8]
+            cur_s = current[::8, ::8]
+            lit = avg_s > 20
+            if np.count_nonzero(lit) > 50:
+                gain = float(np.median(cur_s[lit] / avg_s[lit]))
+        reference = self._average
+        k = int(self._bg.shake_tolerance)
+        if k > 0:
+            # A camera that shakes by a pixel turns every bright edge (court lines, lights)
+            # into foreground; compare with the brightest background pixel nearby instead.
+            reference = cv2.dilate(reference, cv2.getStructuringElement(
+                cv2.MORPH_RECT, (2 * k + 1, 2 * k + 1)))
+        diff = cv2.subtract(current, reference * gain) if gain != 1.0 else cv2.subtract(current, reference)
         if self._bin.max_background < 255:
             # Lights: a shuttle in front of them is invisible anyway, and they flicker.
             diff[self._average >= float(self._bin.max_background)] = 0

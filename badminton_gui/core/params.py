@@ -77,6 +77,12 @@ class BackgroundParams(ParamGroup):
                                  help="Squared Mahalanobis distance for a pixel to match a Gaussian")
     detect_shadows: bool = flag(False, label="Detect shadows",
                                 help="Mark shadows (grey 127) so binarization can drop them")
+    compensate_gain: bool = flag(True, label="Compensate flicker",
+                                 help="Divide out a common brightness gain (light flicker, exposure drift) "
+                                      "before the brighter-than-average difference")
+    shake_tolerance: int = param(1, 0, 5, step=1, unit="px", label="Shake tolerance",
+                                 help="Brighter-than-average: compare with the brightest average pixel within "
+                                      "this radius (processing-scale px), so a shaking camera's edges stay quiet")
     processing_scale: float = param(0.5, 0.125, 1.0, step=0.125, label="Processing scale",
                                     help="Background model runs on the image scaled by this factor")
 
@@ -153,7 +159,7 @@ class AssociationParams(ParamGroup):
     """Filter 4, multi-frame: candidates joined into smooth image paths (core/association.py)."""
 
     TITLE: ClassVar[str] = "Association"
-    min_hits: int = param(4, 1, 50, step=1, unit="frames", label="Confirm after",
+    min_hits: int = param(3, 1, 50, step=1, unit="frames", label="Confirm after",
                           help="Frames a tracklet must be seen before it may supply the detection")
     min_travel: float = param(12.0, 0.0, 500.0, step=1.0, unit="px", label="Minimum travel",
                               help="A tracklet must have moved this far over the travel window (lights, a shuttle on the floor do not)")
@@ -163,7 +169,7 @@ class AssociationParams(ParamGroup):
                                  help="A tracklet that has travelled this far may pause (apex, far court)")
     pause_frames: int = param(40, 0, 1000, step=1, unit="frames", label="Pause allowance",
                               help="How long such a tracklet may stay below the minimum travel")
-    min_track_quality: float = param(0.3, 0.0, 1.0, step=0.01, label="Tracklet quality ≥",
+    min_track_quality: float = param(0.25, 0.0, 1.0, step=0.01, label="Tracklet quality ≥",
                                      help="Running mean of the candidates' quality a tracklet needs to be the shuttle")
     quality_weight: float = param(2.0, 0.0, 10.0, step=0.1, label="Quality weight",
                                   help="Weight of the tracklet's quality in its merit (history counts 1)")
