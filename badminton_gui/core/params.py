@@ -232,6 +232,8 @@ class StereoParams(ParamGroup):
                                    help="The learnt tolerance is this multiple of the running median error")
     max_learnt_tolerance: float = param(250.0, 1.0, 2000.0, step=5.0, unit="px",
                                         label="Learnt tolerance ≤")
+    own_choice_bonus: float = param(1.0, 0.0, 10.0, step=0.1, label="Own-choice bonus",
+                                    help="Merit bonus of each camera's own best candidate when pairing")
     confident_hits: int = param(15, 2, 500, step=1, unit="frames", label="Confident after",
                                 help="Tracklets followed this long in both cameras feed the learnt tolerance")
 

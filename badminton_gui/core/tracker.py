@@ -182,6 +182,10 @@ class StereoTracker:
                 continue
             # Prefer shuttle-like blobs; the epipolar error breaks near ties.
             merit = left[i].score + right[j].score - epi[i, j] / max(tolerance, 1e-6)
+            # Each camera's own choice (index 0: best score, hysteresis included) wins
+            # whenever it is stereo-consistent: the pair overrides it only to reject a
+            # candidate that has no partner on the other camera.
+            merit += sp.own_choice_bonus * ((i == 0) + (j == 0))
             if best is None or merit > best[0]:
                 best = (merit, i, j, point, float(epi[i, j]))
         if best is None:
