@@ -72,6 +72,9 @@ class TrackletAssociator:
         self.params = association
         self.tracklets: list[Tracklet] = []
         self.selected: int | None = None
+        # The followed tracklet after it was dropped (hidden by the racket or a player):
+        # a candidate near it may still inherit its history for ``motion.lost_after`` s.
+        self._ghost: Tracklet | None = None
         self._next_id = 0
 
     def set_params(self, motion: MotionParams, association: AssociationParams) -> None:
@@ -81,6 +84,7 @@ class TrackletAssociator:
     def reset(self) -> None:
         self.tracklets = []
         self.selected = None
+        self._ghost = None
 
     # ---------------------------------------------------------------------------------------
     def gate(self, tr: Tracklet, dt: float) -> float:
@@ -142,8 +146,12 @@ class TrackletAssociator:
                 tr.misses += 1
             if tr.misses <= p.max_misses:
                 kept.append(tr)
+            elif tr.ident == self.selected:
+                self._ghost = tr
         self.tracklets = kept
-        heir = self._heir(t, positions, assigned_track)
+        if self._ghost is not None and t - self._ghost.t > self.motion.lost_after:
+            self._ghost = None
+        heir = self._heir(t, positions, assigned_track, scores)
         ids = []
         for j in range(n):
             if assigned_track[j] >= 0:
@@ -173,9 +181,12 @@ class TrackletAssociator:
         for tr in self.tracklets:
             if tr.ident == self.selected:
                 return tr
+        if self._ghost is not None and self._ghost.ident == self.selected:
+            return self._ghost
         return None
 
-    def _heir(self, t: float, positions: np.ndarray, assigned: list[int]) -> int | None:
+    def _heir(self, t: float, positions: np.ndarray, assigned: list[int],
+              scores: np.ndarray) -> int | None:
         """The unassigned candidate that continues the followed tracklet after a hit.
 
         A racket contact changes the velocity abruptly, so the followed tracklet misses; the
@@ -185,9 +196,10 @@ class TrackletAssociator:
         old = self._followed()
         if old is None or old.hit_now or not len(positions) or self.params.rebirth_radius <= 0:
             return None
-        best, best_d = None, self.params.rebirth_radius
+        # The radius grows with the frames the followed tracklet has been missing.
+        best, best_d = None, self.params.rebirth_radius * (1 + 0.5 * old.misses)
         for j, (x, y) in enumerate(positions):
-            if assigned[j] >= 0:
+            if assigned[j] >= 0 or scores[j] < self.params.min_track_quality:
                 continue
             d = math.hypot(x - old.x, y - old.y)
             if d <= best_d:
@@ -202,7 +214,9 @@ class TrackletAssociator:
         tr.recent.append((tr.x, tr.y))
         self._next_id += 1
         self.tracklets.append(tr)
-        self.tracklets.remove(old)
+        if old in self.tracklets:
+            self.tracklets.remove(old)
+        self._ghost = None
         self.selected = tr.ident
         return tr.ident
 
