@@ -111,7 +111,7 @@ def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path):
             if max_frames:
                 rate = detect_in_process(video, out, max_frames, None)
             else:
-                rate, _ = run_cli(["detect", str(video), "-o", str(out), "--quiet"])
+                rate, _ = run_cli(["detect", str(video), "-o", str(out)])
                 rate = rate if rate == rate else _rate_from_elapsed(video)
             return [Row(clip.name, camera, "detect", clip.held_out, "stereo",
                         score(read_detect(out), labels, 2048, max_frames), rate, "frames/s")], None
