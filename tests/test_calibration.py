@@ -194,6 +194,39 @@ def test_cli_on_synthetic_folders(tmp_path, capsys):
     assert abs(rig.baseline / src.rig.baseline - 1) < 0.01
 
 
+def test_cli_one_folder_holding_both_cameras(tmp_path, capsys):
+    """OpenCV's sample layout (left01.jpg, right01.jpg … in one folder) given as both folders:
+    the images are split by name, never paired with themselves."""
+    src = SyntheticChessboardSource(n_poses=10, seed=12)
+    for k, pose in enumerate(src.poses):
+        a, b = src.render_pair(pose)
+        cv2.imwrite(str(tmp_path / f"left{k:02d}.png"), a)
+        cv2.imwrite(str(tmp_path / f"right{k:02d}.png"), b)
+    code, out, err = _run_cli(["calibrate", "--left-dir", str(tmp_path), "--right-dir",
+                               str(tmp_path), "--square", "0.03", "-o",
+                               str(tmp_path / "rig.yaml")], capsys)
+    assert code == 0, err
+    assert "10 image pairs" in out and "left00.png|right00.png" in out
+    assert abs(StereoRig.load(tmp_path / "rig.yaml").baseline / src.rig.baseline - 1) < 0.01
+
+
+def test_cli_refuses_an_image_paired_with_itself(tmp_path, capsys):
+    left, _ = _write_pairs(tmp_path, 3, 0)
+    code, out, err = _run_cli(["calibrate", "--left-dir", str(left), "--right-dir", str(left),
+                               "--square", "0.03", "-o", str(tmp_path / "r.yaml")], capsys)
+    assert code == 2 and "both the left and the right image" in err
+    assert not (tmp_path / "r.yaml").exists()
+
+
+def test_same_camera_twice_is_refused_not_graded_excellent(synthetic_views):
+    """Copies of the left images given as the right ones solve with T = 0 and an epipolar
+    error of 0: that must be an error, not an "excellent" rig."""
+    src, views = synthetic_views
+    twins = [StereoView(v.view_id, v.object_points, v.left, v.left.copy()) for v in views]
+    with pytest.raises(CalibrationError, match="same place"):
+        solve_stereo(twins, src.image_size, src.board)
+
+
 # ---- synthetic ground truth -----------------------------------------------------------------
 def test_synthetic_corners_are_accurate(synthetic_views):
     src, views = synthetic_views

@@ -3,7 +3,8 @@
 Why this file exists: calibrating without a screen (or re-running a calibration on stored
 images) must give the same rig and the same figures as the wizard; both call the core
 (``core.calib_folders`` + ``core.calibration.solve_stereo``). Images are paired by sorted file
-name. The rig file is written with ``StereoRig.save`` (GUIDE §8).
+name (one folder holding both cameras' images is split by "left"/"right" in the names). The
+rig file is written with ``StereoRig.save`` (GUIDE §8).
 """
 
 from __future__ import annotations
@@ -23,8 +24,11 @@ def register(sub) -> None:
         "calibrate", help="stereo calibration from left/right chessboard image folders",
         description="Calibrate a stereo rig from chessboard images: LEFT-DIR and RIGHT-DIR hold "
                     "the two cameras' images of the same board poses, paired by sorted file "
-                    "name. Prints RMS and epipolar errors, baseline, focal lengths, per-view "
-                    "errors and the rejected views, and writes the rig YAML.")
+                    "name. One folder holding both (left01.jpg, right01.jpg, … as in OpenCV's "
+                    "sample) may be given as both: its images are split by 'left'/'right' in "
+                    "the name, or use --left-glob/--right-glob. Prints RMS and epipolar errors, "
+                    "baseline, focal lengths, per-view errors and the rejected views, and "
+                    "writes the rig YAML.")
     p.add_argument("--left-dir", type=Path, required=True, help="folder of left-camera images")
     p.add_argument("--right-dir", type=Path, required=True, help="folder of right-camera images")
     p.add_argument("--left-glob", default="*",

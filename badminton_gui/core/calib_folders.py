@@ -28,11 +28,28 @@ def list_images(folder: Path, pattern: str = "*") -> list[Path]:
                   if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
 
 
+def _split_by_name(images: list[Path]) -> tuple[list[Path], list[Path]]:
+    """One folder holding both cameras' images (OpenCV's sample: left01.jpg, right01.jpg …)."""
+    left = [p for p in images if "left" in p.name.lower() and "right" not in p.name.lower()]
+    right = [p for p in images if "right" in p.name.lower() and "left" not in p.name.lower()]
+    return left, right
+
+
 def pair_image_files(left_dir: Path, right_dir: Path, left_pattern: str = "*",
                      right_pattern: str = "*") -> list[tuple[Path, Path]]:
-    """Sorted left images zipped with sorted right images; clear errors when that cannot work."""
+    """Sorted left images zipped with sorted right images; clear errors when that cannot work.
+
+    When both folders are the same folder and no patterns are given, the images are split by
+    name: files whose name contains "left" are the left camera's, "right" the right camera's.
+    An image is never paired with itself (that would give a rig with no baseline).
+    """
     left = list_images(left_dir, left_pattern)
     right = list_images(right_dir, right_pattern)
+    same_folder = Path(left_dir).resolve() == Path(right_dir).resolve()
+    if same_folder and left_pattern == "*" and right_pattern == "*":
+        by_name = _split_by_name(left)
+        if by_name[0] and by_name[1]:
+            left, right = by_name
     if not left:
         raise CalibrationError(f"no images ({', '.join(IMAGE_SUFFIXES)}) matching "
                                f"{left_pattern!r} in {left_dir}")
@@ -42,7 +59,14 @@ def pair_image_files(left_dir: Path, right_dir: Path, left_pattern: str = "*",
     if len(left) != len(right):
         raise CalibrationError(f"{len(left)} left images but {len(right)} right images: images "
                                f"are paired by sorted file name, so the counts must match")
-    return list(zip(left, right))
+    pairs = list(zip(left, right))
+    for a, b in pairs:
+        if a.resolve() == b.resolve():
+            raise CalibrationError(
+                f"{a.name} would be both the left and the right image of a pair: the two "
+                f"folders must hold different images (for one folder holding both cameras' "
+                f"images, name them left*/right* or select them by name pattern)")
+    return pairs
 
 
 @dataclass(frozen=True, slots=True)

@@ -426,6 +426,16 @@ def solve_stereo(views: Sequence[StereoView], image_size: tuple[int, int], board
     elif options.intrinsics == "auto":
         mode = f"fixed (only {len(active)} views; joint refinement needs ≥ 10)"
 
+    # Identical left and right images (one camera's views given twice) solve "perfectly"
+    # with T = 0 and an epipolar error of 0: refuse rather than report an excellent rig.
+    distance = float(np.median([np.linalg.norm(t) for t in tv_l]))
+    if float(np.linalg.norm(T)) < 1e-3 * distance:
+        raise CalibrationError(
+            f"the two cameras came out at the same place (baseline "
+            f"{float(np.linalg.norm(T)):.2g} m, board {distance:.2g} m away): the left and right "
+            f"images look like the same camera's; check that the right images come from the "
+            f"right camera")
+
     check_cancel()
     report(0.88, "rectifying")
     rect, note = _rectify(m1, dd1, m2, dd2, size, R, T, options)
