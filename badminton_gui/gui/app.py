@@ -73,12 +73,14 @@ def main(argv: list[str] | None = None) -> int:
         window.realtime_action.setChecked(False)
         window._realtime_changed()
     window.show()
-    # Ctrl+C in the terminal closes the window cleanly instead of being ignored by Qt.
-    signal.signal(signal.SIGINT, lambda *_: window.close())
+    # Ctrl+C in the terminal closes the window cleanly instead of being ignored by Qt. The
+    # close is queued: a Python signal handler runs between any two bytecodes, e.g. inside the
+    # 3D view's paintGL, and closing the window there crashed (segfault in 2 of 4 tries).
+    from PySide6.QtCore import QTimer
+    signal.signal(signal.SIGINT, lambda *_: QTimer.singleShot(0, window.close))
 
     status = {"code": 0}
     if args.quit_after is not None:
-        from PySide6.QtCore import QTimer
 
         def finish() -> None:
             if window.results_seen == 0:
