@@ -26,6 +26,7 @@ from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDoubleSpinBox, QF
 from ..core.params import ParamError, TrackerParams, field_info
 from ..io.presets import list_presets, load_preset
 from .feed_view import FeedView
+from .overlays import reject_style
 from .worker import DisplayPacket
 
 SEND_INTERVAL_MS = 50          # at most ~20 snapshots per second while a slider moves
@@ -289,12 +290,14 @@ class TuningDialog(QDialog):
         if cam.mask is None:
             self.preview.set_message("The tracker kept no mask for this frame")
             return
-        image = cv2.cvtColor(cam.mask, cv2.COLOR_GRAY2BGR) if cam.mask.ndim == 2 else np.ascontiguousarray(cam.mask)
+        image = (cv2.cvtColor(cam.mask, cv2.COLOR_GRAY2BGRA) if cam.mask.ndim == 2
+                 else cv2.cvtColor(cam.mask, cv2.COLOR_BGR2BGRA))
         self.preview.set_frame(image, cam.mask_scale, cam, np.zeros((0, 3)))
         rejected: dict[str, int] = {}
         for c in cam.candidates:
             if c.rejected_by is not None:
-                rejected[c.rejected_by] = rejected.get(c.rejected_by, 0) + 1
+                name = reject_style(c.rejected_by)[1]       # the legend's words, not the code
+                rejected[name] = rejected.get(name, 0) + 1
         summary = ", ".join(f"{n} {k}" for k, n in sorted(rejected.items())) or "none"
         self.preview_info.setText(f"{len(cam.candidates)} candidates; "
                                   f"{'shuttle found' if cam.detection else 'no shuttle'}; rejected: {summary}")
