@@ -247,3 +247,18 @@ def test_detection_and_solve_never_run_on_the_gui_thread(qtbot, tmp_path, monkey
     assert threads["detect"] and gui_thread not in threads["detect"]
     assert threads["solve"] and gui_thread not in threads["solve"]
     wizard.close()
+
+
+def test_court_click_labels_match_the_drawing_after_a_skip(qtbot):
+    """The numbers on the clicked image are the keypoints' numbers on the court drawing, so a
+    skipped point does not shift them."""
+    wizard = CalibrationWizard(_source)
+    qtbot.addWidget(wizard)
+    _, image = _court_camera()
+    wizard.set_court_image(image)
+    wizard.court_click(10, 10)
+    wizard.court_skip()
+    assert "point 3:" in wizard.court_prompt.text()
+    wizard.court_click(20, 20)
+    assert [label for *_, label in wizard.court_view._points] == ["1", "3"]
+    wizard.close()

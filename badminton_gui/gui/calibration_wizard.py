@@ -16,6 +16,7 @@ the live view is a newest-wins mailbox polled at ~30 Hz (GUIDE §3.3).
 
 from __future__ import annotations
 
+import html
 import shutil
 import threading
 import time
@@ -31,9 +32,9 @@ from PySide6.QtGui import (QColor, QFont, QIcon, QImage, QKeySequence, QPainter,
                            QShortcut)
 from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDoubleSpinBox, QFileDialog,
                                QFormLayout, QGridLayout, QGroupBox, QHBoxLayout, QLabel,
-                               QListWidget, QListWidgetItem, QProgressBar,
-                               QPushButton, QSizePolicy, QSpinBox, QStackedWidget, QVBoxLayout,
-                               QWidget)
+                               QListWidget, QListWidgetItem, QProgressBar, QPushButton,
+                               QScrollArea, QSizePolicy, QSpinBox, QStackedWidget,
+                               QVBoxLayout, QWidget)
 
 from ..core.calib_board import (BoardError, BoardSpec, charuco_available, detect_board,
                                 to_gray)
@@ -92,6 +93,11 @@ def _shrink(image: np.ndarray) -> tuple[np.ndarray, float]:
         return image.copy(), 1.0
     return cv2.resize(image, (round(w * scale), round(h * scale)),
                       interpolation=cv2.INTER_AREA), scale
+
+
+def _short_id(view_id: str) -> str:
+    """A folder view is named "left07.jpg|right07.jpg": the left name is enough on screen."""
+    return view_id.split("|")[0]
 
 
 def _draw_corners(image: np.ndarray, det, scale: float, good: bool) -> np.ndarray:
@@ -418,9 +424,10 @@ class CourtDiagram(QWidget):
         return QSize(170, 320)
 
     def _map(self, x: float, y: float) -> QPointF:
-        margin, label = 12, 18          # room at the bottom for the "near side" caption
-        k = min((self.width() - 2 * margin) / 6.1, (self.height() - 2 * margin - label) / 13.4)
-        cx, cy = self.width() / 2, (self.height() - label) / 2
+        # Room at the top for the far points' numbers, at the bottom for the caption.
+        margin, top, label = 12, 20, 18
+        k = min((self.width() - 2 * margin) / 6.1, (self.height() - top - margin - label) / 13.4)
+        cx, cy = self.width() / 2, top + (self.height() - top - margin - label) / 2
         return QPointF(cx + x * k, cy - y * k)      # far side (+Y) at the top
 
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt naming
@@ -433,9 +440,19 @@ class CourtDiagram(QWidget):
         p.setPen(QPen(QColor(250, 250, 250), 1, Qt.PenStyle.DashLine))
         p.drawLine(self._map(-3.3, 0), self._map(3.3, 0))        # the net
         current = self.clicks.current_name
-        for name in self.clicks.order:
+        small = QFont(self.font())
+        small.setPointSizeF(max(6.0, small.pointSizeF() * 0.8))
+        small.setBold(True)
+        p.setFont(small)
+        for number, name in enumerate(self.clicks.order, 1):
             x, y, _ = self.clicks.keypoints[name]
             c = self._map(x, y)
+            # The same number labels the click on the camera image, so the two can be matched.
+            p.setPen(QColor(255, 255, 255))
+            side = -1 if x < 0 else 1
+            text_x = c.x() + (10 if side > 0 else -24) if x != 0 else c.x() + 6
+            p.drawText(QRectF(text_x, c.y() - 16, 18, 14),
+                       Qt.AlignmentFlag.AlignCenter, str(number))
             if name == current:
                 p.setPen(QPen(QColor(255, 60, 60), 3))
                 p.setBrush(QColor(255, 220, 0))
@@ -710,6 +727,9 @@ class CalibrationWizard(QDialog):
         self._last_serial = -1
         self._frames_shown = 0
         self.status_label.setText("starting the cameras…")
+        for view in (self.left_view, self.right_view):     # no stale frame from a past run
+            view.set_image(None)
+            view.set_placeholder("starting the cameras…")
         worker = CaptureWorker(self._factory, self.spec, list(self._params), self._next_id,
                                self.auto_check.isChecked())
         worker.captured.connect(self._on_captured)
@@ -957,23 +977,35 @@ class CalibrationWizard(QDialog):
         self.save_label = QLabel("")
         self.save_label.setWordWrap(True)
         self.save_label.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
-        left = QVBoxLayout()
-        left.addWidget(self.epipolar_label)
-        left.addWidget(self.figures_label)
-        left.addWidget(self.view_errors_label)
-        left.addWidget(self.rejected_label)
-        left.addStretch(1)
+        # Figures on top, the rectified pair (twice as wide as high) across the full width
+        # below them, where it is large enough to judge the lines.
+        figures = QVBoxLayout()
+        figures.addWidget(self.epipolar_label)
+        figures.addWidget(self.figures_label)
+        figures.addStretch(1)
+        views_box = QWidget()
+        views = QVBoxLayout(views_box)
+        views.setContentsMargins(0, 0, 0, 0)
+        views.addWidget(self.view_errors_label)
+        views.addWidget(self.rejected_label)
+        views.addStretch(1)
+        scroll = QScrollArea()
+        scroll.setWidget(views_box)
+        scroll.setWidgetResizable(True)
+        scroll.setFrameShape(QScrollArea.Shape.NoFrame)
+        scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        top = QHBoxLayout()
+        top.addLayout(figures, 3)
+        top.addWidget(scroll, 2)
         save_row = QHBoxLayout()
         save_row.addWidget(self.save_button)
         save_row.addWidget(self.save_label, 1)
-        left.addLayout(save_row)
-        right = QVBoxLayout()
-        right.addWidget(QLabel("<b>Rectified pair</b>: every feature should sit on the same "
-                               "horizontal line in both images"))
-        right.addWidget(self.preview_view, 1)
-        layout = QHBoxLayout(page)
-        layout.addLayout(left, 1)
-        layout.addLayout(right, 1)
+        layout = QVBoxLayout(page)
+        layout.addLayout(top)
+        layout.addWidget(QLabel("<b>Rectified pair</b>: every feature should sit on the same "
+                                "horizontal line in both images"))
+        layout.addWidget(self.preview_view, 1)
+        layout.addLayout(save_row)
         return page
 
     def _show_result(self, outcome: SolveOutcome) -> None:
@@ -1006,7 +1038,9 @@ class CalibrationWizard(QDialog):
         if rejected:
             self.rejected_label.setText(
                 "<b>Rejected views</b><ul>" + "".join(
-                    f"<li><b>{v.view_id}</b>: {v.reason}</li>" for v in rejected) + "</ul>")
+                    f"<li><b>{html.escape(_short_id(v.view_id))}</b>: "
+                    f"{html.escape(v.reason)}</li>"
+                    for v in rejected) + "</ul>")
         else:
             self.rejected_label.setText("<b>Rejected views</b>: none")
         if outcome.preview is not None:
@@ -1019,7 +1053,7 @@ class CalibrationWizard(QDialog):
         worst = sorted(r.view_errors, key=lambda v: -v.rms_px)
         self.view_errors_label.setText(
             "<b>Per-view error</b> (worst first, px): " + ", ".join(
-                f"{v.view_id} {v.rms_px:.2f}" for v in worst[:12])
+                f"{html.escape(_short_id(v.view_id))}&nbsp;{v.rms_px:.2f}" for v in worst[:12])
             + (f", … ({len(worst) - 12} more)" if len(worst) > 12 else ""))
         self._annotate_thumbnails(r)
 
@@ -1174,10 +1208,14 @@ class CalibrationWizard(QDialog):
         name = self.clicks.current_name
         n = len(self.clicks.clicked)
         self.court_prompt.setText(
-            (f"Click: {name}" if name else "All points done") +
+            (f"Click point {self.clicks.order.index(name) + 1}: {name}" if name
+             else "All points done") +
             f"  ({n} clicked, at least 4 needed)")
-        self.court_view.set_points([(x, y, QColor(80, 230, 90), str(k + 1))
-                                    for k, (x, y) in enumerate(self.clicks.clicked.values())])
+        # Label each click with the keypoint's number on the court drawing (not the click
+        # count), so a skipped point does not shift the numbers.
+        number = {name: k for k, name in enumerate(self.clicks.order, 1)}
+        self.court_view.set_points([(x, y, QColor(80, 230, 90), str(number[name]))
+                                    for name, (x, y) in self.clicks.clicked.items()])
         self.court_diagram.update()
         self.court_solve_button.setEnabled(self.clicks.ready and self.outcome is not None)
 
