@@ -1,0 +1,247 @@
+"""Measure the GUI's cost on its own thread and its effect on the tracking rate.
+
+Why this file exists: the performance goal says the GUI shows both feeds at up to 30 Hz without
+lowering the tracking rate, with frame-to-screen ≤ 2 ms per feed on the GUI thread. This runs
+the real MainWindow on the demo court as fast as the tracker goes, times (perf_counter) the
+feed update path of each feed (``FeedView.set_frame`` + the ``paintEvent`` that follows), the
+whole display slot, the 3D view's ``paintGL`` and the 2D plots' paints, and compares the
+worker's results per second with the same worker running with no window at all, in
+alternating phases of the same run (shared machines drift; GUIDE §9). Run under Xvfb:
+
+    QT_QPA_PLATFORM=xcb xvfb-run -a -s "-screen 0 1600x900x24" \
+        .venv/bin/python scripts/gui-timing.py --seconds 20 --rounds 2
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import os
+import statistics
+import sys
+import tempfile
+import threading
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+
+def _pct(values: list[float], q: float) -> float:
+    return float(np.percentile(values, q)) if values else float("nan")
+
+
+def _cpu_by_thread() -> dict[str, float]:
+    """CPU seconds so far of this process's threads (by name) and of the X server we draw on."""
+    tick = os.sysconf("SC_CLK_TCK")
+    out: dict[str, float] = defaultdict(float)
+
+    def add(stat_path: str, name: str | None = None) -> None:
+        try:
+            text = Path(stat_path).read_text()
+        except OSError:
+            return
+        comm = text[text.index("(") + 1:text.rindex(")")]
+        fields = text[text.rindex(")") + 2:].split()
+        out[name or comm] += (int(fields[11]) + int(fields[12])) / tick
+
+    for task in Path("/proc/self/task").iterdir():
+        add(str(task / "stat"))
+    display = os.environ.get("DISPLAY", "")
+    if display.startswith(":"):
+        try:
+            xpid = int(Path(f"/tmp/.X{display[1:].split('.')[0]}-lock").read_text().strip())
+            add(f"/proc/{xpid}/stat", "X server")
+        except (OSError, ValueError):
+            pass
+    return out
+
+
+def _cpu_delta(before: dict[str, float], after: dict[str, float], seconds: float) -> str:
+    rows = sorted(((after[k] - before.get(k, 0.0)) / seconds, k) for k in after)
+    return ", ".join(f"{k} {v * 100:.0f}%" for v, k in reversed(rows) if v >= 0.01)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=20.0, help="length of each phase")
+    ap.add_argument("--rounds", type=int, default=2, help="alone/GUI phase pairs")
+    ap.add_argument("--size", default="1280x720", help="demo frame size WxH")
+    ap.add_argument("--realtime", action="store_true", help="pace the demo at its 120 fps instead of flat out")
+    args = ap.parse_args()
+    size = tuple(int(v) for v in args.size.lower().split("x"))
+    os.environ.setdefault("BADMINTON_GUI_SETTINGS",
+                          str(Path(tempfile.mkdtemp(prefix="gui-timing-")) / "settings.ini"))
+
+    import pyqtgraph as pg
+    from PySide6.QtCore import QCoreApplication, Qt
+    from PySide6.QtWidgets import QApplication
+
+    from badminton_gui.core.params import TrackerParams
+    from badminton_gui.gui import feed_view
+    from badminton_gui.gui.main_window import MainWindow
+    from badminton_gui.gui.worker import TrackingWorker
+    from badminton_gui.io.demo_scene import DemoScene
+
+    def opener():
+        scene = DemoScene(seed=0, size=size)
+        return scene, scene.rig
+
+    QCoreApplication.setAttribute(Qt.ApplicationAttribute.AA_ShareOpenGLContexts)
+    sys.setswitchinterval(0.001)          # as badminton-gui does
+    app = QApplication(sys.argv[:1])
+
+    # ---- instrumentation (class level, so every instance is timed) -------------------------
+    times: dict[str, list[float]] = defaultdict(list)
+    pending_set: dict[int, float] = {}     # feed id → set_frame ms waiting for its paint
+    feed_ids: dict[int, str] = {}
+
+    def timed(cls, name, key, after=None):
+        original = getattr(cls, name)
+
+        @functools.wraps(original)
+        def wrapper(self, *a, **k):
+            t0 = time.perf_counter()
+            out = original(self, *a, **k)
+            ms = (time.perf_counter() - t0) * 1000.0
+            if after is None:
+                times[key].append(ms)
+            else:
+                after(self, ms)
+            return out
+        setattr(cls, name, wrapper)
+
+    def after_set(feed, ms):
+        if id(feed) in feed_ids:
+            pending_set[id(feed)] = ms
+            times[f"set_frame {feed_ids[id(feed)]}"].append(ms)
+
+    def after_paint(feed, ms):
+        if id(feed) not in feed_ids:
+            return
+        name = feed_ids[id(feed)]
+        times[f"paintEvent {name}"].append(ms)
+        if id(feed) in pending_set:
+            times[f"frame-to-screen {name}"].append(pending_set.pop(id(feed)) + ms)
+
+    refresh_with_packet: list[float] = []
+    refresh_all: list[float] = []
+    original_refresh = MainWindow._refresh_display
+
+    def refresh(self):
+        before = self.results_seen
+        t0 = time.perf_counter()
+        original_refresh(self)
+        ms = (time.perf_counter() - t0) * 1000.0
+        refresh_all.append(ms)
+        if self.results_seen != before:
+            refresh_with_packet.append(ms)
+    MainWindow._refresh_display = refresh
+
+    timed(feed_view.FeedView, "set_frame", None, after_set)
+    timed(feed_view.FeedView, "paintEvent", None, after_paint)
+    import pyqtgraph.opengl as gl
+    timed(gl.GLViewWidget, "paintGL", "3D paintGL")
+    from badminton_gui.gui import court_views, main_window as mw
+    timed(court_views.CourtGLView, "show_packet", "slot part: 3D show_packet")
+    timed(court_views.CourtPlanView, "show_packet", "slot part: plan show_packet")
+    timed(court_views.SideView, "show_packet", "slot part: side show_packet")
+    timed(mw.Readouts, "show_packet", "slot part: readouts show_packet")
+    timed(pg.GraphicsView, "paintEvent", "2D plots paintEvent")
+
+    from PySide6.QtCore import QEventLoop, QTimer
+
+    def pump(seconds: float) -> None:
+        """Run the event loop like app.exec() for a while (no busy polling to skew the figures)."""
+        loop = QEventLoop()
+        QTimer.singleShot(int(seconds * 1000), loop.quit)
+        loop.exec()
+
+    # ---- phases ----------------------------------------------------------------------------
+    def rate_of(sample_a, sample_b) -> float:
+        (ta, fa), (tb, fb) = sample_a, sample_b
+        return (fb - fa) / (tb - ta) if tb > ta else float("nan")
+
+    def alone(seconds: float) -> tuple[float, float]:
+        cpu0, t0 = _cpu_by_thread(), time.perf_counter()
+        worker = TrackingWorker(opener, TrackerParams(), realtime=args.realtime)
+        worker.set_display_size(640, 360)          # what the window's feeds ask for at 1280×720
+        thread = threading.Thread(target=worker.run, daemon=True)
+        thread.start()
+        samples, ms = [], []
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            time.sleep(0.25)
+            p = worker.output.take()
+            if p is not None:
+                samples.append((time.perf_counter(), p.stats.frames))
+                ms.append(p.stats.processing_ms)
+        cpu_use = _cpu_delta(cpu0, _cpu_by_thread(), time.perf_counter() - t0)
+        worker.abort()
+        thread.join(10)
+        warm = [s for s in samples if s[0] >= samples[0][0] + 2.0] if samples else []
+        return (rate_of(warm[0], warm[-1]) if len(warm) > 1 else float("nan"),
+                statistics.median(ms) if ms else float("nan"), cpu_use)
+
+    window = MainWindow(start=False)
+    window.resize(1280, 720)
+    window.show()
+    window.realtime_action.setChecked(args.realtime)
+    feed_ids[id(window.left_feed)] = "left"
+    feed_ids[id(window.right_feed)] = "right"
+
+    def with_gui(seconds: float) -> tuple[float, float, float, float]:
+        cpu0, t0 = _cpu_by_thread(), time.perf_counter()
+        ticks0 = len(refresh_all)
+        window.start_opener(opener, "demo (timing)")
+        samples, ms = [], []
+        n_before = window.results_seen
+        end = time.monotonic() + seconds
+        t_first = None
+        while time.monotonic() < end:
+            pump(0.25)
+            p = window.latest_packet
+            if p is not None:
+                samples.append((time.perf_counter(), p.stats.frames))
+                ms.append(p.stats.processing_ms)
+                if t_first is None:
+                    t_first, n_first = time.perf_counter(), window.results_seen
+        shown = (window.results_seen - n_first) / (time.perf_counter() - t_first) if t_first else 0.0
+        cpu_use = _cpu_delta(cpu0, _cpu_by_thread(), time.perf_counter() - t0)
+        cpu_use += f"; display timer ran {(len(refresh_all) - ticks0) / (time.perf_counter() - t0):.1f} ticks/s"
+        window.stop_worker()
+        warm = [s for s in samples if s[0] >= samples[0][0] + 2.0] if samples else []
+        del n_before
+        return (rate_of(warm[0], warm[-1]) if len(warm) > 1 else float("nan"),
+                statistics.median(ms) if ms else float("nan"), shown,
+                p.stats.dropped if p is not None else 0, cpu_use)
+
+    pump(1.0)
+    print(f"demo {size[0]}×{size[1]}, {'real-time' if args.realtime else 'as fast as possible'}, "
+          f"window {window.width()}×{window.height()}, feeds "
+          f"{window.left_feed.width()}×{window.left_feed.height()}, "
+          f"{'3D + 2D views' if window.gl_view is not None else '2D views only'}")
+    for r in range(args.rounds):
+        fps_a, ms_a, cpu_a = alone(args.seconds)
+        print(f"round {r + 1} tracker alone : {fps_a:6.1f} results/s, tracker {ms_a:5.1f} ms/pair (median)")
+        print(f"    CPU (% of one core): {cpu_a}")
+        fps_g, ms_g, shown, dropped, cpu_g = with_gui(args.seconds)
+        print(f"round {r + 1} with the GUI  : {fps_g:6.1f} results/s, tracker {ms_g:5.1f} ms/pair (median), "
+              f"display {shown:5.1f} Hz, dropped {dropped}")
+        print(f"    CPU (% of one core): {cpu_g}")
+    window.close()
+
+    print(f"\nGUI thread, ms (n, median, p99, max) over all GUI phases:")
+    rows = [("display slot (refreshes that took a packet)", refresh_with_packet),
+            ("display slot (all timer ticks)", refresh_all)]
+    rows += [(k, v) for k, v in sorted(times.items())]
+    for name, values in rows:
+        print(f"  {name:46s} n={len(values):5d}  median {_pct(values, 50):6.2f}  "
+              f"p99 {_pct(values, 99):6.2f}  max {max(values) if values else float('nan'):7.2f}")
+    app.quit()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
