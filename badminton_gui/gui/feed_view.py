@@ -159,13 +159,20 @@ class FeedView(QWidget):
             p.drawPoint(pts[i])
 
     def _paint_rejected(self, p: QPainter) -> None:
+        """Rejected candidates as rings in their filter's colour, each on a dark halo.
+
+        The halo keeps the colours apart from what lies under them: without it the purple
+        motion-gate rings vanished on the magenta mask tint and yellow ones on court lines.
+        """
         p.setBrush(Qt.BrushStyle.NoBrush)
-        for c in self._camera.candidates:
-            if c.rejected_by is None:
-                continue
-            colour, _ = reject_style(c.rejected_by)
-            p.setPen(QPen(colour, 1.6))
-            p.drawEllipse(self.image_to_widget(c.x, c.y), 6.0, 6.0)
+        rings = [(self.image_to_widget(c.x, c.y), reject_style(c.rejected_by)[0])
+                 for c in self._camera.candidates if c.rejected_by is not None]
+        p.setPen(QPen(QColor(0, 0, 0, 170), 3.6))
+        for centre, _ in rings:
+            p.drawEllipse(centre, 6.0, 6.0)
+        for centre, colour in rings:
+            p.setPen(QPen(colour, 1.8))
+            p.drawEllipse(centre, 6.0, 6.0)
 
     def _paint_legend(self, p: QPainter) -> None:
         f = QFont(self.font())
