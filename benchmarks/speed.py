@@ -9,12 +9,20 @@ and 640×480) it prints:
     camera after the other, at full resolution (the paper written plainly) — timed on the same
     frames in the same run (GUIDE §9: absolute times drift ±15–25 % between runs, ratios do not);
   - latency from a frame pair to its TrackResult, p50 / p99;
-  - peak RSS.
+  - peak RSS;
+  - the F1 (GUIDE §6 protocol, both cameras) of the tracker at that resolution on NYCU rallies
+    (``--f1-rallies``; detections scaled back to the recorded 2048 px, so the tolerance is the
+    same 16 px there), decoded once and fed to one tracker per resolution.
 Then the file processing figures (`track` on a NYCU rally, decoding included: pairs/s and the
-share of time spent decoding vs tracking), peak RSS after 1000 and after ``--long`` pairs, and
+share of time spent decoding vs tracking), resident memory after 1000 and after ``--long`` pairs
+(current RSS, and the peak since the long run began: the kernel's peak is reset first, so the
+frames held in memory by the timing runs do not hide growth), and
 with ``--profile`` a cProfile summary of where the tracker's time goes.
 
-Needs ../shared/data/nycu-stereo. Tests never assert on these figures.
+First of all it prints how fast the demo court renders at 1280×720 (the GUI's demo must render
+faster than the cameras' rate it imitates); that part needs no data.
+
+The rest needs ../shared/data/nycu-stereo. Tests never assert on these figures.
 """
 
 from __future__ import annotations
@@ -49,6 +57,23 @@ RALLY = "rally_11-46-04"
 
 def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _status_mb(key: str) -> float:
+    """A memory line of /proc/self/status (VmRSS: now, VmHWM: peak since the last reset), MB."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(key + ":"):
+            return int(line.split()[1]) / 1024.0
+    return float("nan")
+
+
+def reset_peak_rss() -> bool:
+    """Reset the kernel's peak-RSS mark (Linux: write 5 to clear_refs); False if refused."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+        return True
+    except OSError:
+        return False
 
 
 class PlainChain:
@@ -167,26 +192,110 @@ def file_processing(rig: StereoRig, params: TrackerParams, n: int) -> tuple[floa
     return count / (decode + track), decode / (decode + track)
 
 
+F1_RALLIES = ("rally_11-46-04", "rally_11-49-21")   # one tuned-on, one held-out (benchmarks/clips.py)
+
+
+def f1_by_resolution(full_rig: StereoRig, params: TrackerParams, sizes, rallies,
+                     max_pairs: int) -> dict:
+    """F1 of the tracker at each size on the rallies: one decode, one tracker per size."""
+    from badminton_gui.core.evaluation import Outcomes, evaluate, tolerance_px
+    from badminton_gui.io.labels import read_point_labels
+
+    native = full_rig.image_size
+    totals = {size: Outcomes() for size in sizes}
+    for name in rallies:
+        d = DATA / name
+        lt = read_timestamps(d / "CameraReader_1.csv")[1]
+        rt = read_timestamps(d / "CameraReader_2.csv")[1]
+        src = VideoPair(d / "CameraReader_1.mp4", d / "CameraReader_2.mp4", lt, rt)
+        trackers = {size: StereoTracker(full_rig if size is None else scaled_rig(full_rig, size), params)
+                    for size in sizes}
+        preds = {size: ({}, {}) for size in sizes}
+        try:
+            for _ in range(max_pairs):
+                f = src.read()
+                if f is None:
+                    break
+                for size, tracker in trackers.items():
+                    if size is None:
+                        lf, rf, sx, sy = f.left, f.right, 1.0, 1.0
+                    else:
+                        lf = cv2.resize(f.left, size, interpolation=cv2.INTER_AREA)
+                        rf = cv2.resize(f.right, size, interpolation=cv2.INTER_AREA)
+                        sx, sy = native[0] / size[0], native[1] / size[1]
+                    r = tracker.process(lf, rf, f.t_left, f.index, f.index_right, keep_masks=False)
+                    left, right = preds[size]
+                    for out, det, idx in ((left, r.left.detection, f.index),
+                                          (right, r.right.detection, f.index_right)):
+                        entry = (True, det.x * sx, det.y * sy) if det else (False, 0.0, 0.0)
+                        if idx not in out or not out[idx][0]:
+                            out[idx] = entry
+        finally:
+            src.close()
+            for tracker in trackers.values():
+                tracker.close()
+        for cam, labels_path in ((0, d / "CameraReader_1.csv"), (1, d / "CameraReader_2.csv")):
+            labels = read_point_labels(labels_path).as_dict()
+            for size in sizes:
+                pred = preds[size][cam]
+                last = max(pred) if pred else -1
+                totals[size] = totals[size] + evaluate(
+                    pred, {k: v for k, v in labels.items() if k <= last}, tolerance_px(native[0]))
+    return totals
+
+
+def demo_render_rate(n: int = 300, size: tuple[int, int] = (1280, 720)) -> tuple[float, float]:
+    """Frame pairs per second the demo court renders at ``size``, and the demo's own frame rate."""
+    from badminton_gui.io.demo_scene import DemoScene
+
+    scene = DemoScene(seed=0, size=size, rig="binocular", n_frames=n + 10)
+    try:
+        for _ in range(10):      # warm-up: first shot generated, caches filled
+            scene.read()
+        start = time.perf_counter()
+        count = 0
+        while scene.read() is not None:
+            count += 1
+        return count / (time.perf_counter() - start), float(scene.fps)
+    finally:
+        scene.close()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pairs", type=int, default=300, help="frame pairs held in memory per resolution")
     ap.add_argument("--long", type=int, default=10000, help="pairs for the memory run (0: skip)")
     ap.add_argument("--preset", default=None)
     ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--f1-rallies", nargs="*", default=list(F1_RALLIES),
+                    help="NYCU rallies scored at each resolution (none: skip the F1 column)")
+    ap.add_argument("--f1-pairs", type=int, default=100000, help="at most this many pairs per rally for F1")
     args = ap.parse_args()
+    render, demo_fps = demo_render_rate()
+    print(f"demo court 1280x720: renders {render:.1f} pairs/s (it plays at {demo_fps:.0f} fps: "
+          f"{render / demo_fps:.2f}x real time)")
     if not DATA.is_dir():
         sys.exit(f"needs {DATA}")
     params = load_preset(args.preset)
     full_rig = rig_from_nycu(DATA / RALLY / "CameraReader_1.cfg", DATA / RALLY / "CameraReader_2.cfg")
     print(f"cv2 {cv2.__version__}, {cv2.getNumberOfCPUs()} CPUs, preset {args.preset or 'default'}")
-    print(f"{'resolution':>10} {'plain/s':>8} {'tracker/s':>9} {'ratio':>6} {'p50 ms':>7} {'p99 ms':>7} {'RSS MB':>7}")
-    for size in (None, (1280, 720), (640, 480)):
+    sizes = (None, (1280, 720), (640, 480))
+    f1 = {}
+    if args.f1_rallies:
+        f1 = f1_by_resolution(full_rig, params, sizes, args.f1_rallies, args.f1_pairs)
+        print(f"F1 on {', '.join(args.f1_rallies)} (both cameras, first {args.f1_pairs} pairs at most)")
+    print(f"{'resolution':>10} {'plain/s':>8} {'tracker/s':>9} {'ratio':>6} {'p50 ms':>7} {'p99 ms':>7} "
+          f"{'RSS MB':>7} {'F1':>6} {'acc':>6}")
+    for size in sizes:
         pairs = load_pairs(args.pairs, size)
         rig = full_rig if size is None else scaled_rig(full_rig, size)
         plain = time_plain(pairs)
         rate, p50, p99 = time_tracker(pairs, rig, params)
         w, h = pairs[0][0].shape[1], pairs[0][0].shape[0]
-        print(f"{w:>5}x{h:<4} {plain:8.1f} {rate:9.1f} {rate / plain:6.2f} {p50:7.2f} {p99:7.2f} {peak_rss_mb():7.0f}")
+        score = f1.get(size)
+        quality = f"{100 * score.f1:6.2f} {100 * score.accuracy:6.2f}" if score else f"{'-':>6} {'-':>6}"
+        print(f"{w:>5}x{h:<4} {plain:8.1f} {rate:9.1f} {rate / plain:6.2f} {p50:7.2f} {p99:7.2f} "
+              f"{peak_rss_mb():7.0f} {quality}")
         if args.profile and size is None:
             prof = cProfile.Profile()
             tracker = StereoTracker(rig, params, parallel=False)
@@ -206,14 +315,17 @@ def main() -> None:
         pairs = load_pairs(100, (640, 480))
         rig = scaled_rig(full_rig, (640, 480))
         tracker = StereoTracker(rig, params)
+        reset = reset_peak_rss()
         rss = {}
         for i in range(args.long):
             lf, rf, _ = pairs[i % len(pairs)]
             tracker.process(lf, rf, i / 119.0, keep_masks=False)
             if i + 1 in (1000, args.long):
-                rss[i + 1] = peak_rss_mb()
+                rss[i + 1] = (_status_mb("VmRSS"), _status_mb("VmHWM"))
         tracker.close()
-        print("peak RSS " + ", ".join(f"after {k} pairs {v:.0f} MB" for k, v in rss.items()))
+        peak = "peak since start" if reset else "process peak (reset refused)"
+        print("memory (640x480 loop): " + "; ".join(
+            f"after {k} pairs RSS {now:.0f} MB, {peak} {hwm:.0f} MB" for k, (now, hwm) in rss.items()))
     if args.profile:
         print("\nprofile (2048x1536, one thread, top functions by own time):")
         print(profile_text)
