@@ -8,7 +8,9 @@ session, one shuttle per session), samples them at a camera rate with stereo-lik
 :class:`Trajectory` exactly as the tracker does, and prints:
 
 * the landing-point error (median, p95, cm) by time left before landing (600 … 100 ms), with the
-  share of flights that had a prediction by then, for each frame rate and noise level;
+  share of flights that had a prediction by then and the share whose whole flight (hit to floor)
+  is longer than that (a 0.15 s smash cannot be predicted 300 ms ahead), for each frame rate and
+  noise level (``--noise demo``: the demo pipeline's measured 3D noise, see :func:`observe`);
 * the speed error (median and p95 of |estimated − true| / true, after the prediction starts);
 * how often the true landing lies inside the predicted radius (calibration of the uncertainty);
 * the update cost per frame (median, mean, p99 µs; wall clock and thread CPU time) and the fitted L error at the end of a shot.
@@ -20,10 +22,11 @@ rally's direction reversals (every return of the shuttle reverses its along-cour
 error of the position predicted 300 ms ahead against the labelled point then (same shot), and
 the session's fitted L. The labels carry no landing ground truth.
 
-With ``--demo-track DIR`` it scores the whole pipeline's 3D points on the demo court: DIR holds
-``truth.csv`` from ``badminton-track demo`` and ``track.csv`` from ``badminton-track track`` on
-those videos; the CSV's 3D points are fed to :class:`Trajectory` again and its speed is compared
-with the true velocity, its landing predictions with the true landings.
+With ``--demo-track DIR [DIR ...]`` it scores the whole pipeline's 3D points on the demo court: each
+DIR holds ``truth.csv`` from ``badminton-track demo`` and ``track.csv`` from ``badminton-track
+track`` on those videos; the CSV's 3D points are fed to :class:`Trajectory` again and its speed is
+compared with the true velocity, its landing predictions with the true landings (a table by time
+before landing, pooled per frame rate; a demo rally lands about once every 10 s).
 
 Usage:  python benchmarks/landing.py [--sessions N] [--shots N] [--fps 120 60] [--sigma 0.01 0.02]
         python benchmarks/landing.py --real ../shared/data/nycu-stereo [--real-noise 0.05]
@@ -103,33 +106,62 @@ def make_shot(rng: np.random.Generator, kind: str, aero_length: float,
 
 
 def observe(rng: np.random.Generator, shot: SyntheticShot, fps: float, sigma: float,
-            outlier_rate: float = 0.03, miss_rate: float = 0.02
+            outlier_rate: float = 0.03, miss_rate: float = 0.02, lag: float = 0.0,
+            run_max_s: float = 0.0
             ) -> tuple[np.ndarray, list[tuple | None], np.ndarray, np.ndarray]:
     """Camera-rate samples of a shot: (times, points or None, true pos, true vel).
 
     Noise: isotropic Gaussian σ; outliers: a point displaced 0.15–1.5 m in a random direction
     (a wrong stereo pair); misses: no point (the shuttle hidden or not detected).
+
+    The tracker's measured noise (``--noise demo``) adds two things white noise lacks: ``lag``, the
+    blob centroid sitting behind the cork along the velocity (the skirt trails), and outliers in
+    *runs* of up to ``run_max_s`` seconds that drift (the detector following a racket, a shoe or a
+    player's head for a few frames): displaced 0.15–1.5 m, moving 0–8 m/s relative to the shuttle.
     """
     phase = rng.uniform(0.0, 1.0 / fps)
     times = np.arange(phase, shot.duration, 1.0 / fps)
     true_pos, true_vel = shot.at(times)
     points: list[tuple | None] = []
-    for p in true_pos:
-        u = rng.uniform()
-        if u < miss_rate:
+    if lag == 0.0 and run_max_s <= 0.0:
+        for p in true_pos:
+            u = rng.uniform()
+            if u < miss_rate:
+                points.append(None)
+                continue
+            q = p + rng.normal(0.0, sigma, 3)
+            if u < miss_rate + outlier_rate:
+                d = rng.normal(size=3)
+                q = p + d / np.linalg.norm(d) * rng.uniform(0.15, 1.5)
+            points.append(tuple(q))
+        return times, points, true_pos, true_vel
+    speed = np.maximum(np.linalg.norm(true_vel, axis=1, keepdims=True), 1e-9)
+    seen = true_pos - lag * true_vel / speed
+    max_run = max(1, int(round(run_max_s * fps)))
+    p_start = outlier_rate / ((1 + max_run) / 2.0)    # mean run (1 + max_run)/2 frames
+    run_left, k, offset, drift = 0, 0, np.zeros(3), np.zeros(3)
+    for p in seen:
+        if run_left == 0 and rng.uniform() < p_start:
+            run_left, k = int(rng.integers(1, max_run + 1)), 0
+            d, w = rng.normal(size=3), rng.normal(size=3)
+            offset = d / np.linalg.norm(d) * rng.uniform(0.15, 1.5)
+            drift = w / np.linalg.norm(w) * rng.uniform(0.0, 8.0)
+        if run_left > 0:
+            points.append(tuple(p + offset + drift * (k / fps) + rng.normal(0.0, sigma, 3)))
+            run_left -= 1
+            k += 1
+            continue
+        if rng.uniform() < miss_rate:
             points.append(None)
             continue
-        q = p + rng.normal(0.0, sigma, 3)
-        if u < miss_rate + outlier_rate:
-            d = rng.normal(size=3)
-            q = p + d / np.linalg.norm(d) * rng.uniform(0.15, 1.5)
-        points.append(tuple(q))
+        points.append(tuple(p + rng.normal(0.0, sigma, 3)))
     return times, points, true_pos, true_vel
 
 
 @dataclass
 class ShotRecord:
     kind: str
+    duration: float            # s from the hit to the floor
     lead_errors: dict          # lead ms -> landing error (m) or None (no prediction yet)
     lead_inside: dict          # lead ms -> true landing within the predicted radius
     speed_rel_errors: list     # per frame with a prediction
@@ -139,7 +171,8 @@ class ShotRecord:
 
 
 def run_session(rng: np.random.Generator, n_shots: int, fps: float, sigma: float,
-                params: TrajectoryParams, timings: list, outlier_rate: float = 0.03) -> list[ShotRecord]:
+                params: TrajectoryParams, timings: list, outlier_rate: float = 0.03,
+                lag: float = 0.0, run_max_s: float = 0.0) -> list[ShotRecord]:
     """One shuttle (one L), several shots separated by pauses, fed to one Trajectory."""
     aero_length = rng.uniform(4.4, 5.2)
     traj = Trajectory(params, court_frame=True)
@@ -149,7 +182,8 @@ def run_session(rng: np.random.Generator, n_shots: int, fps: float, sigma: float
     for _ in range(n_shots):
         kind = kinds[rng.integers(len(kinds))]
         shot = make_shot(rng, kind, aero_length)
-        times, points, true_pos, true_vel = observe(rng, shot, fps, sigma, outlier_rate)
+        times, points, true_pos, true_vel = observe(rng, shot, fps, sigma, outlier_rate,
+                                                     lag=lag, run_max_s=run_max_s)
         t_land = clock + shot.duration
         history = []   # (t, prediction, velocity)
         shot_before = traj._shot_index
@@ -177,7 +211,7 @@ def run_session(rng: np.random.Generator, n_shots: int, fps: float, sigma: float
                             for _, _, v, tv in history if v is not None]
         fitted = traj.current_aero_length
         aero_err = abs(fitted - aero_length) if fitted is not None else None
-        records.append(ShotRecord(kind, lead_errors, lead_inside, speed_errors, speed_errors_all, aero_err,
+        records.append(ShotRecord(kind, shot.duration, lead_errors, lead_inside, speed_errors, speed_errors_all, aero_err,
                                   traj._shot_index - shot_before))
         # The shuttle lies on the floor, then the next rally starts (no points meanwhile).
         clock = t_land + rng.uniform(0.5, 1.5)
@@ -288,66 +322,111 @@ def run_real(folder: Path, noise: float, ahead: float = 0.3) -> int:
     return 0
 
 
-def run_demo_track(folder: Path) -> int:
-    """Speed and landing of Trajectory on the pipeline's own 3D points (demo court truth)."""
+def run_demo_track(folders: list[Path]) -> int:
+    """Speed and landing of Trajectory on the pipeline's own 3D points (demo court truth).
+
+    Each folder's ``track.csv`` points are fed to a fresh :class:`Trajectory` (the current code,
+    default parameters, as inside the tracker). A shot has landed when the truth shows the shuttle
+    at rest after it; its landing time is the last moving truth sample carried down to the floor
+    (the recording may go on with the shuttle lying there). The live columns LandX/LandY that
+    ``badminton-track track`` wrote are scored too (same code unless the CSV is older).
+    """
     import csv
 
     def num(row, key):
         value = row.get(key, "")
         return float(value) if value not in ("", None) else math.nan
 
-    try:
-        truth = list(csv.DictReader(open(folder / "truth.csv", encoding="utf-8")))
-        track = list(csv.DictReader(open(folder / "track.csv", encoding="utf-8")))
-    except FileNotFoundError as exc:
-        print(f"--demo-track: {exc}", file=sys.stderr)
-        return 2
-    by_frame = {int(r["Frame"]): r for r in truth}
-    traj = Trajectory(TrajectoryParams(), court_frame=True)
-    history = []
-    points_3d = []
-    for row in track:
-        t = num(row, "Timestamp")
-        point = None
-        if row.get("Vis3D") == "1":
-            point = (num(row, "X"), num(row, "Y"), num(row, "Z"))
-        history.append((t, traj.update(t, point), by_frame.get(int(row["Frame"]))))
-        true_row = by_frame.get(int(row["Frame"]))
-        if point is not None and true_row is not None and true_row["X"]:
-            points_3d.append(np.linalg.norm(np.subtract(point, [num(true_row, k) for k in "XYZ"])))
-    speed_err, shown, moving = [], 0, 0
-    for t, info, true_row in history:
-        if true_row is None or true_row.get("Visible") != "1" or not true_row["VX"]:
-            continue
-        v = float(np.linalg.norm([num(true_row, k) for k in ("VX", "VY", "VZ")]))
-        if v < 0.5:
-            continue
-        moving += 1
-        if info.velocity is not None:
-            shown += 1
-            speed_err.append(abs(float(np.linalg.norm(info.velocity)) - v) / v)
-    print(f"# demo pipeline: {folder}, {len(track)} frames, {len(points_3d)} 3D points "
-          f"(error vs truth: median {percentile(points_3d, 50) * 100:.1f} cm, "
-          f"p90 {percentile(points_3d, 90) * 100:.1f} cm)")
-    print(f"speed shown in {shown}/{moving} frames with a moving visible shuttle; relative error "
-          f"median {percentile(speed_err, 50):.1%}, p75 {percentile(speed_err, 75):.1%}, "
-          f"p95 {percentile(speed_err, 95):.1%}")
-    shots: dict[int, list] = {}
-    for r in truth:
-        if int(r["Shot"]) >= 0 and r["X"]:
-            shots.setdefault(int(r["Shot"]), []).append([num(r, k) for k in ("Timestamp", "X", "Y", "Z")])
-    for shot, rows in sorted(shots.items()):
-        arr = np.asarray(rows)
-        if arr[-1, 3] > 0.1:
-            continue   # intercepted, not landed
+    by_fps: dict[float, dict] = {}
+    for folder in folders:
+        try:
+            truth = list(csv.DictReader(open(folder / "truth.csv", encoding="utf-8")))
+            track = list(csv.DictReader(open(folder / "track.csv", encoding="utf-8")))
+        except FileNotFoundError as exc:
+            print(f"--demo-track: {exc}", file=sys.stderr)
+            return 2
+        by_frame = {int(r["Frame"]): r for r in truth}
+        stamps = np.asarray([num(r, "Timestamp") for r in track])
+        fps = float(round(1.0 / np.median(np.diff(stamps)))) if len(stamps) > 1 else math.nan
+        acc = by_fps.setdefault(fps, {"points": [], "speed": [], "shown": 0, "moving": 0,
+                                      "lead": {lead: [] for lead in LEAD_TIMES_MS},
+                                      "live": {lead: [] for lead in LEAD_TIMES_MS}, "landed": 0})
+        traj = Trajectory(TrajectoryParams(), court_frame=True)
+        history = []      # (t, FlightInfo, truth row, track row)
+        for row in track:
+            t = num(row, "Timestamp")
+            point = None
+            if row.get("Vis3D") == "1":
+                point = (num(row, "X"), num(row, "Y"), num(row, "Z"))
+            true_row = by_frame.get(int(row["Frame"]))
+            history.append((t, traj.update(t, point), true_row, row))
+            if point is not None and true_row is not None and true_row["X"]:
+                acc["points"].append(np.linalg.norm(np.subtract(point, [num(true_row, k) for k in "XYZ"])))
+        for t, info, true_row, _ in history:
+            if true_row is None or true_row.get("Visible") != "1" or not true_row["VX"]:
+                continue
+            v = float(np.linalg.norm([num(true_row, k) for k in ("VX", "VY", "VZ")]))
+            if v < 0.5:
+                continue
+            acc["moving"] += 1
+            if info.velocity is not None:
+                acc["shown"] += 1
+                acc["speed"].append(abs(float(np.linalg.norm(info.velocity)) - v) / v)
+        shots: dict[int, list] = {}
+        for r in truth:
+            if int(r["Shot"]) >= 0 and r["X"]:
+                shots.setdefault(int(r["Shot"]), []).append(
+                    [num(r, k) for k in ("Timestamp", "X", "Y", "Z", "VX", "VY", "VZ")])
+        for shot, rows in sorted(shots.items()):
+            arr = np.asarray(rows)
+            speed = np.linalg.norm(arr[:, 4:7], axis=1)
+            rest = np.flatnonzero(speed == 0.0)
+            if not len(rest):
+                continue   # intercepted (or the recording stops before the floor)
+            last = arr[rest[0] - 1]
+            t_land = last[0] + (last[3] / -last[6] if last[6] < 0 else 0.0)
+            land_xy = arr[rest[0], 1:3]
+            acc["landed"] += 1
+            parts = []
+            for lead in LEAD_TIMES_MS:
+                before = [(info, row) for t, info, _, row in history
+                          if arr[0, 0] <= t <= t_land - lead / 1000.0]
+                info, row = before[-1] if before else (None, None)
+                # A flight that lost its points keeps its last prediction (in_flight False): it
+                # counts when that flight was followed during this shot (not a previous shot's).
+                pred = None
+                if info is not None and (info.in_flight or any(
+                        i.in_flight and i.shot_index == info.shot_index for i, _ in before)):
+                    pred = info.prediction
+                if pred is None:
+                    acc["lead"][lead].append(None)
+                    parts.append(f"{lead}: —")
+                else:
+                    err = math.hypot(pred.x - land_xy[0], pred.y - land_xy[1])
+                    acc["lead"][lead].append(err)
+                    parts.append(f"{lead}: {err * 100:.1f}±{pred.radius * 100:.0f}")
+                live = (num(row, "LandX"), num(row, "LandY")) if row is not None else (math.nan,) * 2
+                acc["live"][lead].append(None if math.isnan(live[0]) else
+                                         math.hypot(live[0] - land_xy[0], live[1] - land_xy[1]))
+            print(f"{folder.name} shot {shot} lands ({land_xy[0]:.2f}, {land_xy[1]:.2f}) at "
+                  f"{t_land:.3f} s; error cm ± radius by ms before: " + ", ".join(parts))
+    for fps, acc in sorted(by_fps.items(), reverse=True):
+        pts, sp = acc["points"], acc["speed"]
+        print(f"\n## demo pipeline at {fps:g} fps: {len(pts)} 3D points (error vs truth: median "
+              f"{percentile(pts, 50) * 100:.1f} cm, p90 {percentile(pts, 90) * 100:.1f} cm), "
+              f"{acc['landed']} landed shots")
+        print(f"speed shown in {acc['shown']}/{acc['moving']} frames with a moving visible shuttle; "
+              f"relative error median {percentile(sp, 50):.1%}, p75 {percentile(sp, 75):.1%}, "
+              f"p95 {percentile(sp, 95):.1%}")
+        print(f"{'before landing':>15} | {'median cm':>9} | {'p95 cm':>7} | {'max cm':>7} | "
+              f"{'with pred.':>10} | {'live CSV median / max cm':>24}")
         for lead in LEAD_TIMES_MS:
-            before = [(t, info) for t, info, _ in history
-                      if arr[0, 0] <= t <= arr[-1, 0] - lead / 1000.0]
-            pred = before[-1][1].prediction if before else None
-            text = "no prediction" if pred is None else (
-                f"error {math.hypot(pred.x - arr[-1, 1], pred.y - arr[-1, 2]) * 100:.1f} cm "
-                f"(±{pred.radius * 100:.0f} cm)")
-            print(f"shot {shot} landing ({arr[-1, 1]:.2f}, {arr[-1, 2]:.2f}), {lead} ms before: {text}")
+            errs = [e for e in acc["lead"][lead] if e is not None]
+            live = [e for e in acc["live"][lead] if e is not None]
+            print(f"{lead:>12} ms | {percentile(errs, 50) * 100:9.1f} | {percentile(errs, 95) * 100:7.1f} | "
+                  f"{(max(errs) if errs else math.nan) * 100:7.1f} | {len(errs):>4}/{acc['landed']:<5} | "
+                  f"{percentile(live, 50) * 100:10.1f} / {(max(live) if live else math.nan) * 100:.1f} "
+                  f"({len(live)})")
     return 0
 
 
@@ -362,9 +441,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sessions", type=int, default=30, help="sessions (one L each), default 30")
     parser.add_argument("--shots", type=int, default=6, help="shots per session, default 6")
     parser.add_argument("--fps", type=float, nargs="+", default=[120.0, 60.0], help="frame rates")
-    parser.add_argument("--sigma", type=float, nargs="+", default=[0.01, 0.02],
-                        help="3D noise σ per axis, m (default 0.01 0.02)")
-    parser.add_argument("--outliers", type=float, default=0.03, help="outlier share, default 0.03")
+    parser.add_argument("--noise", choices=("white", "demo"), default="white",
+                        help="white: isotropic Gaussian σ and lone outliers (default); demo: the "
+                             "demo pipeline's measured 3D noise (σ 1.5 cm, centroid 2.2 cm behind the "
+                             "cork along the velocity, 7 %% outliers in drifting runs up to 75 ms)")
+    parser.add_argument("--sigma", type=float, nargs="+", default=None,
+                        help="3D noise σ per axis, m (default 0.01 0.02; demo noise 0.015)")
+    parser.add_argument("--outliers", type=float, default=None,
+                        help="outlier share (default 0.03; demo noise 0.07)")
+    parser.add_argument("--lag", type=float, default=None,
+                        help="points this far behind the cork along the velocity, m (default 0; demo 0.022)")
+    parser.add_argument("--outlier-run-ms", type=float, default=None,
+                        help="outliers come in drifting runs up to this long (default 0: lone; demo 75)")
     parser.add_argument("--seed", type=int, default=1, help="random seed")
     parser.add_argument("--by-kind", action="store_true", help="also print the 300 ms row per shot kind")
     parser.add_argument("--model-noise", type=float, default=None,
@@ -375,16 +463,27 @@ def main(argv: list[str] | None = None) -> int:
                         help="check on the NYCU stereo rallies under DIR instead of synthetic flights")
     parser.add_argument("--real-noise", type=float, default=0.05,
                         help="measurement_noise for --real, m (default 0.05)")
-    parser.add_argument("--demo-track", type=Path, default=None, metavar="DIR",
-                        help="score the pipeline's 3D points: DIR/truth.csv (demo) and DIR/track.csv (track)")
+    parser.add_argument("--demo-track", type=Path, nargs="+", default=None, metavar="DIR",
+                        help="score the pipeline's 3D points: DIR/truth.csv (demo) and DIR/track.csv "
+                             "(track); several DIRs are pooled per frame rate")
     args = parser.parse_args(argv)
     if args.demo_track is not None:
         return run_demo_track(args.demo_track)
     if args.real is not None:
         return run_real(args.real, args.real_noise)
 
+    demo = args.noise == "demo"
+    if args.sigma is None:
+        args.sigma = [0.015] if demo else [0.01, 0.02]
+    if args.outliers is None:
+        args.outliers = 0.07 if demo else 0.03
+    if args.lag is None:
+        args.lag = 0.022 if demo else 0.0
+    if args.outlier_run_ms is None:
+        args.outlier_run_ms = 75.0 if demo else 0.0
     print(f"# {args.sessions} sessions x {args.shots} shots per configuration, outliers "
-          f"{args.outliers:.0%}, misses 2%, L in 4.4–5.2 m, seed {args.seed}")
+          f"{args.outliers:.0%} (runs up to {args.outlier_run_ms:g} ms), centroid lag "
+          f"{args.lag * 100:g} cm, misses 2%, L in 4.4–5.2 m, seed {args.seed}")
     for sigma in args.sigma:
         for fps in args.fps:
             rng = np.random.default_rng(args.seed)
@@ -397,15 +496,17 @@ def main(argv: list[str] | None = None) -> int:
             timings: list[float] = []
             records: list[ShotRecord] = []
             for _ in range(args.sessions):
-                records += run_session(rng, args.shots, fps, sigma, params, timings, args.outliers)
+                records += run_session(rng, args.shots, fps, sigma, params, timings, args.outliers,
+                                       args.lag, args.outlier_run_ms / 1000.0)
             print(f"\n## fps {fps:g}, σ = {sigma * 100:g} cm: {len(records)} shots")
             print(f"{'before landing':>15} | {'median cm':>9} | {'p95 cm':>7} | {'with pred.':>10} | "
-                  f"{'inside r':>8}")
+                  f"{'inside r':>8} | {'flight longer':>13}")
             for lead in LEAD_TIMES_MS:
                 errs = [r.lead_errors[lead] for r in records if r.lead_errors[lead] is not None]
                 inside = [r.lead_inside[lead] for r in records if r.lead_inside[lead] is not None]
                 print(f"{lead:>12} ms | {percentile(errs, 50) * 100:9.1f} | {percentile(errs, 95) * 100:7.1f} | "
-                      f"{len(errs) / len(records):9.0%} | {np.mean(inside) if inside else float('nan'):8.0%}")
+                      f"{len(errs) / len(records):9.0%} | {np.mean(inside) if inside else float('nan'):8.0%} | "
+                      f"{np.mean([r.duration > lead / 1000.0 for r in records]):13.0%}")
             if args.by_kind:
                 for kind in SHOT_KINDS:
                     errs = [r.lead_errors[300] for r in records
