@@ -17,11 +17,15 @@ How (court frame, Z up):
   posterior minus the prior it started with) is added to a session estimate, which is the prior of
   the next shot. A variance floor keeps it adaptable (feathers wear, shuttles are changed).
 * Outliers: a point whose innovation is beyond ``outlier_sigma`` standard deviations (or farther
-  than ``outlier_distance``) is not used. Rejected points seed a *tentative* track; when at least
-  ``CONFIRM_POINTS`` consecutive rejected points lie on one drag path (χ² test), are surely moving
-  (speed − 2σ ≥ 1 m/s) and start above the floor, the tentative track replaces the flight. If its velocity differs from the flight's by more than
-  ``hit_acceleration`` × the time step, that is a hit: a new shot starts. Otherwise the flight was
-  only re-synchronised (model mismatch) and keeps its shot number and its L.
+  than ``outlier_distance``) is not used. Rejected points seed a *tentative* track. It replaces
+  the flight when at least ``CONFIRM_POINTS`` consecutive rejected points lie on one drag path
+  (χ² test), are surely moving (speed − 2σ ≥ 1 m/s) and start above the floor. While a flight is
+  being followed it takes more: ``TAKEOVER_POINTS`` points, and a path that meets the flight's
+  where the shuttle could have been hit (the shuttle does not jump), so a few wrong points in a
+  row (a racket, a shoe) cannot replace a good flight. If the new track's velocity differs from
+  the flight's by more than ``hit_acceleration`` × the time step, that is a hit: a new shot
+  starts. Otherwise the flight was only re-synchronised (model mismatch) and keeps its shot
+  number and its L.
 * The points' noise: ``measurement_noise`` is a floor; the filter measures the real scatter from
   the innovations of established flights (robust median) and uses the larger of the two, so a
   rig noisier than declared does not get its good points rejected and its shots chopped up.
@@ -50,7 +54,11 @@ from .params import TrajectoryParams
 from .types import FlightInfo, LandingPrediction
 
 NO_COURT_POSE = "no court pose: calibrate the court pose to get landing predictions"
-CONFIRM_POINTS = 4          # consecutive agreeing points that start (or restart) a flight
+CONFIRM_POINTS = 4          # consecutive agreeing points that start a flight
+TAKEOVER_POINTS = 6         # ... that replace a flight being followed (a hit, or a re-synchronisation):
+                            # the demo pipeline makes runs of 4 wrong points (centroid on the skirt
+                            # or a racket for a few frames) that had replaced a good flight 230 ms
+                            # before landing and cost its prediction
 MIN_FLIGHT_SPEED = 1.0      # m/s: slower "tracks" are shuttles lying on the floor or held in a hand
 LANDED_HEIGHT = 0.03        # m: a flight whose estimate is this low has landed (cork radius ≈ 1.3 cm)
 MIN_START_HEIGHT = 0.15     # m: no flight starts lower (a shuttle rolling or picked up off the floor;
@@ -60,6 +68,9 @@ VELOCITY_SIGMA_FRACTION = 0.10
 LANDING_GRACE_S = 0.03      # s: a flight past its predicted landing time by this much has landed
 NOISE_WINDOW = 120          # innovations kept for the measured-noise estimate (~1 s at 120 fps)
 NOISE_MIN_SAMPLES = 30      # before that many, the parameter alone sets the noise
+COAST_VELOCITY_S = 0.1     # s: no speed shown after this long without a point (a hidden hit, seen in
+                            # the demo: a shuttle behind a player for 190 ms, hit meanwhile)
+HIT_SLACK = 0.05            # m: at a hit the blob's centroid swaps sides of the cork (skirt lag ~2 cm)
 MAX_RADIUS = 2.0            # m: a landing this uncertain is withheld (a fresh, poorly fixed track)
 MAX_FLIGHT_TIME = 6.0       # s: the landing search stops here
 K_MIN = 1.0 / physics.AERO_LENGTH_BOUNDS[1]
@@ -423,7 +434,8 @@ class Trajectory:
             nu, S, d2 = tent.innovation(z, sigma)
             if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
                 tent.correct(t, z, nu, S, sigma)
-                if len(tent.points) >= CONFIRM_POINTS:
+                needed = CONFIRM_POINTS if self._flight is None else TAKEOVER_POINTS
+                if len(tent.points) >= needed:
                     self._promote(tent)
                 return
             tent.x, tent.P, tent.t = saved
@@ -440,14 +452,16 @@ class Trajectory:
             # Not (yet) surely moving: a shuttle lying on the floor or held in a hand, or a track
             # too short to tell. It keeps growing and is promoted once it is sure.
             return
-        if not self._consistent(tent):
-            # Its points do not lie on one drag-model path (the 2-point start took an outlier):
-            # start again from the newest point.
-            self._tentative = None
+        old = self._flight
+        if not self._consistent(tent) or (old is not None and not self._continuous(old, tent)):
+            # Its points do not lie on one drag-model path (the 2-point start took an outlier, or
+            # the first point after a hit is the racket's blob), or it is not where the followed
+            # shuttle is or could have been hit (a racket, a shoe, the skirt for a few frames):
+            # keep the flight, drop the track's oldest point and refit the rest.
+            self._tentative = self._refit(tent.points[1:])
             last = tent.points[-1]
             self._seed = (last[0], np.asarray(last[1:], dtype=float))
             return
-        old = self._flight
         new_shot = True
         if old is not None:
             t_first = tent.points[0][0]
@@ -474,6 +488,49 @@ class Trajectory:
             self._peak_speed = None
             self._launch_speed = None
         self._after_flight_update()
+
+    def _refit(self, points: list) -> _Filter | None:
+        """A tentative track fitted to ``points`` (t, x, y, z) afresh; points it rejects are left out."""
+        if len(points) < 2:
+            return None
+        p = self.params
+        sigma = self.measurement_sigma
+        (t0, *z0), (t1, *z1) = points[0], points[1]
+        tent = _Filter.from_two_points(t0, z0, t1, z1, sigma, self._session_k)
+        for t_i, *z_i in points[2:]:
+            saved = (tent.x, tent.P, tent.t)
+            tent.predict(t_i, p.model_noise)
+            z = np.asarray(z_i, dtype=float)
+            nu, S, d2 = tent.innovation(z, sigma)
+            if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
+                tent.correct(t_i, z, nu, S, sigma)
+            else:
+                tent.x, tent.P, tent.t = saved
+        return tent
+
+    def _continuous(self, old: _Filter, tent: _Filter) -> bool:
+        """Does the new track meet the followed flight's path between the flight's last point and
+        its own first one (where a hit, or the model's drift, must have happened)?
+
+        The shuttle cannot jump: both paths pass through it at the moment of a hit. The gate is
+        ``outlier_sigma`` standard deviations of the two position estimates and the point noise,
+        plus ``HIT_SLACK``.
+        """
+        t_first = tent.points[0][0]
+        t_from = min(old.t, t_first)
+        var = (self.measurement_sigma ** 2 + float(np.trace(old.P[0:3, 0:3])) / 3.0
+               + float(np.trace(tent.P[0:3, 0:3])) / 3.0)
+        gate = self.params.outlier_sigma * math.sqrt(var) + HIT_SLACK
+        new_state = tuple(tent.x[:6].tolist())
+        k_new = float(tent.x[6])
+        n = min(16, max(1, math.ceil((t_first - t_from) / 0.004)))
+        best = math.inf
+        for i in range(n + 1):
+            ts = t_from + (t_first - t_from) * i / n
+            po = old.predicted(ts)
+            pn = _propagate(new_state, k_new, ts - tent.t)
+            best = min(best, math.sqrt((po[0] - pn[0]) ** 2 + (po[1] - pn[1]) ** 2 + (po[2] - pn[2]) ** 2))
+        return best <= gate
 
     def _consistent(self, tent: _Filter) -> bool:
         """Do the track's points lie on the path its final state implies (χ² test at 99.9 %)?
@@ -611,7 +668,7 @@ class Trajectory:
             # The flight no longer explains the points but a new track does: probably a hit being
             # confirmed. Neither velocity can be trusted yet: better no speed than a wrong one.
             vel = None
-        elif _velocity_is_sure(f):
+        elif _velocity_is_sure(f) and t - f.t <= COAST_VELOCITY_S:
             vel = tuple(float(v) for v in f.predicted(t)[3:6])   # coasting through a short gap
         else:
             vel = None
