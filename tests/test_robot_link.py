@@ -383,6 +383,41 @@ def test_robot_listen_cli_decodes_a_socket_stream(capsys):
     assert any("HEARTBEAT sent=1" in line for line in out)
 
 
+def test_robot_listen_cli_survives_the_port_going_away(capsys):
+    """The robot's reader reopens a vanished port and goes on decoding (like the link itself)."""
+    import socket
+
+    from badminton_gui.cli import main
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(1)
+    host, port_no = server.getsockname()
+
+    def serve():
+        try:
+            for frame_index in (5, 7):          # two connections: the first one is dropped
+                conn, _ = server.accept()
+                try:
+                    for _ in range(8):
+                        conn.sendall(encode_track(make_result(frame_index, 0.5), 1))
+                        time.sleep(0.05)
+                finally:
+                    conn.close()
+        except OSError:
+            pass
+        finally:
+            server.close()
+
+    threading.Thread(target=serve, daemon=True).start()
+    code = main(["robot-listen", f"socket://{host}:{port_no}", "--timeout", "4"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert any("TRACK frame=5" in line for line in captured.out.splitlines())
+    assert any("TRACK frame=7" in line for line in captured.out.splitlines())
+    assert "reopening" in captured.err and "is back" in captured.err
+
+
 def test_robot_listen_cli_user_error_on_missing_port(capsys):
     from badminton_gui.cli import main
 

@@ -3,7 +3,8 @@
 Why this file exists: a robot team needs to see what the tracker sends before their own parser
 works. This opens a serial port (or Bluetooth serial port, or a pyserial URL such as
 ``socket://host:port``), decodes the stream with the same :class:`StreamDecoder` the protocol
-document describes, and prints one message per line.
+document describes, and prints one message per line. When the port goes away it waits for
+it and reopens it (as the robot's own reader should), so a link test survives a Bluetooth drop.
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ import sys
 import time
 
 from .common import UserError
+
+RETRY_S = 0.5      # s between attempts to reopen a port that went away
 
 
 def register(sub) -> None:
@@ -50,10 +53,22 @@ def run(args) -> int:
     deadline = time.monotonic() + args.timeout if args.timeout > 0 else None
     try:
         while deadline is None or time.monotonic() < deadline:
+            if port is None:
+                # The device went away (Bluetooth out of range, adapter unplugged, the other end of
+                # a pseudo-terminal closed): wait for it like the robot would, then carry on.
+                time.sleep(RETRY_S)
+                try:
+                    port = serial.serial_for_url(args.port, baudrate=args.baud, timeout=0.05)
+                    print(f"robot-listen: {args.port} is back", file=sys.stderr, flush=True)
+                except (serial.SerialException, OSError, ValueError):
+                    continue
             try:
                 data = port.read(4096)
             except (serial.SerialException, OSError) as exc:
-                raise UserError(f"reading {args.port}: {exc}") from None
+                print(f"robot-listen: reading {args.port}: {exc}; reopening", file=sys.stderr, flush=True)
+                _close(port)
+                port = None
+                continue
             for message in decoder.feed(data):
                 received += 1
                 if not (args.no_heartbeat and isinstance(message, HeartbeatMessage)):
@@ -61,7 +76,15 @@ def run(args) -> int:
                 if args.count and received >= args.count:
                     return 0
     finally:
-        port.close()
+        if port is not None:
+            _close(port)
         print(f"robot-listen: {received} messages, {decoder.crc_errors} CRC errors, "
               f"{decoder.bytes_skipped} bytes skipped", file=sys.stderr)
     return 0 if received else 1
+
+
+def _close(port) -> None:
+    try:
+        port.close()
+    except Exception:  # noqa: BLE001 - closing a vanished device may fail; nothing to do about it
+        pass
