@@ -205,7 +205,8 @@ class CourtPlanView:
         self._flight = self.widget.plot([], [], pen=pg.mkPen(FLIGHT_COLOUR, width=2))
         self._predicted = self.widget.plot([], [], pen=pg.mkPen(PREDICTED_COLOUR, width=2, style=pg.QtCore.Qt.PenStyle.DashLine))
         self._circle = self.widget.plot([], [], pen=pg.mkPen(IN_COLOUR, width=2))
-        self._landing = pg.ScatterPlotItem(size=9, brush=pg.mkBrush(IN_COLOUR), pen=None)
+        # A small centre dot: the uncertainty circle (often 5-20 cm, a few pixels here) stays visible.
+        self._landing = pg.ScatterPlotItem(size=4, brush=pg.mkBrush(IN_COLOUR), pen=None)
         self._position = pg.ScatterPlotItem(size=11, brush=pg.mkBrush(POSITION_COLOUR), pen=pg.mkPen("w"))
         self._call = pg.TextItem("", anchor=(0.5, 1.2))
         for item in (self._landing, self._position, self._call):

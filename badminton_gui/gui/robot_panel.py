@@ -97,7 +97,8 @@ class RobotLinkPanel(QWidget):
         s = self.link.status()
         state = "connected" if s.connected else "waiting for the port"
         text = (f"<b>{s.port}</b> @ {s.baud}: {state}<br>"
-                f"sent {s.messages_sent}, dropped {s.messages_dropped}, errors {s.errors}")
+                f"sent {s.messages_sent}, dropped {s.messages_dropped}, errors {s.errors}<br>"
+                f"heartbeats {s.heartbeats_sent}, reconnects {s.reconnects}")
         if s.last_error:
             text += f"<br><span style='color:#e66'>{s.last_error}</span>"
         self.status.setText(text)
