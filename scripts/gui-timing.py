@@ -32,35 +32,56 @@ def _pct(values: list[float], q: float) -> float:
     return float(np.percentile(values, q)) if values else float("nan")
 
 
-def _cpu_by_thread() -> dict[str, float]:
-    """CPU seconds so far of this process's threads (by name) and of the X server we draw on."""
+def _cpu_by_thread() -> dict[tuple[int, str], float]:
+    """CPU seconds so far per (thread id, name) of this process, and of the X server."""
     tick = os.sysconf("SC_CLK_TCK")
-    out: dict[str, float] = defaultdict(float)
+    out: dict[tuple[int, str], float] = {}
+    main_tid = os.getpid()
 
-    def add(stat_path: str, name: str | None = None) -> None:
+    def add(stat_path: str, tid: int, name: str | None = None) -> None:
         try:
             text = Path(stat_path).read_text()
         except OSError:
             return
         comm = text[text.index("(") + 1:text.rindex(")")]
+        if tid == main_tid:
+            comm = "GUI thread"
         fields = text[text.rindex(")") + 2:].split()
-        out[name or comm] += (int(fields[11]) + int(fields[12])) / tick
+        out[(tid, name or comm)] = (int(fields[11]) + int(fields[12])) / tick
 
     for task in Path("/proc/self/task").iterdir():
-        add(str(task / "stat"))
+        add(str(task / "stat"), int(task.name))
+    # Python does not give its threads OS names; name the alone-phase worker by its id.
+    for t in threading.enumerate():
+        if t.name == "tracking" and t.native_id is not None:
+            for key in [k for k in out if k[0] == t.native_id]:
+                out[(key[0], "tracking")] = out.pop(key)
     display = os.environ.get("DISPLAY", "")
     if display.startswith(":"):
         try:
             xpid = int(Path(f"/tmp/.X{display[1:].split('.')[0]}-lock").read_text().strip())
-            add(f"/proc/{xpid}/stat", "X server")
+            add(f"/proc/{xpid}/stat", -xpid, "X server")
         except (OSError, ValueError):
             pass
     return out
 
 
-def _cpu_delta(before: dict[str, float], after: dict[str, float], seconds: float) -> str:
-    rows = sorted(((after[k] - before.get(k, 0.0)) / seconds, k) for k in after)
-    return ", ".join(f"{k} {v * 100:.0f}%" for v, k in reversed(rows) if v >= 0.01)
+def _gui_thread_sched() -> tuple[float, float]:
+    """(on-CPU s, waiting-for-a-CPU s) of the GUI thread so far, from /proc schedstat."""
+    try:
+        run, wait, _ = Path(f"/proc/self/task/{os.getpid()}/schedstat").read_text().split()
+        return int(run) / 1e9, int(wait) / 1e9
+    except (OSError, ValueError):
+        return float("nan"), float("nan")
+
+
+def _cpu_delta(before: dict, after: dict, seconds: float) -> str:
+    """Per thread name, CPU used between two snapshots (threads that ended are not counted)."""
+    by_name: dict[str, float] = defaultdict(float)
+    for key, value in after.items():
+        by_name[key[1]] += value - before.get(key, 0.0)
+    rows = sorted(((v / seconds, k) for k, v in by_name.items()), reverse=True)
+    return ", ".join(f"{k} {v * 100:.0f}%" for v, k in rows if v >= 0.01)
 
 
 def main() -> int:
@@ -69,6 +90,8 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=2, help="alone/GUI phase pairs")
     ap.add_argument("--size", default="1280x720", help="demo frame size WxH")
     ap.add_argument("--realtime", action="store_true", help="pace the demo at its 120 fps instead of flat out")
+    ap.add_argument("--switch-interval", type=float, default=None,
+                    help="GIL switch interval in s (default: what badminton-gui sets)")
     args = ap.parse_args()
     size = tuple(int(v) for v in args.size.lower().split("x"))
     os.environ.setdefault("BADMINTON_GUI_SETTINGS",
@@ -89,7 +112,10 @@ def main() -> int:
         return scene, scene.rig
 
     QCoreApplication.setAttribute(Qt.ApplicationAttribute.AA_ShareOpenGLContexts)
-    sys.setswitchinterval(0.001)          # as badminton-gui does
+    from badminton_gui.gui import app as gui_app
+    sys.setswitchinterval(args.switch_interval if args.switch_interval is not None
+                          else getattr(gui_app, "GIL_SWITCH_INTERVAL", 0.001))
+    print(f"GIL switch interval {sys.getswitchinterval() * 1000:.2f} ms")
     app = QApplication(sys.argv[:1])
 
     # ---- instrumentation (class level, so every instance is timed) -------------------------
@@ -167,7 +193,7 @@ def main() -> int:
         cpu0, t0 = _cpu_by_thread(), time.perf_counter()
         worker = TrackingWorker(opener, TrackerParams(), realtime=args.realtime)
         worker.set_display_size(640, 360)          # what the window's feeds ask for at 1280×720
-        thread = threading.Thread(target=worker.run, daemon=True)
+        thread = threading.Thread(target=worker.run, daemon=True, name="tracking")
         thread.start()
         samples, ms = [], []
         end = time.monotonic() + seconds
@@ -193,6 +219,7 @@ def main() -> int:
 
     def with_gui(seconds: float) -> tuple[float, float, float, float]:
         cpu0, t0 = _cpu_by_thread(), time.perf_counter()
+        sched0 = _gui_thread_sched()
         ticks0 = len(refresh_all)
         window.start_opener(opener, "demo (timing)")
         samples, ms = [], []
@@ -209,7 +236,12 @@ def main() -> int:
                     t_first, n_first = time.perf_counter(), window.results_seen
         shown = (window.results_seen - n_first) / (time.perf_counter() - t_first) if t_first else 0.0
         cpu_use = _cpu_delta(cpu0, _cpu_by_thread(), time.perf_counter() - t0)
-        cpu_use += f"; display timer ran {(len(refresh_all) - ticks0) / (time.perf_counter() - t0):.1f} ticks/s"
+        span = time.perf_counter() - t0
+        sched1 = _gui_thread_sched()
+        cpu_use += (f"; display timer ran {(len(refresh_all) - ticks0) / span:.1f} ticks/s; GUI thread "
+                    f"on a CPU {(sched1[0] - sched0[0]) / span * 100:.0f}% of the time, runnable but "
+                    f"waiting for a CPU {(sched1[1] - sched0[1]) / span * 100:.0f}%, the rest idle or "
+                    f"blocked (event loop, GIL)")
         window.stop_worker()
         warm = [s for s in samples if s[0] >= samples[0][0] + 2.0] if samples else []
         del n_before
