@@ -332,3 +332,38 @@ def test_ctrl_c_closes_cleanly(tmp_path):
         raise
     assert proc.returncode == 0, err
     assert err.strip() == "", err
+
+
+def test_feeds_get_frames_sized_for_a_plain_blit(main_window, qtbot):
+    """The worker hands BGRA frames the size of the feed, so painting is a 1:1 copy.
+
+    This is the cheap display path (GUIDE §4): no resampling and no format conversion on the
+    GUI thread. A frame of another size still shows, scaled to fit.
+    """
+    window = main_window()
+    window.realtime_action.setChecked(False)
+    window.start_opener(_demo_opener, "demo")
+
+    def sized_for_feed() -> bool:
+        p = window.latest_packet
+        feed = window.left_feed
+        ratio = window.devicePixelRatioF()
+        return (p is not None and abs(p.left.shape[1] - feed.width() * ratio) <= 1.5
+                or p is not None and abs(p.left.shape[0] - feed.height() * ratio) <= 1.5)
+
+    qtbot.waitUntil(sized_for_feed, timeout=WAIT_MS)
+    window._timer.stop()
+    packet = window.latest_packet
+    assert packet.left.ndim == 3 and packet.left.shape[2] == 4 and packet.left.flags["C_CONTIGUOUS"]
+    for feed, image in ((window.left_feed, packet.left), (window.right_feed, packet.right)):
+        rect = feed.image_rect()
+        assert (rect.width(), rect.height()) == (image.shape[1], image.shape[0])
+        assert rect.left() == int(rect.left()) and rect.top() == int(rect.top())
+
+    from badminton_gui.gui.feed_view import FeedView
+    small = FeedView("scaled")
+    qtbot.addWidget(small)
+    small.resize(320, 240)
+    small.set_frame(np.zeros((100, 200, 3), np.uint8), 1.0, None, np.zeros((0, 3)))
+    assert small.image_rect().width() == 320           # BGR and another size: scaled to fit
+    window._timer.start()
