@@ -301,6 +301,8 @@ def test_live_source_drops_old_frames_and_reports_unplugging(main_window, qtbot)
     window.start_opener(lambda: ((s := _UnpluggedCameras(150)), s.scene.rig), "stand-in cameras")
     qtbot.waitUntil(lambda: window.banner.text != "", timeout=WAIT_MS)
     assert window.banner.text == "The left camera (0) stopped delivering frames: was it unplugged?"
+    # No number outlives its source: the readouts show dashes, not the last live values.
+    assert {v.text() for v in window.readouts.values.values()} == {"—"}
     stats = window.latest_packet.stats if window.latest_packet is not None else None
     # The tracker is slower than the stand-in renders: newest frame wins and drops are counted.
     assert stats is not None and stats.frames + stats.dropped <= 150 and stats.dropped > 0

@@ -106,6 +106,11 @@ class Readouts(QWidget):
                                  fm.horizontalAdvance("±0.00 m, lands in 0.00 s"),
                                  fm.horizontalAdvance("888 fps (888.8 ms/pair)")))
 
+    def clear(self) -> None:
+        """Dashes everywhere: no number may outlive the source it came from."""
+        for value in self.values.values():
+            value.setText("—")
+
     def show_packet(self, packet: DisplayPacket, display_hz: float) -> None:
         r, s = packet.result, packet.stats
         v = self.values
@@ -304,6 +309,7 @@ class MainWindow(QMainWindow):
         switching sources never blocks the GUI thread on a slow frame.
         """
         self.banner.hide()
+        self.readouts.clear()
         self.status_source.setText(f"Opening {description}…")
         for feed in (self.left_feed, self.right_feed):
             feed.set_message(f"Opening {description}…")
@@ -384,6 +390,9 @@ class MainWindow(QMainWindow):
     def _on_error(self, message: str) -> None:
         self.banner.show_message(message[:1].upper() + message[1:])
         self.status_source.setText("Stopped — choose a source in the Source menu")
+        if self.worker is not None:
+            self.worker.output.clear()    # the stopped worker's last result must not redraw the numbers
+        self.readouts.clear()
         for feed in (self.left_feed, self.right_feed):
             feed.set_message("No frames: " + message)
 
