@@ -173,7 +173,7 @@ class FeedView(QWidget):
         A detection that hops to another object and back would otherwise draw long lines
         across the picture; unjoined dots show the hop for what it is. The fade is drawn in
         TRAIL_LEVELS steps of opacity, each step one drawLines/drawPoints call: a pen per
-        segment cost 2.4 ms for a 60-point trail on the GUI thread, batching ~10× less.
+        segment cost 2.2–2.4 ms for a 60-point trail on the GUI thread, batched 1.0 ms.
         """
         trail = self._trail
         if len(trail) < 2:
