@@ -231,6 +231,7 @@ def test_calibrate_loads_the_saved_rig(main_window, qtbot, tmp_path, monkeypatch
         def __init__(self, source_factory, parent=None, save_dir=None):
             super().__init__(parent)
             self.factory = source_factory
+            save_dirs.append(save_dir)
 
         def exec(self):
             source = self.factory()        # the factory must open the current source
@@ -238,12 +239,16 @@ def test_calibrate_loads_the_saved_rig(main_window, qtbot, tmp_path, monkeypatch
             self.rigSaved.emit(str(rig_path))
             return 1
 
+    save_dirs = []
     monkeypatch.setattr(wizard_module, "CalibrationWizard", FakeWizard)
     window = main_window()
     window.start_spec(SourceSpec("demo", realtime=False))
     qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)
     window.open_calibration()
     assert window.spec.calib == str(rig_path)
+    # A checkout is writable: rigs go where the README says, the project's calibration/ folder.
+    assert save_dirs == [wizard_module.DEFAULT_SAVE_DIR]
+    assert wizard_module.DEFAULT_SAVE_DIR.name == "calibration"
     qtbot.waitUntil(lambda: window.rig is not None and window.worker is not None, timeout=WAIT_MS)
     assert load_source_spec(open_settings()).calib == str(rig_path)
 

@@ -32,6 +32,21 @@ from .worker import DisplayPacket, RateMeter, SourceOpener, TrackingWorker
 DISPLAY_INTERVAL_MS = 33          # ≈30 Hz, whatever the tracking rate
 
 
+
+def rig_save_dir() -> Path:
+    """Where the wizard saves rigs: the project's ``calibration/`` folder (README), or, when the
+    package is installed somewhere read-only, a ``rigs`` folder in the user's application data."""
+    from .calibration_wizard import DEFAULT_SAVE_DIR
+    try:
+        DEFAULT_SAVE_DIR.mkdir(parents=True, exist_ok=True)
+        probe = DEFAULT_SAVE_DIR / ".write-test"
+        probe.touch()
+        probe.unlink()
+        return DEFAULT_SAVE_DIR
+    except OSError:
+        return Path(QStandardPaths.writableLocation(
+            QStandardPaths.StandardLocation.AppDataLocation) or Path.home()) / "rigs"
+
 class Banner(QFrame):
     """A one-sentence error line across the top of the window, with a close button."""
 
@@ -467,8 +482,7 @@ class MainWindow(QMainWindow):
             return
         spec = self.spec
         self.stop_worker()
-        save_dir = Path(QStandardPaths.writableLocation(
-            QStandardPaths.StandardLocation.AppDataLocation) or Path.home()) / "rigs"
+        save_dir = rig_save_dir()
         saved: list[str] = []
         wizard = CalibrationWizard(lambda: open_spec(dataclasses.replace(spec, calib=""))[0]
                                    if spec.kind == "demo" else open_spec(spec)[0],
@@ -478,6 +492,8 @@ class MainWindow(QMainWindow):
         if saved:
             spec = dataclasses.replace(spec, calib=saved[-1])
         self.start_spec(spec)
+        if saved:
+            self.statusBar().showMessage(f"Tracking with the new rig {saved[-1]}", 15000)
 
     # ---- display ---------------------------------------------------------------------------
     def _refresh_display(self) -> None:
