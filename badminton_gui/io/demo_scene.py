@@ -239,10 +239,16 @@ class DemoScene:
 
     def _exposure_samples(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
         """Cork positions and flight directions across the exposure (None: nothing to draw)."""
-        p_start, v_start, _ = self.script.state(t - self.exposure / 2)
-        p_end, _, _ = self.script.state(t + self.exposure / 2)
-        if p_start is None or p_end is None:
+        # The shutter integrates only while the shuttle is in play: at a rally's first frame
+        # the exposure may open before the serve (the frame's truth has a position, so the
+        # shuttle must be drawn, over the part of the exposure after the serve).
+        probes = t + (np.linspace(0.0, 1.0, 9) - 0.5) * self.exposure
+        live = [float(ts) for ts in probes if self.script.state(float(ts))[0] is not None]
+        if not live:
             return None
+        lo, hi = live[0], live[-1]
+        p_start, _, _ = self.script.state(lo)
+        p_end, _, _ = self.script.state(hi)
         streak = 0.0
         for cam in self.cameras:
             pc = cam.to_camera(np.stack([p_start, p_end]))
@@ -250,7 +256,7 @@ class DemoScene:
                 uv = cam.project_camera(pc)
                 streak = max(streak, float(np.hypot(*(uv[1] - uv[0]))))
         n = int(np.clip(math.ceil(streak / 0.5) + 1, 1, 48))
-        times = [t] if n == 1 else t + (np.linspace(0.0, 1.0, n) - 0.5) * self.exposure
+        times = [t] if n == 1 or hi <= lo else np.linspace(lo, hi, n)
         positions, directions = [], []
         for ts in times:
             p, v, seg = self.script.state(float(ts))
