@@ -67,6 +67,15 @@ def test_missing_and_bad_rig_files(tmp_path):
     garbage.write_bytes(b"\x00\x01 this is not yaml {{{")
     with pytest.raises(RigError):
         StereoRig.load(garbage)
+    # A text file that is not YAML: one sentence with the line OpenCV choked on, not the
+    # binding's "returned a result with an exception set" nor OpenCV's source path.
+    prose = tmp_path / "notes.yaml"
+    prose.write_text("hello: [1, 2\nthis is not yaml {{{\n")
+    with pytest.raises(RigError) as info:
+        StereoRig.load(prose)
+    message = str(info.value)
+    assert "not an OpenCV FileStorage" in message and "line 2" in message
+    assert "exception set" not in message and ".cpp" not in message
 
 
 def test_wrong_resolution_message():

@@ -14,6 +14,7 @@ only the special case of a rectified parallel rig.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -76,9 +77,17 @@ class StereoRig:
         try:
             fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
         except (cv2.error, SystemError) as exc:
-            # OpenCV's parser raises cv2.error, or a SystemError wrapping one, on garbage.
-            detail = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
-            raise RigError(f"rig file {path} is not OpenCV FileStorage YAML/XML ({detail})") from None
+            # OpenCV's parser raises cv2.error, or a SystemError wrapping one, on garbage; the
+            # SystemError's own text ("... returned a result with an exception set") says nothing
+            # to a user, so the message names the cause OpenCV gave, or none.
+            cause = exc.__cause__ if isinstance(exc, SystemError) and exc.__cause__ else exc
+            text = str(cause)
+            where = re.search(r"\((\d+)\): ([^']+)'", text)   # "...file.yaml(2): Incorrect indentation'"
+            lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+            detail = (f"line {where.group(1)}: {where.group(2)}" if where else
+                      lines[-1] if lines and "exception set" not in lines[-1] else "")
+            raise RigError(f"rig file {path} is not an OpenCV FileStorage YAML/XML rig file"
+                           + (f" ({detail})" if detail else "")) from None
         if not fs.isOpened():
             raise RigError(f"rig file {path} cannot be opened as OpenCV FileStorage")
         try:
