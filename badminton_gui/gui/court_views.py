@@ -181,8 +181,9 @@ class CourtGLView:
 
 def _plot(title: str, x_label: str, y_label: str) -> pg.PlotWidget:
     w = pg.PlotWidget(background=(18, 20, 26))
-    w.setTitle(title, color="#dddddd", size="10pt")
-    w.setLabel("bottom", x_label, units="m")
+    # The view's name goes into the axis label, not a title row: these plots are short and
+    # wide, and with the aspect locked every pixel of height is court on screen.
+    w.setLabel("bottom", f"{title} · {x_label}", units="m")
     w.setLabel("left", y_label, units="m")
     w.showGrid(x=True, y=True, alpha=0.15)
     w.setMenuEnabled(False)
