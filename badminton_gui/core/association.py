@@ -10,8 +10,12 @@ tracklet's own image speed, so a smash is not lost), and only tracklets that are
 in enough frames, smooth, and actually travelling) may supply the detection. The choice between
 confirmed tracklets has hysteresis: the one being followed keeps the lead while it is hit.
 
-Everything is causal: a tracklet is confirmed after ``min_hits`` frames, which costs those first
-frames of each flight (no look-ahead, no latency).
+Everything is causal: a tracklet is confirmed after ``min_hits`` frames (one fewer when its
+candidates look clearly like a shuttle), which costs those first frames of each flight (no
+look-ahead, no latency). A step far off the predicted path breaks the tracklet's travel record,
+so a tracklet that hopped onto a static glint cannot claim the flight's travel to "pause" there;
+the followed tracklet survives a blind spot (a light, a white line) for ``motion.coast_blind``
+frames.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import deque
+from typing import Callable
 
 import numpy as np
 
@@ -102,13 +107,16 @@ class TrackletAssociator:
                 for tr in self.tracklets if tr.hits >= 2]
         return np.asarray(rows, dtype=float).reshape(-1, 3)
 
-    def update(self, t: float, positions: np.ndarray, scores: np.ndarray
+    def update(self, t: float, positions: np.ndarray, scores: np.ndarray,
+               blind: Callable[[float, float], bool] | None = None
                ) -> list[tuple[int, float, float]]:
         """Associate this frame's candidates; return per candidate (tracklet id, motion, merit).
 
         ``merit`` is ≥ 0 when the candidate continues a confirmed, travelling tracklet (the
         larger the better) and negative otherwise; ``motion`` is its distance from the
-        tracklet's prediction (nan for a new tracklet).
+        tracklet's prediction (nan for a new tracklet). ``blind(x, y)`` (full-resolution px)
+        says where the detector cannot see the shuttle: the followed tracklet survives there
+        for ``motion.coast_blind`` frames instead of ``max_misses``.
         """
         p = self.params
         n = len(positions)
@@ -144,7 +152,7 @@ class TrackletAssociator:
         for tr in self.tracklets:
             if not tr.hit_now:
                 tr.misses += 1
-            if tr.misses <= p.max_misses:
+            if tr.misses <= p.max_misses or self._coasts(tr, t, blind):
                 kept.append(tr)
             elif tr.ident == self.selected:
                 self._ghost = tr
@@ -176,6 +184,25 @@ class TrackletAssociator:
             merit = self.merit(tr) if tr is not None else -1.0
             out.append((ids[j], motion[j], merit))
         return out
+
+    def _coasts(self, tr: Tracklet, t: float, blind) -> bool:
+        """The followed, confirmed tracklet is predicted inside a blind spot: keep it."""
+        return (blind is not None and tr.ident == self.selected and not tr.hit_now
+                and tr.velocity_known and tr.hits >= self.params.min_hits
+                and tr.misses <= self.motion.coast_blind and blind(*tr.predict(t)))
+
+    def coasting(self, t: float, blind: Callable[[float, float], bool] | None
+                 ) -> tuple[Tracklet, float] | None:
+        """(followed tracklet, merit) when it was missed this frame inside a blind spot."""
+        tr = self._followed()
+        if tr is None or tr not in self.tracklets or not self._coasts(tr, t, blind):
+            return None
+        p = self.params
+        if tr.quality < p.min_track_quality:
+            return None
+        merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation + p.quality_weight * tr.quality
+                 - tr.residual / max(p.residual_scale, 1e-6) + p.hysteresis)
+        return tr, max(merit, 0.0)
 
     def _followed(self) -> Tracklet | None:
         for tr in self.tracklets:
@@ -223,7 +250,8 @@ class TrackletAssociator:
     def _extend(self, tr: Tracklet, t: float, pos: np.ndarray, score: float, dist: float) -> None:
         dt = t - tr.t
         x, y = float(pos[0]), float(pos[1])
-        if tr.velocity_known:   # the prediction meant something: a smoothness measurement
+        predicted = tr.velocity_known
+        if predicted:   # the prediction meant something: a smoothness measurement
             tr.residual = 0.8 * tr.residual + 0.2 * dist
         if dt > 1e-6:
             vx, vy = (x - tr.x) / dt, (y - tr.y) / dt
@@ -234,6 +262,12 @@ class TrackletAssociator:
         # Plain mean over the first hits, then an exponential memory of ~5 frames.
         tr.quality += (score - tr.quality) * max(0.2, 1.0 / (tr.hits + 1))
         tr.x, tr.y, tr.t = x, y, t
+        if predicted and self.params.jump_residual > 0 and dist > self.params.jump_residual:
+            # The step left the predicted path (a racket hit, or a tracklet hopping between
+            # clutter blobs inside its wide gates): the travel before it says nothing about
+            # what the tracklet follows now, so the travel and pause rules start afresh.
+            tr.start_x, tr.start_y, tr.travel = x, y, 0.0
+            tr.recent.clear()
         tr.hits += 1
         tr.misses = 0
         tr.hit_now = True
@@ -247,7 +281,13 @@ class TrackletAssociator:
     def merit(self, tr: Tracklet) -> float:
         """How shuttle-like a tracklet is; negative when it may not supply a detection."""
         p = self.params
-        if not tr.hit_now or tr.hits < p.min_hits or tr.quality < p.min_track_quality:
+        # A tracklet is confirmed after min_hits frames, or one frame earlier when every
+        # candidate on it so far looked clearly like a shuttle (a flight's first frames
+        # are otherwise lost to the confirmation).
+        confirmed = tr.hits >= p.min_hits or (p.early_confirm_quality < 1.0
+                                               and tr.hits >= max(p.min_hits - 1, 2)
+                                               and tr.quality >= p.early_confirm_quality)
+        if not tr.hit_now or not confirmed or tr.quality < p.min_track_quality:
             return -1.0
         # Moving now, or a shuttle that flew far and slows down for a moment (apex, the far
         # court); clutter (lights, screens) never flies far, a shuttle on the floor stays

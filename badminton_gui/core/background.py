@@ -77,6 +77,24 @@ class BackgroundModel:
             mask = cv2.dilate(mask, None, iterations=int(self._bin.dilate_iterations))
         return mask
 
+    def is_blind(self, x: float, y: float) -> bool:
+        """True when a shuttle at (x, y) (processing-scale px) cannot show in the mask.
+
+        Only the brighter-than-average method has blind spots: pixels whose average is at
+        least ``max_background`` (lights, white lines, the net tape) are never foreground, and
+        the shake tolerance compares their neighbours with them too.
+        """
+        avg = self._average
+        if self._bg.method != "bright_diff" or avg is None or self._bin.max_background >= 255:
+            return False
+        h, w = avg.shape
+        xi, yi = int(round(x)), int(round(y))
+        if not (0 <= xi < w and 0 <= yi < h):
+            return False
+        k = int(self._bg.shake_tolerance) + 1
+        window = avg[max(yi - k, 0):yi + k + 1, max(xi - k, 0):xi + k + 1]
+        return bool(window.max() >= float(self._bin.max_background))
+
     def _brighter_than_average(self, gray: np.ndarray) -> np.ndarray:
         """Pixels brighter than a running average of the scene by more than the threshold.
 

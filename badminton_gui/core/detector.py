@@ -19,7 +19,10 @@ The chain per frame (coarse to fine, GUIDE §4):
    a speed-aware gate; only candidates on a confirmed, travelling, smooth tracklet of good
    mean quality pass, scored by the tracklet's merit;
 5. the best surviving candidate by score is the detection (the tracker may override this with
-   a stereo-consistent choice, ``choose`` / ``commit``).
+   a stereo-consistent choice, ``choose`` / ``commit``);
+6. when the followed shuttle leaves no blob because it crosses a spot where the mask is blind
+   (a light, a white line: ``binarize.max_background``), its track's prediction stands in for
+   up to ``motion.coast_blind`` frames, flagged ``Candidate.predicted`` and never triangulated.
 
 Latency: none (causal); a flight costs its first ``association.min_hits`` frames.
 """
@@ -44,6 +47,7 @@ from .types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SID
 MAX_COLOUR_CHECKS = 64
 # Margin (full-res px) around a blob's box for the sub-pixel refinement window.
 REFINE_MARGIN = 5
+_GROW = np.ones((3, 3), np.uint8)
 # Appearance features measured in the full-resolution window (order matters: the classifier).
 APPEARANCE_NAMES = ("contrast", "background", "log_bright_area", "spill", "whiteness",
                     "saturation", "log_mask_area", "peak_saturation", "window_std")
@@ -168,7 +172,8 @@ class CameraDetector:
 
         measured = []
         for _, length, short_side, area, box in geometric:
-            x, y, whiteness, saturation, appearance = self._measure(frame_bgr, mask, box, sx, sy)
+            x, y, whiteness, saturation, appearance = self._measure(
+                frame_bgr, mask, box, sx, sy, p.colour.head_fraction)
             contrast = float(appearance[0])
             reason = None
             if (whiteness < p.colour.min_whiteness or saturation > p.colour.max_saturation
@@ -192,7 +197,12 @@ class CameraDetector:
         live = [m for m in measured if m[7] is None]
         positions = np.asarray([(m[0], m[1]) for m in live], dtype=float).reshape(-1, 2)
         qualities = np.asarray([m[6] for m in live], dtype=float)
-        links = self._associator.update(t, positions, qualities)
+        ms_x, ms_y = 1.0 / sx, 1.0 / sy
+        blind = None
+        if p.motion.coast_blind > 0:
+            def blind(x: float, y: float) -> bool:
+                return self._background.is_blind(x * ms_x, y * ms_y)
+        links = self._associator.update(t, positions, qualities, blind)
         self._tracklet_of = {}
         k = 0
         for m in measured:
@@ -209,6 +219,16 @@ class CameraDetector:
             if ident is not None:
                 self._tracklet_of[id(c)] = ident
             candidates.append(c)
+        # The followed shuttle crossing a light or a white line leaves no blob: its track's
+        # prediction stands in (flagged, never triangulated) until it shows again.
+        coast = self._associator.coasting(t, blind)
+        if coast is not None:
+            tr, merit = coast
+            px, py = tr.predict(t)
+            c = Candidate(px, py, math.nan, math.nan, math.nan, math.nan, 0.0, merit, None,
+                          predicted=True)
+            self._tracklet_of[id(c)] = tr.ident
+            candidates.append(c)
         return CameraResult(detection=None, candidates=tuple(candidates),
                             mask=mask if keep_mask else None,
                             mask_scale=mask.shape[1] / w, image_size=(w, h))
@@ -220,6 +240,14 @@ class CameraDetector:
             if tr.ident == ident:
                 return tr.hits
         return 0
+
+    def tracklet_velocity(self, candidate: Candidate) -> tuple[float, float] | None:
+        """Image velocity (px/s) of the candidate's tracklet, or None when not yet known."""
+        ident = self._tracklet_of.get(id(candidate))
+        for tr in self._associator.tracklets:
+            if tr.ident == ident:
+                return (tr.vx, tr.vy) if tr.velocity_known else None
+        return None
 
     def choose(self, candidates: tuple[Candidate, ...]) -> Candidate | None:
         """The best candidate that passed every filter, or None."""
@@ -270,7 +298,8 @@ class CameraDetector:
 
     @staticmethod
     def _measure(frame: np.ndarray, mask: np.ndarray, box: tuple[int, int, int, int],
-                 sx: float, sy: float) -> tuple[float, float, float, float, np.ndarray]:
+                 sx: float, sy: float, head_fraction: float = 0.5
+                 ) -> tuple[float, float, float, float, np.ndarray]:
         """(x, y, whiteness, saturation, appearance features) of a blob, full-resolution window.
 
         The position is the intensity-weighted centroid of the blob's brightest part above the
@@ -319,12 +348,23 @@ class CameraDetector:
             if len(xs) == 0:
                 return box[0] + box[2] / 2, box[1] + box[3] / 2, whiteness, saturation, features
             return x0 + xs.mean(), y0 + ys.mean(), whiteness, saturation, features
-        # Keep the brighter half of the blob: the cork is whiter than the feathers.
-        weights = np.clip(excess - 0.5 * peak, 0, None)
-        weights *= inside | bright
+        # The position is measured on the blob's own pixels only (its mask, grown by one
+        # full-resolution pixel for the blur fringe): a light or a court line inside the
+        # window is brighter than the shuttle and used to drag the centroid towards itself.
+        support = inside
+        if support.any():
+            support = cv2.dilate(support.astype(np.uint8), _GROW) > 0
+        blob_excess = np.where(support, excess, 0.0)
+        blob_peak = float(blob_excess.max())
+        if blob_peak <= 0:
+            blob_excess = np.clip(excess, 0, None)
+            blob_peak = peak
+        # Keep the part of the blob above ``head_fraction`` of its peak: the cork is whiter
+        # than the feathers (0 = the whole blob's intensity centroid).
+        weights = np.clip(blob_excess - head_fraction * blob_peak, 0, None)
         total = float(weights.sum())
         if total <= 0:
-            weights = np.clip(excess, 0, None)
+            weights = np.clip(blob_excess, 0, None)
             total = float(weights.sum())
         ys, xs = np.mgrid[0:crop.shape[0], 0:crop.shape[1]]
         # OpenCV's convention: integer coordinates are pixel centres (as projectPoints gives).

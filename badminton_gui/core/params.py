@@ -136,6 +136,10 @@ class ColourParams(ParamGroup):
                                 help="Brightest pixel of the blob above its surroundings (grey levels)")
     contrast_reference: float = param(40.0, 1.0, 255.0, step=1.0, label="Contrast for full score",
                                       help="Contrast at which a candidate's colour score saturates")
+    head_fraction: float = param(0.5, 0.0, 0.95, step=0.05, label="Head: part of the peak",
+                                 help="The position is the intensity centroid of the blob's pixels brighter than "
+                                      "this fraction of its peak (0.5: the white cork, not the middle of the "
+                                      "skirt; 0: the whole blob)")
 
 
 @dataclass(frozen=True, slots=True)
@@ -150,6 +154,10 @@ class MotionParams(ParamGroup):
                                    help="Fastest shuttle in the image; the gate grows with the time step")
     lost_after: float = param(0.15, 0.0, 5.0, step=0.01, unit="s", label="Lost after",
                               help="Without a hit for this long the track is dropped and any candidate may start a new one")
+    coast_blind: int = param(10, 0, 60, step=1, unit="frames", label="Coast through glare",
+                             help="The followed shuttle is carried on its image path for up to this many frames "
+                                  "while it crosses a spot where the detector is blind (background brighter "
+                                  "than 'Ignore lights above': lights, white lines, the net tape); 0 = off")
     min_displacement: float = param(0.0, 0.0, 50.0, step=0.5, unit="px", label="Stationary below",
                                     help="Candidates that moved less than this since the last frame are rejected (shuttles lying on the floor)")
 
@@ -161,6 +169,9 @@ class AssociationParams(ParamGroup):
     TITLE: ClassVar[str] = "Association"
     min_hits: int = param(3, 1, 50, step=1, unit="frames", label="Confirm after",
                           help="Frames a tracklet must be seen before it may supply the detection")
+    early_confirm_quality: float = param(0.7, 0.0, 1.0, step=0.01, label="Confirm early at quality",
+                                         help="A tracklet whose candidates' mean quality is at least this is "
+                                              "confirmed one frame before 'Confirm after' (1 = never)")
     min_travel: float = param(12.0, 0.0, 500.0, step=1.0, unit="px", label="Minimum travel",
                               help="A tracklet must have moved this far over the travel window (lights, a shuttle on the floor do not)")
     travel_window: int = param(12, 1, 60, step=1, unit="frames", label="Travel window",
@@ -169,7 +180,7 @@ class AssociationParams(ParamGroup):
                                  help="A tracklet that has travelled this far may pause (apex, far court)")
     pause_frames: int = param(40, 0, 1000, step=1, unit="frames", label="Pause allowance",
                               help="How long such a tracklet may stay below the minimum travel")
-    min_track_quality: float = param(0.25, 0.0, 1.0, step=0.01, label="Tracklet quality ≥",
+    min_track_quality: float = param(0.15, 0.0, 1.0, step=0.01, label="Tracklet quality ≥",
                                      help="Running mean of the candidates' quality a tracklet needs to be the shuttle")
     quality_weight: float = param(2.0, 0.0, 10.0, step=0.1, label="Quality weight",
                                   help="Weight of the tracklet's quality in its merit (history counts 1)")
@@ -188,6 +199,10 @@ class AssociationParams(ParamGroup):
                                       help="Weight of the newest velocity measurement")
     residual_scale: float = param(5.0, 0.1, 500.0, step=1.0, unit="px", label="Residual scale",
                                   help="Prediction residual that costs one unit of merit (smooth paths win)")
+    jump_residual: float = param(30.0, 0.0, 2000.0, step=1.0, unit="px", label="Path break at",
+                                 help="A step this far from the tracklet's prediction breaks its path: travel and "
+                                      "pause allowance count again from there (a clutter hop cannot inherit a "
+                                      "flight's travel; 0 = off)")
     hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
@@ -236,6 +251,12 @@ class StereoParams(ParamGroup):
                                     help="Merit bonus of each camera's own best candidate when pairing")
     confident_hits: int = param(15, 2, 500, step=1, unit="frames", label="Confident after",
                                 help="Tracklets followed this long in both cameras feed the learnt tolerance")
+    head_offset: float = param(0.022, 0.0, 0.1, step=0.001, unit="m", label="Cork ahead of the blob",
+                               help="The blob's bright centroid lies this far behind the cork along the flight "
+                                    "(the skirt trails); the 3D point is moved forward by it (0 = off)")
+    head_min_speed: float = param(1.0, 0.0, 50.0, step=0.5, unit="m/s", label="Cork correction from",
+                                  help="The cork correction needs a flight direction: below this speed the "
+                                       "point is left as measured")
 
 
 @dataclass(frozen=True, slots=True)

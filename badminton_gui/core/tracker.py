@@ -33,6 +33,12 @@ except ImportError:  # pragma: no cover
     Trajectory = None  # type: ignore[assignment]
 
 
+# Time step (s) over which the tracklets' image velocities are followed back to find the
+# flight direction for the cork correction: long enough to resolve the direction, short
+# enough that the image path is still straight.
+HEAD_DIRECTION_DT = 0.01
+
+
 class StereoTracker:
     """Tracks the shuttle with two calibrated cameras."""
 
@@ -86,7 +92,7 @@ class StereoTracker:
             return
         own_left = self.left.choose(res_left.candidates)
         own_right = self.right.choose(res_right.candidates)
-        if own_left is None or own_right is None:
+        if own_left is None or own_right is None or own_left.predicted or own_right.predicted:
             return
         if min(self.left.tracklet_hits(own_left), self.right.tracklet_hits(own_right)) < sp.confident_hits:
             return
@@ -133,6 +139,9 @@ class StereoTracker:
         res_left = CameraDetector.finalise(res_left, det_left)
         res_right = CameraDetector.finalise(res_right, det_right)
 
+        if point_left is not None and self.params.stereo.head_offset > 0:
+            point_left = self._to_head(det_left, det_right, point_left)
+
         point_out = None
         distance = None
         if point_left is not None:
@@ -160,9 +169,10 @@ class StereoTracker:
         sp = self.params.stereo
         tolerance = self.epipolar_tolerance()
         k = int(sp.max_candidates)
-        left = sorted((c for c in res_left.candidates if c.rejected_by is None),
+        # A coasting prediction is no measurement: it is never triangulated.
+        left = sorted((c for c in res_left.candidates if c.rejected_by is None and not c.predicted),
                       key=lambda c: -c.score)[:k]
-        right = sorted((c for c in res_right.candidates if c.rejected_by is None),
+        right = sorted((c for c in res_right.candidates if c.rejected_by is None and not c.predicted),
                        key=lambda c: -c.score)[:k]
         if not left or not right:
             return None, None, None, None
@@ -192,6 +202,31 @@ class StereoTracker:
             return None, None, None, None
         _, i, j, point, err = best
         return left[i], right[j], point, err
+
+    def _to_head(self, det_left: Candidate, det_right: Candidate, point: np.ndarray) -> np.ndarray:
+        """Move the triangulated blob point forward along the flight to the cork (GUIDE §7).
+
+        Each camera measures the centroid of the blob's bright part, which lies behind the
+        cork because the skirt trails it. The bias is the same 3D offset in both views (it
+        survives triangulation as a shift along the flight direction, not as a disparity
+        error), so it is removed in 3D: the direction is the triangulation of the two
+        tracklets' image velocities. Without a known image velocity in both cameras (the first
+        frames of a tracklet, a shuttle at rest) the point is left as measured.
+        """
+        sp = self.params.stereo
+        vl = self.left.tracklet_velocity(det_left)
+        vr = self.right.tracklet_velocity(det_right)
+        if vl is None or vr is None:
+            return point
+        back = self.rig.triangulate([[det_left.x - vl[0] * HEAD_DIRECTION_DT,
+                                      det_left.y - vl[1] * HEAD_DIRECTION_DT]],
+                                    [[det_right.x - vr[0] * HEAD_DIRECTION_DT,
+                                      det_right.y - vr[1] * HEAD_DIRECTION_DT]])[0]
+        step = point - back
+        norm = float(np.linalg.norm(step))
+        if norm < sp.head_min_speed * HEAD_DIRECTION_DT:
+            return point
+        return point + sp.head_offset * step / norm
 
     def _naive_speed(self, t: float, point) -> float | None:
         if point is None:

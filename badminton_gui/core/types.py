@@ -56,6 +56,9 @@ class Candidate:
     motion: float        # distance from the predicted position, px (nan: no track)
     score: float         # higher is more shuttle-like
     rejected_by: str | None = None
+    # True when no blob was seen: the followed track's prediction, carried through a spot
+    # where the detector is blind (a light, a white line); never triangulated.
+    predicted: bool = False
 
 
 @dataclass(frozen=True, slots=True)
