@@ -1,0 +1,85 @@
+"""Ground-truth evaluation of the tracker on the demo court.
+
+Why this file exists: the demo court knows exactly where the shuttle is, in 3D and in both
+images, so it measures the whole pipeline (detection, stereo, triangulation) without labels.
+The tests run it on a few hundred frames; ``benchmarks/demo_accuracy.py`` on 1000 frames × 3
+seeds for the figures in the closing notes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.evaluation import Outcomes, classify, tolerance_px
+from ..core.params import TrackerParams
+from ..core.tracker import StereoTracker
+from .demo_scene import DemoScene
+
+
+@dataclass(frozen=True, slots=True)
+class DemoScore:
+    left: Outcomes
+    right: Outcomes
+    errors_3d: np.ndarray       # (N,) metres, frames with a 3D point and a truth position
+    ranges: np.ndarray          # (N,) distance of the truth from the left camera, metres
+    pairs_per_s: float
+
+    def rms_3d(self, max_range: float | None = None) -> float:
+        sel = self.errors_3d if max_range is None else self.errors_3d[self.ranges <= max_range]
+        return float(np.sqrt(np.mean(sel ** 2))) if len(sel) else float("nan")
+
+    def median_3d(self, max_range: float | None = None) -> float:
+        sel = self.errors_3d if max_range is None else self.errors_3d[self.ranges <= max_range]
+        return float(np.median(sel)) if len(sel) else float("nan")
+
+
+def _count(codes: np.ndarray) -> Outcomes:
+    return Outcomes(tp=int((codes == "TP").sum()), tn=int((codes == "TN").sum()),
+                    fp1=int((codes == "FP1").sum()), fp2=int((codes == "FP2").sum()),
+                    fn=int((codes == "FN").sum()))
+
+
+def evaluate_demo(seed: int = 0, frames: int = 1000, size: tuple[int, int] = (1280, 720),
+                  rig: str = "binocular", params: TrackerParams | None = None,
+                  warmup: int = 0) -> DemoScore:
+    """Track ``frames`` demo frames and score them against the scene's truth."""
+    import time
+
+    scene = DemoScene(seed=seed, size=size, rig=rig, n_frames=frames + warmup)
+    tracker = StereoTracker(scene.rig, params)
+    tol = tolerance_px(size[0])
+    codes = {0: [], 1: []}
+    errors, ranges = [], []
+    centre_left = scene.rig.camera_centres()[0]
+    elapsed = 0.0
+    try:
+        while True:
+            frame = scene.read()
+            if frame is None:
+                break
+            start = time.perf_counter()
+            result = tracker.process(frame.left, frame.right, frame.t_left, frame.index,
+                                     frame.index_right, keep_masks=False)
+            elapsed += time.perf_counter() - start
+            if frame.index < warmup:
+                continue
+            truth = scene.truth(frame.index)
+            for cam, res, vis, uv in ((0, result.left, truth.visible_left, truth.uv_left),
+                                      (1, result.right, truth.visible_right, truth.uv_right)):
+                d = res.detection
+                codes[cam].append(classify(np.array([d is not None]),
+                                           np.array([[d.x, d.y] if d else [np.nan, np.nan]]),
+                                           np.array([bool(vis)]),
+                                           np.array([uv if (vis and uv) else [np.nan, np.nan]]),
+                                           tol)[0])
+            if result.point is not None and truth.position is not None:
+                errors.append(float(np.linalg.norm(np.subtract(result.point, truth.position))))
+                ranges.append(float(np.linalg.norm(np.subtract(truth.position, centre_left))))
+    finally:
+        tracker.close()
+        scene.close()
+    n = len(codes[0])
+    return DemoScore(_count(np.array(codes[0])), _count(np.array(codes[1])),
+                     np.asarray(errors), np.asarray(ranges), n / max(elapsed, 1e-9))
