@@ -15,6 +15,7 @@ from __future__ import annotations
 import bisect
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -346,18 +347,31 @@ class RallyScript:
 def _hermite(times: np.ndarray, pos: np.ndarray, vel: np.ndarray, t: float
              ) -> tuple[np.ndarray, np.ndarray]:
     """Cubic Hermite interpolation of the 1 ms RK4 samples (error ≪ 1 µm)."""
-    i = int(np.clip(np.searchsorted(times, t) - 1, 0, len(times) - 2))
     if len(times) < 2:
         return pos[0].copy(), vel[0].copy()
-    t0, t1 = times[i], times[i + 1]
+    i = min(max(int(np.searchsorted(times, t)) - 1, 0), len(times) - 2)
+    # Called ~10 times a frame pair on (3,) rows: numpy's per-call overhead on such tiny arrays
+    # was most of the cost, so the basis is evaluated on Python floats, component by component.
+    # Every product and sum is the one numpy's element-wise operators did, in the same order,
+    # so the result is bit-identical (no dot products or fused operations involved).
+    t0, t1 = float(times[i]), float(times[i + 1])
     h = t1 - t0
-    s = float(np.clip((t - t0) / h, 0.0, 1.0)) if h > 0 else 0.0
-    p0, p1, m0, m1 = pos[i], pos[i + 1], vel[i] * h, vel[i + 1] * h
+    s = min(max((t - t0) / h, 0.0), 1.0) if h > 0 else 0.0
     s2, s3 = s * s, s * s * s
-    p = (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * m1
-    dp = ((6 * s2 - 6 * s) * p0 + (3 * s2 - 4 * s + 1) * m0 + (-6 * s2 + 6 * s) * p1
-          + (3 * s2 - 2 * s) * m1) / h if h > 0 else vel[i]
-    return p, dp
+    a0, a1 = 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s          # basis of p0, m0
+    a2, a3 = -2 * s3 + 3 * s2, s3 - s2                     # basis of p1, m1
+    p0, p1 = pos[i].tolist(), pos[i + 1].tolist()
+    v0, v1 = vel[i].tolist(), vel[i + 1].tolist()
+    m0 = [c * h for c in v0]
+    m1 = [c * h for c in v1]
+    p = [a0 * p0[k] + a1 * m0[k] + a2 * p1[k] + a3 * m1[k] for k in range(3)]
+    if h > 0:
+        b0, b1 = 6 * s2 - 6 * s, 3 * s2 - 4 * s + 1
+        b2, b3 = -6 * s2 + 6 * s, 3 * s2 - 2 * s
+        dp = [(b0 * p0[k] + b1 * m0[k] + b2 * p1[k] + b3 * m1[k]) / h for k in range(3)]
+    else:
+        dp = v0
+    return np.array(p), np.array(dp)
 
 
 # ---- players -----------------------------------------------------------------------------------
@@ -410,62 +424,131 @@ def _smoothstep(u: float) -> float:
     return u * u * (3 - 2 * u)
 
 
-def player_body(script: RallyScript, player: int, t: float) -> np.ndarray:
-    """Floor position (x, y) of a player at time t, keyed to their contacts."""
+def _lin(v, *terms) -> tuple[float, float, float]:
+    """``v + k1 * w1 + k2 * w2 + ...`` on 3-tuples, summed left to right like numpy would.
+
+    The players are rebuilt every frame from ~20 such sums of 3-vectors; on Python floats they
+    cost a fraction of numpy's per-call overhead, with the same products and sums in the same
+    order (so the same bits). ``a - k * w`` is written ``(-k, w)``: negation is exact.
+    """
+    x, y, z = v
+    for k, w in terms:
+        x, y, z = x + k * w[0], y + k * w[1], z + k * w[2]
+    return (x, y, z)
+
+
+def _player_body_xy(script: RallyScript, player: int, t: float) -> tuple[float, float]:
+    """``player_body`` on Python floats (same operations, same order: the same bits)."""
     prev, nxt = script.contacts_of(player, t)
-    base = _base_position(player)
-    p_prev = _body_for_contact(player, prev) if prev else base
+    base = (0.0, _side_sign(player) * 3.4)
+    p_prev = _body_xy_for_contact(player, prev) if prev else base
     if nxt is None or nxt.t - t > 2.5:
         if prev is None:
             return base
-        return p_prev + (base - p_prev) * _smoothstep((t - prev.t) / 0.8)
-    p_next = _body_for_contact(player, nxt)
-    t_prev = prev.t if prev else nxt.t - 2.5
-    gap = max(nxt.t - t_prev, 1e-6)
-    u = (t - t_prev) / gap
-    if gap < 1.2:
-        return p_prev + (p_next - p_prev) * _smoothstep(u)
-    if u < 0.4:                      # recover to the base, then go to the next contact
-        return p_prev + (base - p_prev) * _smoothstep(u / 0.4)
-    return base + (p_next - base) * _smoothstep((u - 0.4) / 0.6)
+        a, b, k = p_prev, base, _smoothstep((t - prev.t) / 0.8)
+    else:
+        p_next = _body_xy_for_contact(player, nxt)
+        t_prev = prev.t if prev else nxt.t - 2.5
+        gap = max(nxt.t - t_prev, 1e-6)
+        u = (t - t_prev) / gap
+        if gap < 1.2:
+            a, b, k = p_prev, p_next, _smoothstep(u)
+        elif u < 0.4:                    # recover to the base, then go to the next contact
+            a, b, k = p_prev, base, _smoothstep(u / 0.4)
+        else:
+            a, b, k = base, p_next, _smoothstep((u - 0.4) / 0.6)
+    return (a[0] + (b[0] - a[0]) * k, a[1] + (b[1] - a[1]) * k)
+
+
+def player_body(script: RallyScript, player: int, t: float) -> np.ndarray:
+    """Floor position (x, y) of a player at time t, keyed to their contacts."""
+    return np.array(_player_body_xy(script, player, t))
 
 
 def _blend_dirs(a: np.ndarray, b: np.ndarray, u: float) -> np.ndarray:
     return _unit(a + (b - a) * _smoothstep(u))
 
 
+def _tuple_unit(v) -> tuple[float, float, float]:
+    return tuple(_unit(v).tolist())
+
+
+# Directions that depend only on the player (and a contact): normalised once with numpy's
+# norm, exactly as when they were computed every frame, and kept as float tuples.
+_UP = (0.0, 0.0, 1.0)
+_UP_NP = np.array(_UP)
+_POSE_DIRS = []
+for _p in (NEAR, FAR):
+    _f, _r = _frame_of(_p)
+    _POSE_DIRS.append({
+        "fwd": tuple(_f.tolist()), "right": tuple(_r.tolist()),
+        "off_arm": _tuple_unit(0.35 * _f - 0.25 * _r - 0.9 * _UP_NP),
+        "rest": _tuple_unit(0.55 * _f + 0.35 * _r - 0.45 * _UP_NP),
+        "windup_overhead": _tuple_unit(-0.7 * _f + 0.2 * _r + 0.7 * _UP_NP),
+        "windup_side": _tuple_unit(-0.6 * _f + 0.7 * _r - 0.2 * _UP_NP),
+        "follow": _tuple_unit(0.7 * _f - 0.3 * _r - 0.6 * _UP_NP),
+    })
+del _p, _f, _r
+
+
+@lru_cache(maxsize=4096)
+def _body_xy_for_contact(player: int, c: Contact) -> tuple[float, float]:
+    """``_body_for_contact`` as floats, cached: it is asked for ~6 times per player and frame."""
+    return tuple(_body_for_contact(player, c).tolist())
+
+
+@lru_cache(maxsize=4096)
+def _arm_at_contact(player: int, c: Contact) -> tuple[float, float, float]:
+    """Unit shoulder → contact direction at the contact (the swing passes through it)."""
+    _, right = _frame_of(player)
+    return _tuple_unit(np.asarray(c.point) - (np.array([*_body_for_contact(player, c),
+                                                        _jump_height(c)])
+                                              + SHOULDER_HEIGHT * _UP_NP
+                                              + SHOULDER_HALF_WIDTH * right))
+
+
 def player_capsules(script: RallyScript, player: int, t: float) -> list[Capsule]:
-    """The articulated player at time t: legs, shorts, torso, head, two arms, racket."""
-    fwd, right = _frame_of(player)
-    up = np.array([0.0, 0.0, 1.0])
-    body_xy = player_body(script, player, t)
-    vel_xy = (player_body(script, player, t + 0.01) - player_body(script, player, t - 0.01)) / 0.02
-    speed = float(np.hypot(*vel_xy))
+    """The articulated player at time t: legs, shorts, torso, head, two arms, racket.
+
+    Vectors are float 3-tuples combined with ``_lin`` (see there why); the few unit vectors
+    that change every frame still go through numpy's norm, so every value is bit-identical to
+    the all-numpy formulation this replaced.
+    """
+    dirs = _POSE_DIRS[player]
+    fwd, right, up = dirs["fwd"], dirs["right"], _UP
+    bx, by = _player_body_xy(script, player, t)
+    ax, ay = _player_body_xy(script, player, t + 0.01)
+    cx, cy = _player_body_xy(script, player, t - 0.01)
+    vel_x, vel_y = (ax - cx) / 0.02, (ay - cy) / 0.02
+    speed = float(np.hypot(vel_x, vel_y))
     prev, nxt = script.contacts_of(player, t)
     jump = 0.0
     for c in (prev, nxt):
         if c is not None and abs(t - c.t) < 0.25:
             jump = max(jump, _jump_height(c) * math.cos(math.pi * (t - c.t) / 0.5) ** 2)
-    body = np.array([body_xy[0], body_xy[1], jump])
-    stride_dir = np.array([*(_unit(vel_xy) if speed > 0.2 else fwd[:2]), 0.0])
+    body = (bx, by, jump)
+    if speed > 0.2:
+        sx, sy = _unit(np.array([vel_x, vel_y])).tolist()
+    else:
+        sx, sy = fwd[0], fwd[1]
+    stride_dir = (sx, sy, 0.0)
     stride = min(speed / 4.0, 1.0) * 0.28 * math.sin(2 * math.pi * 2.2 * t)
     caps: list[Capsule] = []
-    tup = lambda v: tuple(float(c) for c in v)   # noqa: E731
     for side in (-1.0, 1.0):
-        hip = body + 0.11 * side * right + 0.9 * up
-        foot = body + 0.15 * side * right + side * stride * stride_dir + 0.05 * up
-        caps.append(Capsule(tup(hip), tup(foot), 0.075, 0.055, "skin"))
-    caps.append(Capsule(tup(body + 0.78 * up), tup(body + 0.98 * up), 0.17, 0.17, "shorts"))
-    caps.append(Capsule(tup(body + 1.0 * up), tup(body + 1.38 * up), 0.17, 0.19, "shirt"))
-    head = body + 1.64 * up
-    caps.append(Capsule(tup(head), tup(head), 0.11, 0.11, "hair"))
+        hip = _lin(body, (0.11 * side, right), (0.9, up))
+        foot = _lin(body, (0.15 * side, right), (side * stride, stride_dir), (0.05, up))
+        caps.append(Capsule(hip, foot, 0.075, 0.055, "skin"))
+    caps.append(Capsule(_lin(body, (0.78, up)), _lin(body, (0.98, up)), 0.17, 0.17, "shorts"))
+    caps.append(Capsule(_lin(body, (1.0, up)), _lin(body, (1.38, up)), 0.17, 0.19, "shirt"))
+    head = _lin(body, (1.64, up))
+    caps.append(Capsule(head, head, 0.11, 0.11, "hair"))
     # Off arm hangs, slightly forward.
-    s_off = body + SHOULDER_HEIGHT * up - SHOULDER_HALF_WIDTH * right
-    hand_off = s_off + 0.58 * _unit(0.35 * fwd - 0.25 * right - 0.9 * up)
-    caps.append(Capsule(tup(s_off), tup(hand_off), 0.05, 0.04, "skin"))
+    s_off = _lin(body, (SHOULDER_HEIGHT, up), (-SHOULDER_HALF_WIDTH, right))
+    hand_off = _lin(s_off, (0.58, dirs["off_arm"]))
+    caps.append(Capsule(s_off, hand_off, 0.05, 0.04, "skin"))
     # Racket arm: a swing keyed to the nearest contact.
-    shoulder = body + SHOULDER_HEIGHT * up + SHOULDER_HALF_WIDTH * right
-    rest = _unit(0.55 * fwd + 0.35 * right - 0.45 * up)
+    shoulder = _lin(body, (SHOULDER_HEIGHT, up), (SHOULDER_HALF_WIDTH, right))
+    rest = dirs["rest"]
     direction = rest
     for c in (nxt, prev):
         if c is None:
@@ -473,27 +556,24 @@ def player_capsules(script: RallyScript, player: int, t: float) -> list[Capsule]
         u = t - c.t
         if not -0.35 <= u <= 0.3:
             continue
-        at_contact = _unit(np.asarray(c.point) - (np.array([*_body_for_contact(player, c),
-                                                            _jump_height(c)])
-                                                  + SHOULDER_HEIGHT * up
-                                                  + SHOULDER_HALF_WIDTH * right))
-        windup = (_unit(-0.7 * fwd + 0.2 * right + 0.7 * up) if c.overhead
-                  else _unit(-0.6 * fwd + 0.7 * right - 0.2 * up))
-        follow = _unit(0.7 * fwd - 0.3 * right - 0.6 * up)
+        at_contact = _arm_at_contact(player, c)
+        windup = dirs["windup_overhead"] if c.overhead else dirs["windup_side"]
+        follow = dirs["follow"]
         if u < -0.18:
-            direction = _blend_dirs(rest, windup, (u + 0.35) / 0.17)
+            a, b, k = rest, windup, (u + 0.35) / 0.17
         elif u < 0:
-            direction = _blend_dirs(windup, at_contact, (u + 0.18) / 0.18)
+            a, b, k = windup, at_contact, (u + 0.18) / 0.18
         elif u < 0.12:
-            direction = _blend_dirs(at_contact, follow, u / 0.12)
+            a, b, k = at_contact, follow, u / 0.12
         else:
-            direction = _blend_dirs(follow, rest, (u - 0.12) / 0.18)
+            a, b, k = follow, rest, (u - 0.12) / 0.18
+        direction = tuple(_blend_dirs(np.array(a), np.array(b), k).tolist())
         break
-    hand = shoulder + ARM_LENGTH * direction
-    racket_centre = shoulder + REACH * direction
-    caps.append(Capsule(tup(shoulder), tup(hand), 0.05, 0.04, "skin"))
-    caps.append(Capsule(tup(hand), tup(racket_centre - 0.13 * direction), 0.012, 0.006,
+    hand = _lin(shoulder, (ARM_LENGTH, direction))
+    racket_centre = _lin(shoulder, (REACH, direction))
+    caps.append(Capsule(shoulder, hand, 0.05, 0.04, "skin"))
+    caps.append(Capsule(hand, _lin(racket_centre, (-0.13, direction)), 0.012, 0.006,
                         "racket", occludes=False))
-    caps.append(Capsule(tup(racket_centre), tup(racket_centre), 0.115, 0.115, "racket_head",
+    caps.append(Capsule(racket_centre, racket_centre, 0.115, 0.115, "racket_head",
                         occludes=False))
     return caps
