@@ -16,6 +16,7 @@ Cameras here are pinhole (the demo rig has D = 0); ``PinholeCamera`` is derived 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -207,32 +208,46 @@ def _draw_capsule(img, cam: PinholeCamera, a, b, ra, rb, colour) -> None:
     pc = cam.to_camera([a, b])
     if pc[0, 2] < NEAR_PLANE or pc[1, 2] < NEAR_PLANE:
         return
-    uv = cam.project_camera(pc)
-    r = cam.focal * np.array([ra, rb]) / pc[:, 2]
-    _draw_capsule_2d(img, uv, r, colour)
+    (u0, v0), (u1, v1) = cam.project_camera(pc).tolist()
+    r0, r1 = (cam.focal * np.array([ra, rb]) / pc[:, 2]).tolist()
+    _draw_capsule_2d(img, u0, v0, u1, v1, r0, r1, colour)
 
 
-def _draw_capsule_2d(img, uv: np.ndarray, r: np.ndarray, colour) -> None:
-    d = uv[1] - uv[0]
-    n = np.hypot(*d)
-    for i in range(2):
-        c = tuple(int(v) for v in np.round(uv[i] * SCALE))
-        cv2.circle(img, c, max(int(round(r[i] * SCALE)), 1), colour, -1, cv2.LINE_AA, SHIFT)
+def _draw_capsule_2d(img, u0: float, v0: float, u1: float, v1: float, r0: float, r1: float,
+                     colour) -> None:
+    """Two end discs and the tangent quad between them (pixels, radii in pixels).
+
+    ~32 of these per frame pair: on Python floats rather than (2,) arrays, because numpy's
+    per-call overhead was most of the time. The arithmetic is the element-wise arithmetic of
+    the array version, in the same order; ``round`` rounds half to even like ``np.round``.
+    """
+    dx, dy = u1 - u0, v1 - v0
+    # np.hypot, not math.hypot: CPython's own algorithm may differ from libm's in the last bit.
+    n = float(np.hypot(dx, dy))
+    cv2.circle(img, (round(u0 * SCALE), round(v0 * SCALE)), max(round(r0 * SCALE), 1), colour,
+               -1, cv2.LINE_AA, SHIFT)
+    cv2.circle(img, (round(u1 * SCALE), round(v1 * SCALE)), max(round(r1 * SCALE), 1), colour,
+               -1, cv2.LINE_AA, SHIFT)
     if n > 1e-6:
-        perp = np.array([-d[1], d[0]]) / n
-        quad = np.array([uv[0] + perp * r[0], uv[1] + perp * r[1], uv[1] - perp * r[1],
-                         uv[0] - perp * r[0]])
-        cv2.fillConvexPoly(img, np.round(quad * SCALE).astype(np.int32), colour, cv2.LINE_AA, SHIFT)
+        px, py = -dy / n, dx / n
+        quad = np.array([[round((u0 + px * r0) * SCALE), round((v0 + py * r0) * SCALE)],
+                         [round((u1 + px * r1) * SCALE), round((v1 + py * r1) * SCALE)],
+                         [round((u1 - px * r1) * SCALE), round((v1 - py * r1) * SCALE)],
+                         [round((u0 - px * r0) * SCALE), round((v0 - py * r0) * SCALE)]],
+                        np.int32)
+        cv2.fillConvexPoly(img, quad, colour, cv2.LINE_AA, SHIFT)
 
 
-@dataclass(frozen=True)
-class ProjectedCapsule:
-    uv: np.ndarray          # (2, 2) pixels of the two ends
-    r: np.ndarray           # (2,) pixel radii
-    depth: np.ndarray       # (2,) camera depths of the two ends (m)
+class ProjectedCapsule(NamedTuple):
+    """A body part in one camera, as Python floats (built ~32 times a frame pair)."""
+
+    uv: tuple[tuple[float, float], tuple[float, float]]   # pixels of the two ends
+    r: tuple[float, float]          # pixel radii
+    depth: tuple[float, float]      # camera depths of the two ends (m)
     colour: tuple[int, int, int]
     part: str
     occludes: bool
+    mean_depth: float               # (depth[0] + depth[1]) / 2, the painter's-order key
 
 
 def project_capsules(cam: PinholeCamera, capsules: list[Capsule], player: int
@@ -241,28 +256,45 @@ def project_capsules(cam: PinholeCamera, capsules: list[Capsule], player: int
         return []
     ends = np.array([[c.a, c.b] for c in capsules], float).reshape(-1, 3)
     pc = cam.to_camera(ends)
-    in_front = (pc[:, 2] >= NEAR_PLANE).reshape(-1, 2).all(axis=1)
-    uv = cam.project_camera(np.where(pc[:, 2:3] >= NEAR_PLANE, pc, 1.0)).reshape(-1, 2, 2)
-    depth = pc[:, 2].reshape(-1, 2)
+    in_front = (pc[:, 2] >= NEAR_PLANE).reshape(-1, 2).all(axis=1).tolist()
+    uv = cam.project_camera(np.where(pc[:, 2:3] >= NEAR_PLANE, pc, 1.0)).reshape(-1, 2, 2).tolist()
+    depth = pc[:, 2].reshape(-1, 2).tolist()
+    focal = cam.focal
+    colours = PLAYER_COLOURS[player]
     out = []
     for i, c in enumerate(capsules):
         if not in_front[i]:
             continue
-        r = cam.focal * np.array([c.ra, c.rb]) / depth[i]
-        out.append(ProjectedCapsule(uv[i], r, depth[i], PLAYER_COLOURS[player][c.part], c.part,
-                                    c.occludes))
+        d0, d1 = depth[i]
+        (u0, v0), (u1, v1) = uv[i]
+        out.append(ProjectedCapsule(((u0, v0), (u1, v1)), (focal * c.ra / d0, focal * c.rb / d1),
+                                    (d0, d1), colours[c.part], c.part, c.occludes,
+                                    (d0 + d1) / 2))
     return out
 
 
 def occluded_by(caps: list[ProjectedCapsule], uv: np.ndarray, depth: float) -> bool:
     """True when the point (pixel ``uv`` at camera ``depth``) lies inside a nearer body part."""
+    uv = np.asarray(uv, float)
+    x, y = float(uv[0]), float(uv[1])
     for c in caps:
         if not c.occludes:
             continue
-        d = c.uv[1] - c.uv[0]
+        (u0, v0), (u1, v1) = c.uv
+        # Cheap rejection first (most parts are nowhere near the shuttle): the closest point
+        # lies within the ends' box, and the disc there within max(r) of it. The 1 px and 1e-9
+        # margins only make the test conservative; the decision below is the exact one.
+        reach = max(c.r) + 1.0
+        if (x < min(u0, u1) - reach or x > max(u0, u1) + reach or y < min(v0, v1) - reach
+                or y > max(v0, v1) + reach or min(c.depth) >= depth + 1e-9):
+            continue
+        # The decision itself stays in numpy: ``@`` is a BLAS dot product whose rounding a
+        # scalar re-write would not be guaranteed to reproduce (visibility is truth).
+        cuv = np.array(c.uv)
+        d = cuv[1] - cuv[0]
         n2 = float(d @ d)
-        s = float(np.clip((uv - c.uv[0]) @ d / n2, 0.0, 1.0)) if n2 > 1e-12 else 0.0
-        closest = c.uv[0] + s * d
+        s = float(np.clip((uv - cuv[0]) @ d / n2, 0.0, 1.0)) if n2 > 1e-12 else 0.0
+        closest = cuv[0] + s * d
         radius = c.r[0] + s * (c.r[1] - c.r[0])
         part_depth = c.depth[0] + s * (c.depth[1] - c.depth[0])
         if np.hypot(*(uv - closest)) <= radius and part_depth < depth:
@@ -272,12 +304,14 @@ def occluded_by(caps: list[ProjectedCapsule], uv: np.ndarray, depth: float) -> b
 
 def draw_capsule(img, c: ProjectedCapsule, gain: float) -> None:
     colour = tuple(min(255, int(v * gain)) for v in c.colour)
+    (u0, v0), (u1, v1) = c.uv
+    r0, r1 = c.r
     if c.part == "racket_head":
-        centre = tuple(int(v) for v in np.round(c.uv[0] * SCALE))
-        axes = (max(int(round(c.r[0] * 0.8 * SCALE)), 1), max(int(round(c.r[0] * SCALE)), 1))
-        cv2.ellipse(img, centre, axes, 0, 0, 360, colour, max(1, int(c.r[0] / 8)), cv2.LINE_AA, SHIFT)
+        axes = (max(round(r0 * 0.8 * SCALE), 1), max(round(r0 * SCALE), 1))
+        cv2.ellipse(img, (round(u0 * SCALE), round(v0 * SCALE)), axes, 0, 0, 360, colour,
+                    max(1, int(r0 / 8)), cv2.LINE_AA, SHIFT)
         return
-    _draw_capsule_2d(img, c.uv, c.r, colour)
+    _draw_capsule_2d(img, u0, v0, u1, v1, r0, r1, colour)
 
 
 # ---- shuttle ---------------------------------------------------------------------------------
@@ -312,35 +346,41 @@ def draw_shuttle(img: np.ndarray, cam: PinholeCamera, positions: np.ndarray,
     pw, ph = x1 - x0, y1 - y0
     acc = np.zeros((ph * S, pw * S, 2), np.float32)
     canvas = np.zeros((ph * S, pw * S, 2), np.uint8)
-    origin = np.array([x0, y0], float)
-
-    def to_canvas(p: np.ndarray) -> np.ndarray:
-        return ((p - origin + 0.5) * S - 0.5) * SCALE
+    ox, oy = float(x0), float(y0)
 
     # How much of the skirt's open end shows depends on the view angle to the shuttle axis.
     view = heads / np.linalg.norm(heads, axis=1, keepdims=True)
     axis_cam = directions @ cam.R.T
-    end_on = np.abs(np.sum(view * axis_cam, axis=1))
+    end_on = np.abs(np.sum(view * axis_cam, axis=1)).tolist()
+    # The per-sample geometry is a handful of scalars: Python floats instead of (2,) arrays
+    # (numpy's per-call overhead was most of this function's time). Same element-wise
+    # operations in the same order, ``round`` = ``np.round`` (half to even): same pixels.
+    uv_h_l, uv_t_l = uv_h.tolist(), uv_t.tolist()
+    r_h_l, r_t_l = r_h.tolist(), r_t.tolist()
+    skirt_colour = (190, 165)          # coverage 0.75, grey 215 premultiplied
     for k in range(len(positions)):
         canvas[:] = 0
-        ch, ct = uv_h[k], uv_t[k]
-        rh, rt = r_h[k] * S, r_t[k] * S
-        d = ct - ch
-        n = float(np.hypot(*d))
-        skirt_colour = (190, 165)          # coverage 0.75, grey 215 premultiplied
+        (hx, hy), (tx, ty) = uv_h_l[k], uv_t_l[k]
+        rh, rt = r_h_l[k] * S, r_t_l[k] * S
+        dx, dy = tx - hx, ty - hy
+        n = float(np.hypot(dx, dy))
+        # Canvas coordinates, 1/16 px: ((p - origin + 0.5) * S - 0.5) * SCALE.
+        chx, chy = ((hx - ox + 0.5) * S - 0.5) * SCALE, ((hy - oy + 0.5) * S - 0.5) * SCALE
+        ctx, cty = ((tx - ox + 0.5) * S - 0.5) * SCALE, ((ty - oy + 0.5) * S - 0.5) * SCALE
         if n > 1e-6:
-            perp = np.array([-d[1], d[0]]) / n
-            quad = np.array([to_canvas(ch) + perp * rh * 0.9 * SCALE,
-                             to_canvas(ct) + perp * rt * SCALE,
-                             to_canvas(ct) - perp * rt * SCALE,
-                             to_canvas(ch) - perp * rh * 0.9 * SCALE])
-            cv2.fillConvexPoly(canvas, np.round(quad).astype(np.int32), skirt_colour,
-                               cv2.LINE_AA, SHIFT)
-        r_end = rt * max(0.3, float(end_on[k]))
-        cv2.circle(canvas, tuple(int(v) for v in np.round(to_canvas(ct))),
-                   max(int(round(r_end * SCALE)), 1), skirt_colour, -1, cv2.LINE_AA, SHIFT)
-        cv2.circle(canvas, tuple(int(v) for v in np.round(to_canvas(ch))),
-                   max(int(round(rh * SCALE)), 1), (255, 250), -1, cv2.LINE_AA, SHIFT)
+            px, py = -dy / n, dx / n
+            hxo, hyo = px * rh * 0.9 * SCALE, py * rh * 0.9 * SCALE
+            txo, tyo = px * rt * SCALE, py * rt * SCALE
+            quad = np.array([[round(chx + hxo), round(chy + hyo)],
+                             [round(ctx + txo), round(cty + tyo)],
+                             [round(ctx - txo), round(cty - tyo)],
+                             [round(chx - hxo), round(chy - hyo)]], np.int32)
+            cv2.fillConvexPoly(canvas, quad, skirt_colour, cv2.LINE_AA, SHIFT)
+        r_end = rt * max(0.3, end_on[k])
+        cv2.circle(canvas, (round(ctx), round(cty)), max(round(r_end * SCALE), 1), skirt_colour,
+                   -1, cv2.LINE_AA, SHIFT)
+        cv2.circle(canvas, (round(chx), round(chy)), max(round(rh * SCALE), 1), (255, 250), -1,
+                   cv2.LINE_AA, SHIFT)
         acc += canvas
     acc *= 1.0 / (255.0 * len(positions))
     small = cv2.resize(acc, (pw, ph), interpolation=cv2.INTER_AREA)

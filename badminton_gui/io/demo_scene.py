@@ -286,7 +286,7 @@ class DemoScene:
             else:
                 img = bg.copy()
             # Painter's order: body parts and the shuttle from far to near.
-            items = [(float(pc.depth.mean()), 0, pc) for pc in players[cam_i]]
+            items = [(pc.mean_depth, 0, pc) for pc in players[cam_i]]
             if samples is not None:
                 shuttle_depth = float(cam.to_camera(truth.position)[0, 2])
                 items.append((shuttle_depth, 1, None))
