@@ -245,12 +245,15 @@ class DemoScene:
         # the exposure may open before the serve (the frame's truth has a position, so the
         # shuttle must be drawn, over the part of the exposure after the serve).
         probes = t + (np.linspace(0.0, 1.0, 9) - 0.5) * self.exposure
-        live = [float(ts) for ts in probes if self.script.state(float(ts))[0] is not None]
+        # In play = not an "off" segment (``state`` would interpolate a position only to test
+        # it against None: 9 interpolations a frame for nothing).
+        live = [ts for ts in probes.tolist() if self.script.segment_at(ts).kind != "off"]
         if not live:
             return None
         lo, hi = live[0], live[-1]
-        p_start, _, _ = self.script.state(lo)
-        p_end, _, _ = self.script.state(hi)
+        # The ends are sampled again below (linspace returns lo and hi exactly): keep them.
+        states = {lo: self.script.state(lo), hi: self.script.state(hi)}
+        p_start, p_end = states[lo][0], states[hi][0]
         streak = 0.0
         for cam in self.cameras:
             pc = cam.to_camera(np.stack([p_start, p_end]))
@@ -261,7 +264,8 @@ class DemoScene:
         times = [t] if n == 1 or hi <= lo else np.linspace(lo, hi, n)
         positions, directions = [], []
         for ts in times:
-            p, v, seg = self.script.state(float(ts))
+            ts = float(ts)
+            p, v, seg = states[ts] if ts in states else self.script.state(ts)
             if p is None:
                 continue
             speed = float(np.linalg.norm(v))
