@@ -374,3 +374,34 @@ def test_feeds_get_frames_sized_for_a_plain_blit(main_window, qtbot):
     small.set_frame(np.zeros((100, 200, 3), np.uint8), 1.0, None, np.zeros((0, 3)))
     assert small.image_rect().width() == 320           # BGR and another size: scaled to fit
     window._timer.start()
+
+
+def test_a_coasted_position_is_drawn_dashed_and_captioned(qtbot):
+    """A detection the tracker only predicted (shuttle over a light) must not look like a sighting."""
+    from badminton_gui.core.types import CameraResult, Candidate
+    from badminton_gui.gui.feed_view import FeedView
+
+    feed = FeedView("Left camera")
+    qtbot.addWidget(feed)
+    feed.resize(400, 300)
+    feed.show()
+    frame = np.zeros((300, 400, 3), np.uint8)
+
+    def ring_pixels(predicted: bool) -> tuple[str, int]:
+        det = Candidate(x=200.0, y=150.0, length=20, short_side=3, whiteness=200, area=10,
+                        motion=0.0, score=1.0, predicted=predicted)
+        feed.set_frame(frame, 1.0, CameraResult(det, (det,), image_size=(400, 300)), np.zeros((0, 3)))
+        image = feed.grab().toImage()
+        # Red pixels on the circle around the detection (the image fills the widget 1:1).
+        red = 0
+        for x in range(150, 251):
+            for y in range(100, 201):
+                c = image.pixelColor(x, y)
+                red += c.red() > 150 and c.green() < 90 and c.blue() < 90
+        return feed.title_text(), red
+
+    seen_caption, seen_red = ring_pixels(False)
+    predicted_caption, predicted_red = ring_pixels(True)
+    assert seen_caption.endswith("shuttle found")
+    assert predicted_caption.endswith("shuttle predicted (hidden)")
+    assert 0 < predicted_red < 0.75 * seen_red         # dashed and thinner: clearly fewer red pixels

@@ -139,10 +139,17 @@ class FeedView(QWidget):
                        self._message)
         p.end()
 
-    def _paint_title(self, p: QPainter) -> None:
+    def title_text(self) -> str:
+        """The caption: camera name and whether the shuttle is seen, predicted or missing."""
         text = self.title
         if self._camera is not None:
-            text += "  ·  shuttle found" if self._camera.detection is not None else "  ·  no shuttle"
+            d = self._camera.detection
+            text += ("  ·  no shuttle" if d is None else
+                     "  ·  shuttle predicted (hidden)" if d.predicted else "  ·  shuttle found")
+        return text
+
+    def _paint_title(self, p: QPainter) -> None:
+        text = self.title_text()
         f = QFont(self.font())
         f.setBold(True)
         p.setFont(f)
@@ -158,7 +165,12 @@ class FeedView(QWidget):
         d = self._camera.detection
         c = self.image_to_widget(d.x, d.y)
         p.setBrush(Qt.BrushStyle.NoBrush)
-        p.setPen(QPen(DETECTION_COLOUR, 3.0))
+        # A coasted position (the shuttle over a light or a line, where the detector is blind)
+        # is the track's prediction, not a sighting: the operator sees it dashed.
+        pen = QPen(DETECTION_COLOUR, 2.0 if d.predicted else 3.0)
+        if d.predicted:
+            pen.setStyle(Qt.PenStyle.DashLine)
+        p.setPen(pen)
         p.drawEllipse(c, CIRCLE_RADIUS, CIRCLE_RADIUS)
 
     def _to_widget(self, xy: np.ndarray) -> np.ndarray:
