@@ -5,6 +5,7 @@ that obey the drag model, and the files the CLI writes. No Qt."""
 from __future__ import annotations
 
 import csv
+import math
 from collections import defaultdict
 
 import cv2
@@ -274,3 +275,132 @@ def test_cli_unwritable_output_is_a_user_error(tmp_path, capsys):
     assert code == 2
     err = capsys.readouterr().err
     assert "not a folder" in err and err.count("\n") == 1
+
+
+# ---- the scalar fast paths are the numpy formulations, bit for bit ---------------------------
+# demo_rally/demo_render evaluate per-frame geometry on Python floats for speed (numpy's
+# per-call overhead on 2- and 3-vectors dominated); frames must stay identical, so each fast
+# path is checked here against the array expression it replaced, with ``==`` not ``allclose``.
+
+def test_hermite_is_the_array_formula_exactly(flights):
+    def reference(times, pos, vel, t):
+        i = int(np.clip(np.searchsorted(times, t) - 1, 0, len(times) - 2))
+        t0, t1 = times[i], times[i + 1]
+        h = t1 - t0
+        s = float(np.clip((t - t0) / h, 0.0, 1.0))
+        p0, p1, m0, m1 = pos[i], pos[i + 1], vel[i] * h, vel[i + 1] * h
+        s2, s3 = s * s, s * s * s
+        p = (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * m1
+        dp = ((6 * s2 - 6 * s) * p0 + (3 * s2 - 4 * s + 1) * m0 + (-6 * s2 + 6 * s) * p1
+              + (3 * s2 - 2 * s) * m1) / h
+        return p, dp
+
+    rng = np.random.default_rng(3)
+    for seg in flights[:6]:
+        for t in rng.uniform(seg.t0 - 0.01, seg.t1 + 0.01, 200):
+            p, dp = _hermite(seg.times, seg.pos, seg.vel, float(t))
+            p_ref, dp_ref = reference(seg.times, seg.pos, seg.vel, float(t))
+            assert np.array_equal(p, p_ref) and np.array_equal(dp, dp_ref)
+
+
+def test_player_pose_is_the_array_formula_exactly():
+    from badminton_gui.io import demo_rally as rally
+
+    def unit(v):
+        n = np.linalg.norm(v)
+        return v / n if n > 1e-12 else v
+
+    def blend(a, b, u):
+        return unit(a + (b - a) * rally._smoothstep(u))
+
+    def reference(script, player, t):          # the array formulation (racket arm only)
+        fwd, right = rally._frame_of(player)
+        up = np.array([0.0, 0.0, 1.0])
+        body_xy = rally.player_body(script, player, t)
+        prev, nxt = script.contacts_of(player, t)
+        jump = 0.0
+        for c in (prev, nxt):
+            if c is not None and abs(t - c.t) < 0.25:
+                jump = max(jump, rally._jump_height(c) * math.cos(math.pi * (t - c.t) / 0.5) ** 2)
+        body = np.array([body_xy[0], body_xy[1], jump])
+        shoulder = body + rally.SHOULDER_HEIGHT * up + rally.SHOULDER_HALF_WIDTH * right
+        rest = unit(0.55 * fwd + 0.35 * right - 0.45 * up)
+        direction = rest
+        for c in (nxt, prev):
+            if c is None or not -0.35 <= t - c.t <= 0.3:
+                continue
+            u = t - c.t
+            at = unit(np.asarray(c.point) - (np.array([*rally._body_for_contact(player, c),
+                                                       rally._jump_height(c)])
+                                             + rally.SHOULDER_HEIGHT * up
+                                             + rally.SHOULDER_HALF_WIDTH * right))
+            windup = (unit(-0.7 * fwd + 0.2 * right + 0.7 * up) if c.overhead
+                      else unit(-0.6 * fwd + 0.7 * right - 0.2 * up))
+            follow = unit(0.7 * fwd - 0.3 * right - 0.6 * up)
+            if u < -0.18:
+                direction = blend(rest, windup, (u + 0.35) / 0.17)
+            elif u < 0:
+                direction = blend(windup, at, (u + 0.18) / 0.18)
+            elif u < 0.12:
+                direction = blend(at, follow, u / 0.12)
+            else:
+                direction = blend(follow, rest, (u - 0.12) / 0.18)
+            break
+        vel_xy = (rally.player_body(script, player, t + 0.01)
+                  - rally.player_body(script, player, t - 0.01)) / 0.02
+        speed = float(np.hypot(*vel_xy))
+        stride_dir = np.array([*(unit(vel_xy) if speed > 0.2 else fwd[:2]), 0.0])
+        stride = min(speed / 4.0, 1.0) * 0.28 * math.sin(2 * math.pi * 2.2 * t)
+        foot = body + 0.15 * right + stride * stride_dir + 0.05 * up
+        return foot, shoulder, shoulder + rally.REACH * direction
+
+    script = rally.RallyScript(4)
+    swings = 0
+    for t in np.arange(0.0, 12.0, 1 / 120):
+        for player in (rally.NEAR, rally.FAR):
+            caps = rally.player_capsules(script, player, float(t))
+            foot, shoulder, racket_centre = reference(script, player, float(t))
+            arm, head = caps[-3], caps[-1]
+            assert caps[1].b == tuple(foot.tolist())
+            assert arm.a == tuple(shoulder.tolist())
+            assert head.a == tuple(racket_centre.tolist())
+            swings += any(c is not None and -0.35 <= t - c.t <= 0.3
+                          for c in script.contacts_of(player, float(t)))
+    assert swings > 400, swings       # seed 4: 834 frames mid-swing
+
+
+def test_occlusion_prefilter_keeps_the_exact_decision():
+    from badminton_gui.io import demo_render as dr
+
+    def reference(caps, uv, depth):
+        for c in caps:
+            if not c.occludes:
+                continue
+            cuv = np.array(c.uv)
+            d = cuv[1] - cuv[0]
+            n2 = float(d @ d)
+            s = float(np.clip((uv - cuv[0]) @ d / n2, 0.0, 1.0)) if n2 > 1e-12 else 0.0
+            closest = cuv[0] + s * d
+            radius = c.r[0] + s * (c.r[1] - c.r[0])
+            part_depth = c.depth[0] + s * (c.depth[1] - c.depth[0])
+            if np.hypot(*(uv - closest)) <= radius and part_depth < depth:
+                return True
+        return False
+
+    scene = DemoScene(seed=0, size=SMALL)
+    rng = np.random.default_rng(0)
+    hits = 0
+    for index in range(0, 1200, 40):
+        players = scene._truth_and_players(index)[1][0]
+        for c in players:
+            if not c.occludes:
+                continue
+            # Points around each part, many right at its edge, at depths either side of it.
+            centre = np.array(c.uv).mean(axis=0)
+            for _ in range(10):
+                uv = centre + rng.normal(0, max(c.r) + 3, 2)
+                depth = float(rng.uniform(min(c.depth) - 0.5, max(c.depth) + 0.5))
+                got = dr.occluded_by(players, uv, depth)
+                assert got == reference(players, uv, depth)
+                hits += got
+    assert hits > 300, hits           # seed 0: 723

@@ -9,6 +9,12 @@ pre-generated sensor noise. The shuttle is drawn in a 4× supersampled patch, in
 the exposure interval centred on the frame time, so a detector can localise it to ~0.1 px and
 the centre of its blur streak is the truth position.
 
+The per-frame geometry (~32 body parts and a handful of exposure samples per camera) is
+computed on Python floats, not (2,) arrays: numpy's per-call overhead on such tiny arrays cost
+more than the drawing. The arithmetic is the same element-wise operations in the same order,
+so the frames are bit-identical to the array formulation (``tests/test_demo_scene.py`` pins
+the fast paths to it).
+
 Cameras here are pinhole (the demo rig has D = 0); ``PinholeCamera`` is derived from the
 ``StereoRig`` so that drawing and ``StereoRig.project`` agree exactly.
 """
