@@ -349,15 +349,21 @@ def test_bad_arguments():
         RobotLink("loop://", max_rate_hz=0)
 
 
-def test_robot_listen_cli_decodes_a_socket_stream(capsys):
+def loopback_server():
+    """A listening TCP socket on 127.0.0.1 (any free port): the robot's end for socket:// tests."""
     import socket
-
-    from badminton_gui.cli import main
 
     server = socket.socket()
     server.bind(("127.0.0.1", 0))
     server.listen(1)
     host, port_no = server.getsockname()
+    return server, host, port_no
+
+
+def test_robot_listen_cli_decodes_a_socket_stream(capsys):
+    from badminton_gui.cli import main
+
+    server, host, port_no = loopback_server()
 
     def serve():
         # pyserial empties the input buffer right after connecting, so keep sending.
@@ -385,14 +391,9 @@ def test_robot_listen_cli_decodes_a_socket_stream(capsys):
 
 def test_robot_listen_cli_survives_the_port_going_away(capsys):
     """The robot's reader reopens a vanished port and goes on decoding (like the link itself)."""
-    import socket
-
     from badminton_gui.cli import main
 
-    server = socket.socket()
-    server.bind(("127.0.0.1", 0))
-    server.listen(1)
-    host, port_no = server.getsockname()
+    server, host, port_no = loopback_server()
 
     def serve():
         try:
