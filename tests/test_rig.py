@@ -1,5 +1,7 @@
 """Stereo rig: file round trip (also read by plain cv2.FileStorage), triangulation, epipolar check."""
 
+import math
+
 import cv2
 import numpy as np
 import pytest
@@ -106,3 +108,24 @@ def test_nycu_import_matches_their_projection_matrices():
         m, dist = (rig.M1, rig.D1) if cam == 0 else (rig.M2, rig.D2)
         ours_undist = cv2.undistortPoints(ours.reshape(-1, 1, 2), m, dist, None, newk).reshape(-1, 2)
         np.testing.assert_allclose(ours_undist, their, atol=0.5)
+
+
+def test_noise_shape_is_the_triangulation_jacobian():
+    """Depth is far less sure than across. Parallel rig, point on the left optical axis, 1 px per
+    coordinate: σ_Z = Z²/(f·B)·√2 (both x's move the disparity), σ_X = Z/f (the left x),
+    σ_Y = Z/(f·√2) (both cameras see y)."""
+    f, baseline, z = 800.0, 0.5, 6.0
+    k = np.array([[f, 0, 640], [0, f, 360], [0, 0, 1.0]])
+    rig = StereoRig(M1=k, D1=np.zeros(5), M2=k.copy(), D2=np.zeros(5), R=np.eye(3),
+                    T=np.array([-baseline, 0, 0]), image_size=(1280, 720))
+    point = np.array([[0.0, 0.0, z]])
+    left = np.array([[640.0, 360.0]])
+    right = left - [[f * baseline / z, 0.0]]
+    assert np.allclose(rig.triangulate(left, right), point, atol=1e-9)
+    cov = rig.noise_shape(left, right)[0]
+    assert cov.shape == (3, 3) and np.allclose(cov, cov.T)
+    sigma_z = z * z / (f * baseline) * math.sqrt(2)     # both cameras' x move the disparity
+    assert math.sqrt(cov[2, 2]) == pytest.approx(sigma_z, rel=0.02)
+    assert math.sqrt(cov[0, 0]) == pytest.approx(z / f, rel=0.02)
+    assert math.sqrt(cov[1, 1]) == pytest.approx(z / f / math.sqrt(2), rel=0.02)
+    assert cov[2, 2] > 50 * cov[0, 0]

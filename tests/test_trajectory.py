@@ -296,3 +296,61 @@ def test_real_rally_every_return_starts_a_shot(rally):
     # Returns plus the serve (toss and hit); no stray shots from the shuttle lying on the floor.
     assert len(starts) <= len(reversals) + 3
     assert 3.5 <= traj.session_aero_length <= 6.0
+
+
+def _stereo_shape(point, camera=(-5.0, -3.4, 3.5), f=340.0, baseline=0.6):
+    """The noise shape of a binocular rig like the demo's: 1 px across, Z²/(f·B)·√2 px in depth."""
+    ray = np.asarray(point) - np.asarray(camera)
+    z = float(np.linalg.norm(ray))
+    ray /= z
+    across = np.eye(3) - np.outer(ray, ray)
+    return across * (z / f) ** 2 + np.outer(ray, ray) * 2 * (z * z / (f * baseline)) ** 2
+
+
+def test_stereo_noise_shape_filters_depth_and_refuses_wrong_points():
+    """Points with their stereo noise shape: the filtered positions beat the raw points several
+    times (depth noise dominates a triangulation and the drag model averages it away), and a
+    point the flight refuses is flagged, not filtered."""
+    shot = landing.make_shot(np.random.default_rng(6), "clear", 4.8, dt=1e-3)
+    times = np.arange(0.0, shot.duration, 1 / 120)
+    truth, _ = shot.at(times)
+    rng = np.random.default_rng(3)
+    pixel_sigma = 0.2
+    traj = Trajectory(TrajectoryParams(pixel_noise=pixel_sigma), court_frame=True)
+    wrong = {60, 61}
+    raw_err, filt_err = [], []
+    for i, (t, p) in enumerate(zip(times, truth)):
+        shape = _stereo_shape(p)
+        z = p + rng.multivariate_normal(np.zeros(3), shape * pixel_sigma ** 2)
+        if i in wrong:
+            z = p + np.array([0.0, 0.4, 0.3])        # a racket paired in both views
+        traj.update(t, tuple(z), shape)
+        filtered = traj.filtered_position()
+        if i in wrong:
+            assert filtered is None and traj.point_rejected
+            continue
+        assert not traj.point_rejected
+        if i >= 20:
+            assert filtered is not None
+            raw_err.append(np.linalg.norm(z - p))
+            filt_err.append(np.linalg.norm(np.asarray(filtered) - p))
+    raw_rms = math.sqrt(np.mean(np.square(raw_err)))
+    filt_rms = math.sqrt(np.mean(np.square(filt_err)))
+    assert filt_rms < raw_rms / 2.5, (raw_rms, filt_rms)
+
+
+def test_a_shuttle_lying_where_the_flight_landed_gives_the_landing_direction():
+    shot = landing.make_shot(np.random.default_rng(4), "clear", 4.8, dt=1e-3)
+    times = np.arange(0.0, shot.duration, 1 / 120)
+    truth, _ = shot.at(times)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    fly(traj, times, [tuple(p) for p in truth])
+    lx, ly = shot.landing[0], shot.landing[1]
+    vx, vy = truth[-1, 0] - truth[-5, 0], truth[-1, 1] - truth[-5, 1]
+    t = times[-1] + 0.1
+    traj.update(t, (lx, ly, 0.03))
+    direction = traj.resting_direction((lx, ly, 0.03))
+    assert direction is not None
+    assert direction[0] * vx + direction[1] * vy > 0.99 * math.hypot(vx, vy)
+    assert traj.resting_direction((lx + 2.0, ly, 0.03)) is None      # elsewhere on the floor
+    assert traj.resting_direction((lx, ly, 1.0)) is None             # in the air

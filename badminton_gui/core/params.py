@@ -257,6 +257,15 @@ class StereoParams(ParamGroup):
     head_min_speed: float = param(1.0, 0.0, 50.0, step=0.5, unit="m/s", label="Cork correction from",
                                   help="The cork correction needs a flight direction: below this speed the "
                                        "point is left as measured")
+    # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
+    # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
+    # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and
+    # ~1.0 cm above the cork centre. It lies along its flight: cork ahead.
+    rest_cork_ahead: float = param(0.031, 0.0, 0.1, step=0.001, unit="m", label="Lying: cork ahead",
+                                   help="A shuttle lying where the last flight landed: its cork is this far "
+                                        "ahead of the blob's 3D point along the landing direction (0 = off)")
+    rest_cork_below: float = param(0.010, 0.0, 0.1, step=0.001, unit="m", label="Lying: cork below",
+                                   help="... and this much lower (the skirt's rim holds the tail up)")
 
 
 @dataclass(frozen=True, slots=True)
@@ -268,7 +277,12 @@ class TrajectoryParams(ParamGroup):
     max_gap: float = param(0.25, 0.01, 5.0, step=0.01, unit="s", label="Longest gap",
                            help="A flight without a 3D point for longer than this has ended")
     measurement_noise: float = param(0.02, 0.001, 0.5, step=0.005, unit="m", label="3D point noise σ",
-                                     help="Standard deviation of a triangulated point (per axis)")
+                                     help="Least σ of a 3D point given without its stereo noise shape (per axis; "
+                                          "points from the stereo tracker use the image point noise instead)")
+    pixel_noise: float = param(0.2, 0.01, 10.0, step=0.01, unit="px", label="Image point noise σ",
+                               help="Least noise assumed per image coordinate of a stereo pair: the 3D "
+                                    "point's noise follows from it and the rig's geometry (more in depth, "
+                                    "more far away); the tracker measures the real value and uses the larger")
     outlier_sigma: float = param(5.0, 2.0, 50.0, step=0.5, unit="σ", label="Outlier gate",
                                  help="3D points farther than this many standard deviations from the flight's prediction are ignored")
     outlier_distance: float = param(0.5, 0.01, 10.0, step=0.01, unit="m", label="Outlier distance",

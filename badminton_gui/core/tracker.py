@@ -5,6 +5,12 @@ Why this file exists: it is the one object that the GUI worker, the CLI and the 
 detections (epipolar check), triangulates, and hands the 3D point to the trajectory module for
 speed and landing prediction.
 
+The 3D point it reports is the trajectory filter's estimate whenever the measured point extended
+a flight: a single triangulation is several times less sure in depth than across (≈ 12 cm per px
+of disparity at 5 m on the demo rig), and the drag-model filter, weighing each point by its own
+stereo noise shape, removes most of that. A point the followed flight refuses (a wrong pair, a
+racket) is not reported as the shuttle; the raw triangulation stays in ``measured_point``.
+
 Usage::
 
     rig = StereoRig.load("calibration/rig.yaml")
@@ -25,12 +31,8 @@ import numpy as np
 from .detector import CameraDetector
 from .params import TrackerParams
 from .rig import StereoRig
-from .types import REJECT_STEREO, CameraResult, Candidate, FlightInfo, TrackResult
-
-try:  # the trajectory module is optional at import time only while it is being built
-    from .trajectory import Trajectory
-except ImportError:  # pragma: no cover
-    Trajectory = None  # type: ignore[assignment]
+from .trajectory import Trajectory
+from .types import REJECT_STEREO, CameraResult, Candidate, TrackResult
 
 
 # Time step (s) over which the tracklets' image velocities are followed back to find the
@@ -50,10 +52,7 @@ class StereoTracker:
         self.right = CameraDetector(self.params)
         # OpenCV releases the GIL: the two cameras run side by side on two cores (GUIDE §4).
         self._pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="camera") if parallel else None
-        self._trajectory = (Trajectory(self.params.trajectory, rig.has_court_pose)
-                            if Trajectory is not None else None)
-        self._last_point: tuple[float, np.ndarray] | None = None
-        self._speed: float | None = None
+        self._trajectory = Trajectory(self.params.trajectory, rig.has_court_pose)
         self._checked_size = False
         # Epipolar errors of long, confident tracklets seen by both cameras: what the rig
         # really achieves (a rig calibrated by clicking court points is off by tens of px).
@@ -65,16 +64,12 @@ class StereoTracker:
         self.params = params
         self.left.set_params(params)
         self.right.set_params(params)
-        if self._trajectory is not None and hasattr(self._trajectory, "set_params"):
-            self._trajectory.set_params(params.trajectory)
+        self._trajectory.set_params(params.trajectory)
 
     def reset(self) -> None:
         self.left.reset()
         self.right.reset()
-        if self._trajectory is not None:
-            self._trajectory.reset()
-        self._last_point = None
-        self._speed = None
+        self._trajectory.reset()
         self._epipolar_samples.clear()
 
     def epipolar_tolerance(self) -> float:
@@ -142,25 +137,32 @@ class StereoTracker:
         if point_left is not None and self.params.stereo.head_offset > 0:
             point_left = self._to_head(det_left, det_right, point_left)
 
-        point_out = None
-        distance = None
+        measured = None
+        noise_shape = None
         if point_left is not None:
-            distance = float(np.linalg.norm(point_left))
-            point_out = tuple(float(v) for v in self.rig.to_output(point_left)[0])
+            measured = tuple(float(v) for v in self.rig.to_output(point_left)[0])
+            noise_shape = self.rig.noise_shape([[det_left.x, det_left.y]], [[det_right.x, det_right.y]])[0]
 
-        flight = FlightInfo()
+        flight = self._trajectory.update(timestamp, measured, noise_shape)
         speed = None
-        if self._trajectory is not None:
-            flight = self._trajectory.update(timestamp, point_out)
-            if flight.velocity is not None:
-                speed = float(math.sqrt(sum(v * v for v in flight.velocity)))
-        else:
-            speed = self._naive_speed(timestamp, point_out)
+        if flight.velocity is not None:
+            speed = float(math.sqrt(sum(v * v for v in flight.velocity)))
+        point_out = measured
+        filtered = self._trajectory.filtered_position()
+        if filtered is not None:
+            point_out = filtered
+        elif self._trajectory.point_rejected:
+            point_out = None
+        elif measured is not None and self.rig.has_court_pose:
+            point_out = self._resting_cork(measured)
+        distance = None
+        if point_out is not None:
+            distance = float(np.linalg.norm(self.rig.to_left([point_out])[0]))
 
         return TrackResult(
             index=index, timestamp=timestamp, left=res_left, right=res_right, point=point_out,
             in_court_frame=self.rig.has_court_pose, distance=distance, speed=speed,
-            epipolar_error=epi, index_right=index_right,
+            epipolar_error=epi, index_right=index_right, measured_point=measured,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
 
     def _choose_pair(self, res_left: CameraResult, res_right: CameraResult
@@ -203,6 +205,15 @@ class StereoTracker:
         _, i, j, point, err = best
         return left[i], right[j], point, err
 
+    def _resting_cork(self, point: tuple[float, float, float]) -> tuple[float, float, float]:
+        """A shuttle lying where the last flight landed: move the blob's point to the cork."""
+        direction = self._trajectory.resting_direction(point)
+        if direction is None:
+            return point
+        sp = self.params.stereo
+        return (point[0] + sp.rest_cork_ahead * direction[0], point[1] + sp.rest_cork_ahead * direction[1],
+                point[2] - sp.rest_cork_below)
+
     def _to_head(self, det_left: Candidate, det_right: Candidate, point: np.ndarray) -> np.ndarray:
         """Move the triangulated blob point forward along the flight to the cork (GUIDE §7).
 
@@ -227,16 +238,6 @@ class StereoTracker:
         if norm < sp.head_min_speed * HEAD_DIRECTION_DT:
             return point
         return point + sp.head_offset * step / norm
-
-    def _naive_speed(self, t: float, point) -> float | None:
-        if point is None:
-            return self._speed
-        p = np.asarray(point)
-        if self._last_point is not None and t - self._last_point[0] > 1e-6:
-            inst = float(np.linalg.norm(p - self._last_point[1]) / (t - self._last_point[0]))
-            self._speed = inst if self._speed is None else 0.5 * inst + 0.5 * self._speed
-        self._last_point = (t, p)
-        return self._speed
 
 
 def configure_opencv_threads() -> None:

@@ -65,6 +65,8 @@ MIN_START_HEIGHT = 0.15     # m: no flight starts lower (a shuttle rolling or pi
                             # with noisy points its 4-point "speed" easily exceeds MIN_FLIGHT_SPEED)
 VELOCITY_SIGMA_MIN = 0.5     # m/s: a velocity this uncertain (or 10 % of the speed) is not shown
 VELOCITY_SIGMA_FRACTION = 0.10
+REST_MAX_HEIGHT = 0.10      # m: a point this low next to the last landing is the shuttle lying there
+REST_RADIUS = 0.6           # m: ... within this distance of the predicted landing (it may bounce)
 LANDING_GRACE_S = 0.03      # s: a flight past its predicted landing time by this much has landed
 NOISE_WINDOW = 120          # innovations kept for the measured-noise estimate (~1 s at 120 fps)
 NOISE_MIN_SAMPLES = 30      # before that many, the parameter alone sets the noise
@@ -168,9 +170,12 @@ class _Filter:
     k_prior: tuple[float, float]   # (mean, variance) of k when the filter started
     points: list           # accepted measurements (t, x, y, z)
     start_t: float
+    noises: list           # the (3, 3) noise covariance each accepted point was given
+
 
     @classmethod
-    def from_two_points(cls, t1, p1, t2, p2, sigma, k_prior):
+    def from_two_points(cls, t1, p1, r1, t2, p2, r2, k_prior):
+        """A filter started from two points with noise covariances ``r1``, ``r2`` (3×3, m²)."""
         dt = t2 - t1
         p1 = np.asarray(p1, dtype=float)
         p2 = np.asarray(p2, dtype=float)
@@ -182,17 +187,18 @@ class _Filter:
         v2 = v_mid + acc * (0.5 * dt)
         x = np.concatenate([p2, v2, [k]])
         P = np.zeros((7, 7))
-        var_p = sigma * sigma
+        r1 = np.asarray(r1, dtype=float)
+        r2 = np.asarray(r2, dtype=float)
         # Velocity: chord noise, the model's change of acceleration over the interval, and the
         # unknown k (a smash decelerates at ~2000 m/s²) — generous, the next points settle it.
-        var_v = (2.0 * var_p / (dt * dt) + (0.5 * float(np.linalg.norm(acc)) * dt) ** 2
+        var_v = ((0.5 * float(np.linalg.norm(acc)) * dt) ** 2
                  + (0.5 * speed * speed * dt) ** 2 * k_prior[1] + 0.25)
-        P[0:3, 0:3] = np.eye(3) * var_p
-        P[3:6, 3:6] = np.eye(3) * var_v
-        P[0:3, 3:6] = P[3:6, 0:3] = np.eye(3) * (var_p / dt)
+        P[0:3, 0:3] = r2
+        P[3:6, 3:6] = (r1 + r2) / (dt * dt) + np.eye(3) * var_v
+        P[0:3, 3:6] = P[3:6, 0:3] = r2 / dt
         P[6, 6] = k_prior[1]
         return cls(x=x, P=P, t=t2, k_prior=k_prior,
-                   points=[(t1, *p1.tolist()), (t2, *p2.tolist())], start_t=t1)
+                   points=[(t1, *p1.tolist()), (t2, *p2.tolist())], start_t=t1, noises=[r1, r2])
 
     # ---- prediction -----------------------------------------------------------------------
     def predicted(self, t: float) -> tuple[float, float, float, float, float, float]:
@@ -228,23 +234,25 @@ class _Filter:
         self.t = t
 
     # ---- measurement ----------------------------------------------------------------------
-    def innovation(self, z: np.ndarray, sigma: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """(innovation, its covariance S, squared Mahalanobis distance) of a point at self.t."""
+    def innovation(self, z: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """(innovation, its covariance S, squared Mahalanobis distance) of a point at self.t
+        whose noise covariance is ``r`` (3×3)."""
         nu = z - self.x[:3]
-        S = self.P[0:3, 0:3] + np.eye(3) * (sigma * sigma)
+        S = self.P[0:3, 0:3] + r
         d2 = float(nu @ np.linalg.solve(S, nu))
         return nu, S, d2
 
-    def correct(self, t: float, z: np.ndarray, nu: np.ndarray, S: np.ndarray, sigma: float) -> None:
+    def correct(self, t: float, z: np.ndarray, nu: np.ndarray, S: np.ndarray, r: np.ndarray) -> None:
         PHt = self.P[:, 0:3]
         K = np.linalg.solve(S, PHt.T).T          # (7, 3), S is symmetric
         self.x = self.x + K @ nu
         IKH = _I7.copy()
         IKH[:, 0:3] -= K
         # Joseph form: stays positive definite whatever the rounding.
-        self.P = IKH @ self.P @ IKH.T + (sigma * sigma) * (K @ K.T)
+        self.P = IKH @ self.P @ IKH.T + K @ r @ K.T
         self.x[6] = min(max(self.x[6], K_MIN), K_MAX)
         self.points.append((t, float(z[0]), float(z[1]), float(z[2])))
+        self.noises.append(r)
 
     @property
     def speed(self) -> float:
@@ -297,20 +305,28 @@ class Trajectory:
         self._session_k = (k0, sigma_k0 * sigma_k0)
         self._flight: _Filter | None = None
         self._tentative: _Filter | None = None
-        self._seed: tuple[float, np.ndarray] | None = None  # last unexplained point
+        self._seed: tuple[float, np.ndarray, np.ndarray] | None = None  # last unexplained point, its noise
         self._shot_index = -1
         self._peak_speed: float | None = None
         self._launch_speed: float | None = None
         self._landing: _Landing | None = None
+        # Where the last flight came down and its horizontal direction there: a shuttle lying
+        # on the floor lies along it, cork ahead (see resting_direction).
+        self._rest_anchor: tuple[float, float, float, float] | None = None
         self._last_t: float | None = None
         self._ended_points: np.ndarray | None = None
         self._recent: list[tuple[float, float, float, float]] = []   # camera-frame mode
         self._velocity_no_model: tuple[float, float, float] | None = None
         self._misses_no_model = 0     # consecutive points off the local fit (camera-frame mode)
-        self._noise_samples: list[tuple[float, float]] = []   # (|ν|², state variance) per point
+        # Per point of an established flight: (|w|², state variance along w) with w the innovation
+        # whitened by the point's noise shape (see measurement_noise_matrix).
+        self._noise_samples: list[tuple[float, float]] = []
         self._noise_count = 0
         self._noise_dirty = True
         self._sigma_cache = self.params.measurement_noise
+        self._stereo_noise = False    # the points come with their stereo noise shape (px units)
+        self._accepted_now = False    # the last update's point extended the flight
+        self._rejected_now = False    # ... was refused by a flight being followed
         self.shots_ended = 0
 
     # ---- read-only views for plots and tests ------------------------------------------------
@@ -341,11 +357,19 @@ class Trajectory:
         return None if self._flight is None else 1.0 / float(self._flight.x[6])
 
     # ---- the per-frame entry point ------------------------------------------------------------
-    def update(self, t: float, point: tuple | None) -> FlightInfo:
-        """Feed one frame pair's 3D point (or None) at time t (s); returns the flight state."""
+    def update(self, t: float, point: tuple | None, noise_shape: np.ndarray | None = None) -> FlightInfo:
+        """Feed one frame pair's 3D point (or None) at time t (s); returns the flight state.
+
+        ``noise_shape`` (3×3, m² per px²) is the point's covariance for 1 px of noise on each
+        image coordinate (``StereoTracker`` computes it from the rig): a triangulated point is
+        several times less sure in depth than across, and far points less than near ones, so the
+        filter weighs each point by its own geometry and the scale (px) is measured from the
+        flight's innovations. Without it the noise is isotropic (``measurement_noise``, m).
+        """
         if self._last_t is not None and t < self._last_t - 1e-9:
             self.reset()        # the clock went back: a new video / replay
         self._last_t = t
+        self._accepted_now = self._rejected_now = False
         if not self.court_frame:
             return self._update_no_model(t, point)
 
@@ -365,56 +389,108 @@ class Trajectory:
         if point is not None:
             z = np.asarray(point, dtype=float)
             if np.all(np.isfinite(z)):
-                accepted = self._feed(t, z)
-
+                following = self._flight is not None
+                accepted = self._feed(t, z, self._noise_matrix(noise_shape))
+                self._rejected_now = following and not accepted
+        self._accepted_now = accepted
         return self._info(t, accepted)
 
-    # ---- court-frame machinery ---------------------------------------------------------------
-    def _feed(self, t: float, z: np.ndarray) -> bool:
-        """Use one point; True when it extended the current flight."""
-        p = self.params
+    def filtered_position(self) -> tuple[float, float, float] | None:
+        """The flight's filtered position at the last update's time, when that update's point
+        extended a flight (``update`` returned accepted); else None."""
+        if not self._accepted_now or self._flight is None:
+            return None
+        return tuple(float(v) for v in self._flight.x[:3])
+
+    def resting_direction(self, point) -> tuple[float, float] | None:
+        """The horizontal direction (unit x, y) of the flight that came down next to ``point``, when
+        the point is a shuttle lying on the floor there (no flight followed, at floor height,
+        within ``REST_RADIUS`` of the last landing); else None."""
+        if self._flight is not None or self._rest_anchor is None or point is None:
+            return None
+        x, y, dx, dy = self._rest_anchor
+        if point[2] > REST_MAX_HEIGHT or math.hypot(point[0] - x, point[1] - y) > REST_RADIUS:
+            return None
+        return dx, dy
+
+    @property
+    def point_rejected(self) -> bool:
+        """The last update's point was refused by the flight being followed (an outlier: a wrong
+        pair, a racket) and did not start a new one."""
+        return self._rejected_now
+
+    # ---- measurement noise ------------------------------------------------------------------
+    def _noise_matrix(self, shape: np.ndarray | None) -> np.ndarray:
+        """The 3×3 covariance of a point: its stereo shape × (px scale)², or isotropic (m)."""
+        stereo = shape is not None
+        if stereo != self._stereo_noise:
+            # The units of the measured scale change (px vs m): start measuring afresh.
+            self._stereo_noise = stereo
+            self._noise_samples.clear()
+            self._noise_dirty = True
         sigma = self.measurement_sigma
+        if stereo:
+            return np.asarray(shape, dtype=float) * (sigma * sigma)
+        return np.eye(3) * (sigma * sigma)
+
+    # ---- court-frame machinery ---------------------------------------------------------------
+    def _feed(self, t: float, z: np.ndarray, r: np.ndarray) -> bool:
+        """Use one point with noise covariance ``r``; True when it extended the current flight."""
+        p = self.params
         flight = self._flight
         if flight is not None and t > flight.t:
             # Gate against a copy of the prediction: a rejected point must leave the flight as it was.
             saved = (flight.x, flight.P, flight.t)
             flight.predict(t, p.model_noise)
-            nu, S, d2 = flight.innovation(z, sigma)
+            nu, S, d2 = flight.innovation(z, r)
             if len(flight.points) >= p.min_points:
-                self._observe_noise(nu, flight.P)
+                self._observe_noise(nu, flight.P, r)
             if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
-                flight.correct(t, z, nu, S, sigma)
+                flight.correct(t, z, nu, S, r)
                 self._after_flight_update()
                 self._tentative = None
                 self._seed = None
                 return True
             flight.x, flight.P, flight.t = saved
-        self._feed_tentative(t, z)
+        self._feed_tentative(t, z, r)
         return self._flight is not None and self._flight.t == t
 
-    def _observe_noise(self, nu: np.ndarray, P: np.ndarray) -> None:
-        """Collect one innovation of an established flight for the measured-noise estimate."""
-        nu2 = float(nu @ nu)
-        if nu2 <= self.params.outlier_distance ** 2:
-            self._noise_samples.append((nu2, float(P[0, 0] + P[1, 1] + P[2, 2]) / 3.0))
-            if len(self._noise_samples) > NOISE_WINDOW:
-                del self._noise_samples[:-NOISE_WINDOW]
-            self._noise_count += 1
-            if self._noise_count % 8 == 0:       # re-estimate every few points: a median costs
-                self._noise_dirty = True
+    def _observe_noise(self, nu: np.ndarray, P: np.ndarray, r: np.ndarray) -> None:
+        """Collect one innovation of an established flight for the measured-noise estimate.
+
+        The innovation is whitened by the point's noise shape (``r`` / σ²), so the samples
+        measure the one scale σ whatever the point's range and direction.
+        """
+        if float(nu @ nu) > self.params.outlier_distance ** 2:
+            return
+        sigma2 = self.measurement_sigma ** 2
+        if self._stereo_noise:
+            chol = np.linalg.cholesky(r / sigma2)
+            w = np.linalg.solve(chol, nu)
+            Pw = np.linalg.solve(chol, np.linalg.solve(chol, P[0:3, 0:3]).T)
+            sample = (float(w @ w), float(np.trace(Pw)) / 3.0)
+        else:
+            sample = (float(nu @ nu), float(P[0, 0] + P[1, 1] + P[2, 2]) / 3.0)
+        self._noise_samples.append(sample)
+        if len(self._noise_samples) > NOISE_WINDOW:
+            del self._noise_samples[:-NOISE_WINDOW]
+        self._noise_count += 1
+        if self._noise_count % 8 == 0:       # re-estimate every few points: a median costs
+            self._noise_dirty = True
 
     @property
     def measurement_sigma(self) -> float:
-        """σ of a 3D point used by the filter: the parameter, or more if the points say so.
+        """σ of the points used by the filter: the parameter, or more if the points say so.
 
-        The points' real scatter is estimated from recent innovations of established flights:
-        |ν|² ~ (σ² + state variance) χ²₃, whose median is 2.366 (σ² + state variance). The
-        parameter is a floor: a rig worse than declared (wide range, short baseline) must not
+        In metres for isotropic points, in image pixels for points with a stereo noise shape.
+        The points' real scatter is estimated from recent (whitened) innovations of established
+        flights: |w|² ~ (σ² + state variance) χ²₃, whose median is 2.366 (σ² + state variance).
+        The parameter is a floor: a rig worse than declared (wide range, short baseline) must not
         see its good points rejected as outliers and its shots chopped into pieces.
         """
         if self._noise_dirty:
             self._noise_dirty = False
-            floor = self.params.measurement_noise
+            floor = self.params.pixel_noise if self._stereo_noise else self.params.measurement_noise
             if len(self._noise_samples) >= NOISE_MIN_SAMPLES:
                 arr = np.asarray(self._noise_samples)
                 var = float(np.median(arr[:, 0])) / 2.366 - float(np.median(arr[:, 1]))
@@ -423,17 +499,16 @@ class Trajectory:
                 self._sigma_cache = floor
         return self._sigma_cache
 
-    def _feed_tentative(self, t: float, z: np.ndarray) -> None:
+    def _feed_tentative(self, t: float, z: np.ndarray, r: np.ndarray) -> None:
         """A point the flight could not explain: grow (or restart) the tentative track."""
         p = self.params
-        sigma = self.measurement_sigma
         tent = self._tentative
         if tent is not None and t > tent.t:
             saved = (tent.x, tent.P, tent.t)
             tent.predict(t, p.model_noise)
-            nu, S, d2 = tent.innovation(z, sigma)
+            nu, S, d2 = tent.innovation(z, r)
             if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
-                tent.correct(t, z, nu, S, sigma)
+                tent.correct(t, z, nu, S, r)
                 needed = CONFIRM_POINTS if self._flight is None else TAKEOVER_POINTS
                 if len(tent.points) >= needed:
                     self._promote(tent)
@@ -441,9 +516,9 @@ class Trajectory:
             tent.x, tent.P, tent.t = saved
         # Start a tentative track from the previous unexplained point and this one.
         if self._seed is not None and t > self._seed[0]:
-            t0, z0 = self._seed
-            self._tentative = _Filter.from_two_points(t0, z0, t, z, sigma, self._session_k)
-        self._seed = (t, z)
+            t0, z0, r0 = self._seed
+            self._tentative = _Filter.from_two_points(t0, z0, r0, t, z, r, self._session_k)
+        self._seed = (t, z, r)
 
     def _promote(self, tent: _Filter) -> None:
         """The tentative track becomes the flight: a new shot, or a re-synchronised one."""
@@ -458,9 +533,9 @@ class Trajectory:
             # the first point after a hit is the racket's blob), or it is not where the followed
             # shuttle is or could have been hit (a racket, a shoe, the skirt for a few frames):
             # keep the flight, drop the track's oldest point and refit the rest.
-            self._tentative = self._refit(tent.points[1:])
+            self._tentative = self._refit(tent.points[1:], tent.noises[1:])
             last = tent.points[-1]
-            self._seed = (last[0], np.asarray(last[1:], dtype=float))
+            self._seed = (last[0], np.asarray(last[1:], dtype=float), tent.noises[-1])
             return
         new_shot = True
         if old is not None:
@@ -477,33 +552,35 @@ class Trajectory:
                 tent.P[6, 6] = old.P[6, 6]
                 tent.k_prior = old.k_prior
                 tent.points = old.points + tent.points
+                tent.noises = old.noises + tent.noises
                 tent.start_t = old.start_t
             else:
                 self._end_flight()
         self._flight = tent
         self._tentative = None
         self._seed = None
+        self._rest_anchor = None
         if new_shot:
             self._shot_index += 1
             self._peak_speed = None
             self._launch_speed = None
         self._after_flight_update()
 
-    def _refit(self, points: list) -> _Filter | None:
-        """A tentative track fitted to ``points`` (t, x, y, z) afresh; points it rejects are left out."""
+    def _refit(self, points: list, noises: list) -> _Filter | None:
+        """A tentative track fitted to ``points`` (t, x, y, z) with their noise covariances afresh;
+        points it rejects are left out."""
         if len(points) < 2:
             return None
         p = self.params
-        sigma = self.measurement_sigma
         (t0, *z0), (t1, *z1) = points[0], points[1]
-        tent = _Filter.from_two_points(t0, z0, t1, z1, sigma, self._session_k)
-        for t_i, *z_i in points[2:]:
+        tent = _Filter.from_two_points(t0, z0, noises[0], t1, z1, noises[1], self._session_k)
+        for (t_i, *z_i), r in zip(points[2:], noises[2:]):
             saved = (tent.x, tent.P, tent.t)
             tent.predict(t_i, p.model_noise)
             z = np.asarray(z_i, dtype=float)
-            nu, S, d2 = tent.innovation(z, sigma)
+            nu, S, d2 = tent.innovation(z, r)
             if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
-                tent.correct(t_i, z, nu, S, sigma)
+                tent.correct(t_i, z, nu, S, r)
             else:
                 tent.x, tent.P, tent.t = saved
         return tent
@@ -518,7 +595,7 @@ class Trajectory:
         """
         t_first = tent.points[0][0]
         t_from = min(old.t, t_first)
-        var = (self.measurement_sigma ** 2 + float(np.trace(old.P[0:3, 0:3])) / 3.0
+        var = (float(np.trace(tent.noises[0])) / 3.0 + float(np.trace(old.P[0:3, 0:3])) / 3.0
                + float(np.trace(tent.P[0:3, 0:3])) / 3.0)
         gate = self.params.outlier_sigma * math.sqrt(var) + HIT_SLACK
         new_state = tuple(tent.x[:6].tolist())
@@ -540,17 +617,17 @@ class Trajectory:
         """
         state = tuple(tent.x[:6].tolist())
         k = float(tent.x[6])
-        sigma = self.measurement_sigma
-        limit = self.params.outlier_sigma * sigma
+        limit2 = self.params.outlier_sigma ** 2
         total = 0.0
-        for t_i, x_i, y_i, z_i in tent.points:
+        for (t_i, x_i, y_i, z_i), r in zip(tent.points, tent.noises):
             px, py, pz = _propagate(state, k, t_i - tent.t)[:3]
-            r2 = (px - x_i) ** 2 + (py - y_i) ** 2 + (pz - z_i) ** 2
-            if r2 > limit * limit:
+            res = np.array([px - x_i, py - y_i, pz - z_i])
+            m2 = float(res @ np.linalg.solve(r, res))    # squared Mahalanobis distance
+            if m2 > limit2:
                 return False
-            total += r2
+            total += m2
         dof = max(3 * len(tent.points) - 6, 1)
-        return total / (sigma * sigma) <= _chi2_999(dof)
+        return total <= _chi2_999(dof)
 
     def _after_flight_update(self) -> None:
         """Bookkeeping after the flight took a point: landing, peak speed, end on the floor."""
@@ -593,6 +670,12 @@ class Trajectory:
         self.shots_ended += 1
         if not keep_landing:
             self._landing = None
+        elif self._landing is not None:
+            vx, vy = float(f.x[3]), float(f.x[4])
+            norm = math.hypot(vx, vy)
+            if norm > 1e-6:
+                pred = self._landing.prediction
+                self._rest_anchor = (pred.x, pred.y, vx / norm, vy / norm)
 
     def _sigma_k(self, sigma_length: float, length: float = physics.DEFAULT_AERO_LENGTH) -> float:
         """σ of k = 1/L for a σ of L (first order)."""

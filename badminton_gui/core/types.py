@@ -108,7 +108,7 @@ class TrackResult:
     timestamp: float
     left: CameraResult
     right: CameraResult
-    point: tuple[float, float, float] | None = None   # metres
+    point: tuple[float, float, float] | None = None   # metres: the best estimate (filtered in a flight)
     in_court_frame: bool = False    # point is in court coordinates (else left-camera frame)
     distance: float | None = None   # metres from the left camera (the paper's readout)
     speed: float | None = None      # m/s
@@ -116,6 +116,8 @@ class TrackResult:
     index_right: int = -1
     processing_ms: float = 0.0
     flight: FlightInfo = field(default_factory=FlightInfo)
+    # The triangulated pair as measured (cork-corrected), even when the flight refused it.
+    measured_point: tuple[float, float, float] | None = None
 
     @property
     def has_point(self) -> bool:
