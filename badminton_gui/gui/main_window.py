@@ -531,7 +531,7 @@ class MainWindow(QMainWindow):
         """The window as an image, with the GL view composited from its framebuffer."""
         pixmap = self.grab()
         if self.gl_view is not None and self.gl_view.widget.isVisible():
-            image = self.gl_view.widget.grabFramebuffer()
+            image = self.gl_view.window.grabFramebuffer()
             if not image.isNull():
                 painter = QPainter(pixmap)
                 painter.drawImage(self.gl_view.widget.mapTo(self, QPoint(0, 0)), image)
