@@ -147,22 +147,30 @@ class CameraDetector:
             # the strongest brightening; only the best get the full-resolution measurement.
             diff = self._background.last_difference
             live = self._associator.live_predictions(t)
+            boxes = np.array([g[4] for g in geometric], dtype=float)
+            centre_x = boxes[:, 0] + boxes[:, 2] / 2
+            centre_y = boxes[:, 1] + boxes[:, 3] / 2
+            if len(live):
+                near = (np.hypot(live[None, :, 0] - centre_x[:, None],
+                                 live[None, :, 1] - centre_y[:, None])
+                        <= live[None, :, 2]).any(axis=1).tolist()
+            else:
+                near = [False] * len(geometric)
             ranked = []
-            for g in geometric:
+            for g, is_near in zip(geometric, near):
                 box = g[4]
-                cx, cy = box[0] + box[2] / 2, box[1] + box[3] / 2
                 if diff is not None:
                     bx0, by0 = int(box[0] / sx), int(box[1] / sy)
                     window = (slice(by0, by0 + max(int(box[3] / sy), 1)),
                               slice(bx0, bx0 + max(int(box[2] / sx), 1)))
                     # Brightening, plus plain brightness: a shuttle held still before the
                     # serve fades into the average but stays the brightest thing around.
-                    strength = float(diff[window].max()) + 0.5 * float(gray[window].max())
+                    # (cv2.minMaxLoc: the windows' maxima at a fraction of numpy's overhead.)
+                    strength = (cv2.minMaxLoc(diff[window])[1]
+                                + 0.5 * cv2.minMaxLoc(gray[window])[1])
                 else:
                     strength = -g[3]   # MOG2 gives no strength: smaller blobs first
-                near = bool(len(live)) and bool(np.any(
-                    np.hypot(live[:, 0] - cx, live[:, 1] - cy) <= live[:, 2]))
-                ranked.append((near, strength, g))
+                ranked.append((is_near, strength, g))
             ranked.sort(key=lambda r: (r[0], r[1]), reverse=True)
             for _, _, (_, length, short_side, area, box) in ranked[limit:]:
                 candidates.append(Candidate(box[0] + box[2] / 2, box[1] + box[3] / 2, length,
@@ -170,8 +178,11 @@ class CameraDetector:
                                             REJECT_WHITENESS))
             geometric = [r[2] for r in ranked[:limit]]
 
+        # Filter 3 and the appearance features, blob by blob; the classifier then scores all
+        # the blobs of the frame in one call (one small matrix product instead of one each).
         measured = []
-        for _, length, short_side, area, box in geometric:
+        features = np.empty((len(geometric), len(FEATURE_NAMES)))
+        for row, (_, length, short_side, area, box) in enumerate(geometric):
             x, y, whiteness, saturation, appearance = self._measure(
                 frame_bgr, mask, box, sx, sy, p.colour.head_fraction)
             contrast = float(appearance[0])
@@ -182,12 +193,17 @@ class CameraDetector:
             elif p.motion.min_displacement > 0 and self._is_stationary(x, y):
                 reason = REJECT_MOTION
             long_side = max(length / 2.0 - short_side, short_side)
-            feats = np.concatenate([[math.log1p(length), math.log1p(short_side), math.log1p(area),
-                                     long_side / max(short_side, 1e-3)], appearance])
-            quality = self._quality(length, contrast, feats)
-            if reason is None and quality < p.association.min_quality:
-                reason = REJECT_SCORE
-            measured.append([x, y, length, short_side, whiteness, area, quality, reason, feats])
+            feats = features[row]
+            feats[:4] = (math.log1p(length), math.log1p(short_side), math.log1p(area),
+                         long_side / max(short_side, 1e-3))
+            feats[4:] = appearance
+            measured.append([x, y, length, short_side, whiteness, area, 0.0, reason, feats])
+        if measured:
+            qualities = self._qualities(np.array([m[2] for m in measured]), features[:, 4], features)
+            for m, quality in zip(measured, qualities.tolist()):
+                m[6] = quality
+                if m[7] is None and quality < p.association.min_quality:
+                    m[7] = REJECT_SCORE
         self._previous_positions = np.asarray([(m[0], m[1]) for m in measured],
                                               dtype=float).reshape(-1, 2)
 
@@ -276,17 +292,19 @@ class CameraDetector:
         return dataclasses.replace(result, detection=chosen, candidates=tuple(cands))
 
     # ---- measurements ----------------------------------------------------------------------
-    def _quality(self, length: float, contrast: float, features: np.ndarray) -> float:
-        """Shape/contrast score of a lone candidate in [0, 1] (the soft side of filters 1 and 3).
+    def _qualities(self, lengths: np.ndarray, contrasts: np.ndarray,
+                   features: np.ndarray) -> np.ndarray:
+        """Shape/contrast scores of lone candidates in [0, 1] (the soft side of filters 1 and 3).
 
-        With the learned classifier enabled this is its probability that the blob is the
+        With the learned classifier enabled this is its probability that each blob is the
         shuttle; otherwise a hand-made blend of contrast and size.
         """
         if self._classifier is not None:
-            return float(self._classifier.probability(features[None, :])[0])
+            return self._classifier.probability(features)
         c = self.params.colour
-        bright = min(max(contrast - c.min_contrast, 0.0) / max(c.contrast_reference - c.min_contrast, 1.0), 1.0)
-        size = min(length / max(self.params.contour_length.min_length * 2.0, 1.0), 1.0)
+        bright = np.minimum(np.maximum(contrasts - c.min_contrast, 0.0)
+                            / max(c.contrast_reference - c.min_contrast, 1.0), 1.0)
+        size = np.minimum(lengths / max(self.params.contour_length.min_length * 2.0, 1.0), 1.0)
         return 0.7 * bright + 0.3 * size
 
     def _is_stationary(self, x: float, y: float) -> bool:
@@ -307,42 +325,58 @@ class CameraDetector:
         head rather than the middle of head + skirt, to a fraction of a pixel.
         The appearance features (see ``FEATURE_NAMES``) describe how small, bright, isolated
         and white the blob is; the candidate classifier and the hand-made score read them.
+
+        Speed: up to ``association.max_measured`` blobs per frame and camera come here, so
+        every step is one OpenCV call on the small window (about a microsecond each) rather
+        than a numpy reduction (several microseconds of overhead each, and the GIL held, so
+        the two camera threads would queue on it). The values are those of the plain numpy
+        formulas that the classifiers were trained on (``tests/test_detector.py`` pins them):
+        grey is ``mean(B, G, R)`` in float32, the border median is numpy's, sums and means are
+        exact on integer data; only the window's standard deviation and the centroid's sums
+        are accumulated in double instead of float32 (relative differences ~1e-7).
         """
         h, w = frame.shape[:2]
         x0 = max(box[0] - REFINE_MARGIN, 0)
         y0 = max(box[1] - REFINE_MARGIN, 0)
         x1 = min(box[0] + box[2] + REFINE_MARGIN, w)
         y1 = min(box[1] + box[3] + REFINE_MARGIN, h)
-        crop = frame[y0:y1, x0:x1]
-        features = np.zeros(N_APPEARANCE, dtype=np.float32)
-        if crop.size == 0:
-            return box[0] + box[2] / 2, box[1] + box[3] / 2, 0.0, 255.0, features
-        # The blob's pixels at full resolution: the mask window, resized.
+        if x1 <= x0 or y1 <= y0:
+            return (box[0] + box[2] / 2, box[1] + box[3] / 2, 0.0, 255.0,
+                    np.zeros(N_APPEARANCE, dtype=np.float32))
+        # One contiguous copy of the window: cv2.split of a strided view copies it anyway.
+        crop = np.ascontiguousarray(frame[y0:y1, x0:x1])
+        ch, cw = crop.shape[:2]
+        # The blob's pixels at full resolution: the mask window, resized (0 / 255).
         mx0, my0 = int(x0 / sx), int(y0 / sy)
         mx1, my1 = max(int(math.ceil(x1 / sx)), mx0 + 1), max(int(math.ceil(y1 / sy)), my0 + 1)
-        mcrop = mask[my0:my1, mx0:mx1]
-        if mcrop.shape[:2] != crop.shape[:2]:
-            mcrop = cv2.resize(mcrop, (crop.shape[1], crop.shape[0]), interpolation=cv2.INTER_NEAREST)
-        inside = mcrop > 0
-        cmin = crop.min(axis=2)
-        cmax = crop.max(axis=2)
-        if inside.any():
-            whiteness = float(cmin[inside].mean())
-            saturation = float((cmax[inside].astype(np.int16) - cmin[inside]).mean())
+        inside = mask[my0:my1, mx0:mx1]
+        if inside.shape[:2] != (ch, cw):
+            inside = cv2.resize(inside, (cw, ch), interpolation=cv2.INTER_NEAREST)
+        blue, green, red = cv2.split(crop)
+        cmin = cv2.min(cv2.min(blue, green), red)
+        cmax = cv2.max(cv2.max(blue, green), red)
+        n_inside = cv2.countNonZero(inside)
+        if n_inside:
+            whiteness = cv2.mean(cmin, mask=inside)[0]
+            saturation = cv2.mean(cv2.subtract(cmax, cmin), mask=inside)[0]
         else:
             whiteness, saturation = 0.0, 255.0
-        gray = crop.astype(np.float32).mean(axis=2)
+        # mean(B, G, R) in float32: the integer sum is exact, then one float32 division.
+        gray = cv2.add(blue, green, dtype=cv2.CV_32F)
+        cv2.add(gray, red, dst=gray, dtype=cv2.CV_32F)
+        np.divide(gray, 3, out=gray)
         border = np.concatenate([gray[0], gray[-1], gray[:, 0], gray[:, -1]])
-        background = float(np.median(border))
+        background = _median_float32(border)
         excess = gray - background
-        peak = float(excess.max())
-        bright = excess > 0.5 * peak
-        n_bright = int(bright.sum())
-        border_bright = np.concatenate([bright[0], bright[-1], bright[:, 0], bright[:, -1]])
-        spill = float(border_bright.mean())
-        peak_sat = float(cmax.max()) - float(cmin.max())
-        features[:] = (peak, background, math.log1p(n_bright), spill, whiteness, saturation,
-                       math.log1p(inside.sum()), peak_sat, float(gray.std()))
+        peak = cv2.minMaxLoc(excess)[1]
+        half_peak = 0.5 * peak
+        n_bright = cv2.countNonZero(cv2.compare(excess, half_peak, cv2.CMP_GT))
+        # The border's excess, element for element as the window's (same float32 subtraction).
+        spill = float(np.count_nonzero((border - background) > half_peak)) / len(border)
+        peak_sat = cv2.minMaxLoc(cmax)[1] - cv2.minMaxLoc(cmin)[1]
+        window_std = float(cv2.meanStdDev(gray)[1][0, 0])
+        features = np.array((peak, background, math.log1p(n_bright), spill, whiteness, saturation,
+                             math.log1p(n_inside), peak_sat, window_std), dtype=np.float32)
         if peak <= 0:
             ys, xs = np.nonzero(inside)
             if len(xs) == 0:
@@ -351,23 +385,43 @@ class CameraDetector:
         # The position is measured on the blob's own pixels only (its mask, grown by one
         # full-resolution pixel for the blur fringe): a light or a court line inside the
         # window is brighter than the shuttle and used to drag the centroid towards itself.
-        support = inside
-        if support.any():
-            support = cv2.dilate(support.astype(np.uint8), _GROW) > 0
-        blob_excess = np.where(support, excess, 0.0)
-        blob_peak = float(blob_excess.max())
+        blob_peak = 0.0
+        if n_inside:
+            support = cv2.dilate(inside, _GROW)
+            # copyTo into a new array zero-fills outside the mask: excess on the support, else 0.
+            blob_excess = cv2.copyTo(excess, support)
+            blob_peak = cv2.minMaxLoc(blob_excess)[1]
         if blob_peak <= 0:
-            blob_excess = np.clip(excess, 0, None)
+            blob_excess = np.maximum(excess, 0)
             blob_peak = peak
         # Keep the part of the blob above ``head_fraction`` of its peak: the cork is whiter
         # than the feathers (0 = the whole blob's intensity centroid).
-        weights = np.clip(blob_excess - head_fraction * blob_peak, 0, None)
-        total = float(weights.sum())
-        if total <= 0:
-            weights = np.clip(blob_excess, 0, None)
-            total = float(weights.sum())
-        ys, xs = np.mgrid[0:crop.shape[0], 0:crop.shape[1]]
+        weights = blob_excess - head_fraction * blob_peak
+        np.maximum(weights, 0, out=weights)
+        moments = _raster_moments(weights)
+        if moments[0] <= 0:
+            moments = _raster_moments(np.maximum(blob_excess, 0))
         # OpenCV's convention: integer coordinates are pixel centres (as projectPoints gives).
-        cx = float((weights * xs).sum() / total) + x0
-        cy = float((weights * ys).sum() / total) + y0
-        return cx, cy, whiteness, saturation, features
+        total, sum_x, sum_y = moments
+        return sum_x / total + x0, sum_y / total + y0, whiteness, saturation, features
+
+
+def _median_float32(values: np.ndarray) -> float:
+    """``np.median`` of a 1-D float32 array, without its generic machinery (same result)."""
+    n = len(values)
+    k = n // 2
+    if n % 2:
+        return float(np.partition(values, k)[k])
+    part = np.partition(values, (k - 1, k))
+    # np.median averages the two middle values in the array's dtype (float32).
+    return float((part[k - 1] + part[k]) / np.float32(2))
+
+
+def _raster_moments(weights: np.ndarray) -> tuple[float, float, float]:
+    """(Σw, Σw·x, Σw·y) of a float32 image, accumulated in double (cv2.moments)."""
+    if weights.shape[1] == 2:
+        # cv2.moments reads an (N, 2) single-channel float array as N contour points.
+        ys, xs = np.mgrid[0:weights.shape[0], 0:weights.shape[1]]
+        return float(weights.sum(dtype=np.float64)), float((weights * xs).sum()), float((weights * ys).sum())
+    m = cv2.moments(weights)
+    return m["m00"], m["m10"], m["m01"]

@@ -1,0 +1,168 @@
+"""The detector's fast paths give the values of the plain numpy formulas they replaced.
+
+Why this file exists: the appearance features feed trained classifiers
+(``resources/candidate_classifier*.json``), so a faster implementation must not move them, and a
+later "simplification" must not either. The reference functions below are the original numpy
+code, kept verbatim; the fast code is compared with them on synthetic blobs that reach every
+branch (window clipped by the image edge, no mask pixel inside, nothing brighter than the border,
+mask windows that need resizing) and, when ../shared/data is present, on real NYCU frames.
+"""
+
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from badminton_gui.core.detector import N_APPEARANCE, REFINE_MARGIN, CameraDetector
+from badminton_gui.io.presets import load_preset
+
+_GROW = np.ones((3, 3), np.uint8)
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+NYCU_LEFT = DATA / "nycu-stereo" / "rally_11-46-04" / "CameraReader_1.mp4"
+
+
+def reference_measure(frame, mask, box, sx, sy, head_fraction=0.5):
+    """The per-blob measurement as first written (numpy reductions), the values' definition."""
+    h, w = frame.shape[:2]
+    x0 = max(box[0] - REFINE_MARGIN, 0)
+    y0 = max(box[1] - REFINE_MARGIN, 0)
+    x1 = min(box[0] + box[2] + REFINE_MARGIN, w)
+    y1 = min(box[1] + box[3] + REFINE_MARGIN, h)
+    crop = frame[y0:y1, x0:x1]
+    features = np.zeros(N_APPEARANCE, dtype=np.float32)
+    if crop.size == 0:
+        return box[0] + box[2] / 2, box[1] + box[3] / 2, 0.0, 255.0, features
+    mx0, my0 = int(x0 / sx), int(y0 / sy)
+    mx1, my1 = max(int(math.ceil(x1 / sx)), mx0 + 1), max(int(math.ceil(y1 / sy)), my0 + 1)
+    mcrop = mask[my0:my1, mx0:mx1]
+    if mcrop.shape[:2] != crop.shape[:2]:
+        mcrop = cv2.resize(mcrop, (crop.shape[1], crop.shape[0]), interpolation=cv2.INTER_NEAREST)
+    inside = mcrop > 0
+    cmin = crop.min(axis=2)
+    cmax = crop.max(axis=2)
+    if inside.any():
+        whiteness = float(cmin[inside].mean())
+        saturation = float((cmax[inside].astype(np.int16) - cmin[inside]).mean())
+    else:
+        whiteness, saturation = 0.0, 255.0
+    gray = crop.astype(np.float32).mean(axis=2)
+    border = np.concatenate([gray[0], gray[-1], gray[:, 0], gray[:, -1]])
+    background = float(np.median(border))
+    excess = gray - background
+    peak = float(excess.max())
+    bright = excess > 0.5 * peak
+    n_bright = int(bright.sum())
+    border_bright = np.concatenate([bright[0], bright[-1], bright[:, 0], bright[:, -1]])
+    spill = float(border_bright.mean())
+    peak_sat = float(cmax.max()) - float(cmin.max())
+    features[:] = (peak, background, math.log1p(n_bright), spill, whiteness, saturation,
+                   math.log1p(inside.sum()), peak_sat, float(gray.std()))
+    if peak <= 0:
+        ys, xs = np.nonzero(inside)
+        if len(xs) == 0:
+            return box[0] + box[2] / 2, box[1] + box[3] / 2, whiteness, saturation, features
+        return x0 + xs.mean(), y0 + ys.mean(), whiteness, saturation, features
+    support = inside
+    if support.any():
+        support = cv2.dilate(support.astype(np.uint8), _GROW) > 0
+    blob_excess = np.where(support, excess, 0.0)
+    blob_peak = float(blob_excess.max())
+    if blob_peak <= 0:
+        blob_excess = np.clip(excess, 0, None)
+        blob_peak = peak
+    weights = np.clip(blob_excess - head_fraction * blob_peak, 0, None)
+    total = float(weights.sum())
+    if total <= 0:
+        weights = np.clip(blob_excess, 0, None)
+        total = float(weights.sum())
+    ys, xs = np.mgrid[0:crop.shape[0], 0:crop.shape[1]]
+    cx = float((weights * xs).sum() / total) + x0
+    cy = float((weights * ys).sum() / total) + y0
+    return cx, cy, whiteness, saturation, features
+
+
+def _as_vector(measured):
+    x, y, whiteness, saturation, features = measured
+    return np.array([x, y, whiteness, saturation, *features], dtype=float)
+
+
+def assert_same_measure(frame, mask, box, sx, sy, head_fraction=0.5):
+    ref = _as_vector(reference_measure(frame, mask, box, sx, sy, head_fraction))
+    fast = _as_vector(CameraDetector._measure(frame, mask, box, sx, sy, head_fraction))
+    # Sums of integer data are exact in both; the window's std and the centroid's sums are
+    # accumulated in double instead of float32 (~1e-7 relative).
+    np.testing.assert_allclose(fast, ref, rtol=1e-5, atol=1e-5, err_msg=f"box {box}")
+
+
+def _synthetic_frame(seed):
+    rng = np.random.default_rng(seed)
+    frame = cv2.add(np.full((240, 320, 3), 30, np.uint8), rng.integers(0, 8, (240, 320, 3), dtype=np.uint8))
+    cv2.rectangle(frame, (150, 40), (190, 70), (250, 250, 250), -1)          # a light
+    cv2.circle(frame, (172, 82), 3, (210, 215, 205), -1)                     # a shuttle beside it
+    cv2.circle(frame, (2, 3), 3, (230, 230, 230), -1)                        # one in a corner
+    cv2.ellipse(frame, (250, 190), (12, 4), 30, 0, 360, (60, 90, 200), -1)   # a coloured shoe
+    cv2.circle(frame, (60, 200), 4, (200, 200, 200), -1)
+    return frame
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("scale", [0.5, 1.0])
+def test_measure_equals_the_numpy_formulas_on_synthetic_blobs(seed, scale):
+    frame = _synthetic_frame(seed)
+    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    if scale < 1.0:
+        gray = cv2.resize(gray, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    mask = cv2.threshold(gray, 120, 255, cv2.THRESH_BINARY)[1]
+    sx = frame.shape[1] / mask.shape[1]
+    sy = frame.shape[0] / mask.shape[0]
+    boxes = [(168, 78, 9, 9), (148, 38, 45, 35), (0, 0, 6, 7), (238, 184, 25, 13), (56, 196, 9, 9),
+             (100, 120, 8, 8),            # nothing in the mask: no support, plain background
+             (315, 235, 5, 5),            # clipped by the bottom-right corner
+             (90, 90, 1, 1)]              # the smallest window
+    for box in boxes:
+        for head_fraction in (0.0, 0.5, 0.9):
+            assert_same_measure(frame, mask, box, sx, sy, head_fraction)
+
+
+def test_measure_on_a_window_darker_than_its_border():
+    # peak <= 0: the position falls back to the mask's centroid (or the box centre).
+    frame = np.full((60, 80, 3), 200, np.uint8)
+    frame[20:30, 30:40] = 50
+    mask = np.zeros((60, 80), np.uint8)
+    mask[22:28, 32:38] = 255
+    assert_same_measure(frame, mask, (30, 20, 10, 10), 1.0, 1.0)
+    assert_same_measure(frame, np.zeros_like(mask), (30, 20, 10, 10), 1.0, 1.0)
+
+
+def test_measure_on_a_two_pixel_wide_window():
+    # cv2.moments would read an (N, 2) float array as N contour points: the fast path must not.
+    frame = np.full((12, 2, 3), 40, np.uint8)
+    frame[5:7, :] = 220
+    frame[6, 1] = 250
+    mask = np.zeros((12, 2), np.uint8)
+    mask[5:7, :] = 255
+    assert_same_measure(frame, mask, (0, 5, 2, 2), 1.0, 1.0)
+
+
+@pytest.mark.skipif(not NYCU_LEFT.is_file(), reason="real data (../shared/data) not available")
+def test_measure_equals_the_numpy_formulas_on_real_frames():
+    seen = []
+    original = CameraDetector._measure
+
+    def recording(frame, mask, box, sx, sy, head_fraction=0.5):
+        seen.append((frame, mask.copy(), box, sx, sy, head_fraction))
+        return original(frame, mask, box, sx, sy, head_fraction)
+
+    det = CameraDetector(load_preset("default"))
+    det._measure = recording
+    cap = cv2.VideoCapture(str(NYCU_LEFT))
+    for i in range(25):
+        ok, frame = cap.read()
+        assert ok
+        det.process(frame, i / 119.0, keep_mask=False)
+    cap.release()
+    assert len(seen) > 100
+    for args in seen:
+        assert_same_measure(*args)
