@@ -15,7 +15,8 @@ import cv2
 import numpy as np
 import pytest
 
-from badminton_gui.core.detector import N_APPEARANCE, REFINE_MARGIN, CameraDetector
+from badminton_gui.core import detector as detector_module
+from badminton_gui.core.detector import N_APPEARANCE, REFINE_MARGIN, CameraDetector, measure_blobs
 from badminton_gui.io.presets import load_preset
 
 _GROW = np.ones((3, 3), np.uint8)
@@ -146,23 +147,50 @@ def test_measure_on_a_two_pixel_wide_window():
     assert_same_measure(frame, mask, (0, 5, 2, 2), 1.0, 1.0)
 
 
+def assert_same_batch(frame, mask, boxes, sx, sy, head_fraction=0.5):
+    """All boxes measured together (one canvas) equal each box measured alone by the reference."""
+    batch = measure_blobs(frame, mask, boxes, sx, sy, head_fraction)
+    for k, box in enumerate(boxes):
+        ref = _as_vector(reference_measure(frame, mask, box, sx, sy, head_fraction))
+        fast = _as_vector(tuple(part[k] for part in batch))
+        np.testing.assert_allclose(fast, ref, rtol=1e-5, atol=1e-5, err_msg=f"box {box}")
+
+
+@pytest.mark.parametrize("scale", [0.5, 1.0])
+def test_windows_measured_together_do_not_interact(scale):
+    # Neighbouring windows in the shared canvas (different widths, a mask touching a window's
+    # last row, empty and clipped windows in between) must give each its own values.
+    frame = _synthetic_frame(3)
+    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    if scale < 1.0:
+        gray = cv2.resize(gray, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    mask = cv2.threshold(gray, 120, 255, cv2.THRESH_BINARY)[1]
+    sx = frame.shape[1] / mask.shape[1]
+    sy = frame.shape[0] / mask.shape[0]
+    boxes = [(148, 38, 45, 35), (168, 78, 9, 9), (100, 120, 8, 8), (315, 235, 5, 5),
+             (0, 0, 6, 7), (238, 184, 25, 13), (56, 196, 9, 9), (170, 60, 10, 30),
+             (400, 400, 5, 5)]   # entirely outside the frame: an empty window
+    for head_fraction in (0.0, 0.5):
+        assert_same_batch(frame, mask, boxes, sx, sy, head_fraction)
+
+
 @pytest.mark.skipif(not NYCU_LEFT.is_file(), reason="real data (../shared/data) not available")
-def test_measure_equals_the_numpy_formulas_on_real_frames():
+def test_measure_equals_the_numpy_formulas_on_real_frames(monkeypatch):
     seen = []
-    original = CameraDetector._measure
+    original = detector_module.measure_blobs
 
-    def recording(frame, mask, box, sx, sy, head_fraction=0.5):
-        seen.append((frame, mask.copy(), box, sx, sy, head_fraction))
-        return original(frame, mask, box, sx, sy, head_fraction)
+    def recording(frame, mask, boxes, sx, sy, head_fraction=0.5):
+        seen.append((frame, mask.copy(), list(boxes), sx, sy, head_fraction))
+        return original(frame, mask, boxes, sx, sy, head_fraction)
 
+    monkeypatch.setattr(detector_module, "measure_blobs", recording)
     det = CameraDetector(load_preset("default"))
-    det._measure = recording
     cap = cv2.VideoCapture(str(NYCU_LEFT))
     for i in range(25):
         ok, frame = cap.read()
         assert ok
         det.process(frame, i / 119.0, keep_mask=False)
     cap.release()
-    assert len(seen) > 100
+    assert sum(len(args[2]) for args in seen) > 100
     for args in seen:
-        assert_same_measure(*args)
+        assert_same_batch(*args)

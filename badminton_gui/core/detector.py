@@ -178,14 +178,16 @@ class CameraDetector:
                                             REJECT_WHITENESS))
             geometric = [r[2] for r in ranked[:limit]]
 
-        # Filter 3 and the appearance features, blob by blob; the classifier then scores all
-        # the blobs of the frame in one call (one small matrix product instead of one each).
+        # Filter 3 and the appearance features of all the frame's blobs at once; the
+        # classifier then scores them in one call too.
         measured = []
         features = np.empty((len(geometric), len(FEATURE_NAMES)))
-        for row, (_, length, short_side, area, box) in enumerate(geometric):
-            x, y, whiteness, saturation, appearance = self._measure(
-                frame_bgr, mask, box, sx, sy, p.colour.head_fraction)
-            contrast = float(appearance[0])
+        pos_x, pos_y, whiteness_all, saturation_all, appearance_all = measure_blobs(
+            frame_bgr, mask, [g[4] for g in geometric], sx, sy, p.colour.head_fraction)
+        features[:, 4:] = appearance_all
+        for row, ((_, length, short_side, area, _box), x, y, whiteness, saturation, contrast) in enumerate(zip(
+                geometric, pos_x.tolist(), pos_y.tolist(), whiteness_all.tolist(),
+                saturation_all.tolist(), features[:, 4].tolist())):
             reason = None
             if (whiteness < p.colour.min_whiteness or saturation > p.colour.max_saturation
                     or contrast < p.colour.min_contrast):
@@ -196,7 +198,6 @@ class CameraDetector:
             feats = features[row]
             feats[:4] = (math.log1p(length), math.log1p(short_side), math.log1p(area),
                          long_side / max(short_side, 1e-3))
-            feats[4:] = appearance
             measured.append([x, y, length, short_side, whiteness, area, 0.0, reason, feats])
         if measured:
             qualities = self._qualities(np.array([m[2] for m in measured]), features[:, 4], features)
@@ -318,110 +319,197 @@ class CameraDetector:
     def _measure(frame: np.ndarray, mask: np.ndarray, box: tuple[int, int, int, int],
                  sx: float, sy: float, head_fraction: float = 0.5
                  ) -> tuple[float, float, float, float, np.ndarray]:
-        """(x, y, whiteness, saturation, appearance features) of a blob, full-resolution window.
+        """(x, y, whiteness, saturation, appearance features) of one blob (see ``measure_blobs``)."""
+        x, y, whiteness, saturation, features = measure_blobs(frame, mask, [box], sx, sy, head_fraction)
+        return float(x[0]), float(y[0]), float(whiteness[0]), float(saturation[0]), features[0]
 
-        The position is the intensity-weighted centroid of the blob's brightest part above the
-        window's local background (median of the window border), which locates the white cork
-        head rather than the middle of head + skirt, to a fraction of a pixel.
-        The appearance features (see ``FEATURE_NAMES``) describe how small, bright, isolated
-        and white the blob is; the candidate classifier and the hand-made score read them.
 
-        Speed: up to ``association.max_measured`` blobs per frame and camera come here, so
-        every step is one OpenCV call on the small window (about a microsecond each) rather
-        than a numpy reduction (several microseconds of overhead each, and the GIL held, so
-        the two camera threads would queue on it). The values are those of the plain numpy
-        formulas that the classifiers were trained on (``tests/test_detector.py`` pins them):
-        grey is ``mean(B, G, R)`` in float32, the border median is numpy's, sums and means are
-        exact on integer data; only the window's standard deviation and the centroid's sums
-        are accumulated in double instead of float32 (relative differences ~1e-7).
-        """
-        h, w = frame.shape[:2]
+def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: float,
+                  head_fraction: float = 0.5
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(x, y, whiteness, saturation, appearance features) of blobs, in full-resolution windows.
+
+    Per blob, its window is the box grown by ``REFINE_MARGIN``. The position is the
+    intensity-weighted centroid of the blob's brightest part above the window's local
+    background (median of the window border), which locates the white cork head rather than
+    the middle of head + skirt, to a fraction of a pixel. The appearance features (see
+    ``FEATURE_NAMES``) describe how small, bright, isolated and white the blob is; the
+    candidate classifier and the hand-made score read them.
+
+    Speed: up to ``association.max_measured`` blobs per frame and camera come here. Their
+    windows are copied into one canvas, one below the other (left-aligned, a blank row between
+    two, so growing a mask by a pixel never reaches the next window), and every step runs once
+    on the canvas, with per-window sums and maxima taken row by row and then over each
+    window's rows (``np.add.reduceat``): a few dozen calls per frame instead of ~30 per blob
+    (each with numpy's overhead and the GIL held, so the two camera threads queued on it).
+    Padding pixels are made neutral for every step (0 for counts and sums, -inf for maxima).
+    The values are those of the plain per-window numpy formulas the classifiers were trained
+    on (``tests/test_detector_fast_paths.py`` keeps them as the reference): grey is
+    ``mean(B, G, R)`` in float32, the border median is numpy's, counts and sums of integers are
+    exact; only the window's standard deviation and the centroid's sums are accumulated in
+    double instead of float32 (relative differences ~1e-7).
+    """
+    n = len(boxes)
+    h, w = frame.shape[:2]
+    pos_x = np.empty(n)
+    pos_y = np.empty(n)
+    whiteness = np.zeros(n)
+    saturation = np.full(n, 255.0)
+    features = np.zeros((n, N_APPEARANCE), dtype=np.float32)
+    blobs, windows, heights, widths = [], [], [], []
+    for i, box in enumerate(boxes):
         x0 = max(box[0] - REFINE_MARGIN, 0)
         y0 = max(box[1] - REFINE_MARGIN, 0)
         x1 = min(box[0] + box[2] + REFINE_MARGIN, w)
         y1 = min(box[1] + box[3] + REFINE_MARGIN, h)
         if x1 <= x0 or y1 <= y0:
-            return (box[0] + box[2] / 2, box[1] + box[3] / 2, 0.0, 255.0,
-                    np.zeros(N_APPEARANCE, dtype=np.float32))
-        # One contiguous copy of the window: cv2.split of a strided view copies it anyway.
-        crop = np.ascontiguousarray(frame[y0:y1, x0:x1])
-        ch, cw = crop.shape[:2]
+            pos_x[i], pos_y[i] = box[0] + box[2] / 2, box[1] + box[3] / 2
+            continue
+        blobs.append(i)
+        windows.append((x0, y0, x1, y1))
+        heights.append(y1 - y0)
+        widths.append(x1 - x0)
+    if not blobs:
+        return pos_x, pos_y, whiteness, saturation, features
+    m = len(blobs)
+    height = np.array(heights)
+    width = np.array(widths)
+    start = np.zeros(m, dtype=np.intp)
+    np.cumsum(height[:-1] + 1, out=start[1:])
+    rows, cols = int(start[-1] + height[-1] + 1), int(width.max())
+    canvas = np.zeros((rows, cols, 3), np.uint8)
+    inside = np.zeros((rows, cols), np.uint8)
+    for (x0, y0, x1, y1), r0 in zip(windows, start.tolist()):
+        ch, cw = y1 - y0, x1 - x0
+        canvas[r0:r0 + ch, :cw] = frame[y0:y1, x0:x1]
         # The blob's pixels at full resolution: the mask window, resized (0 / 255).
         mx0, my0 = int(x0 / sx), int(y0 / sy)
         mx1, my1 = max(int(math.ceil(x1 / sx)), mx0 + 1), max(int(math.ceil(y1 / sy)), my0 + 1)
-        inside = mask[my0:my1, mx0:mx1]
-        if inside.shape[:2] != (ch, cw):
-            inside = cv2.resize(inside, (cw, ch), interpolation=cv2.INTER_NEAREST)
-        blue, green, red = cv2.split(crop)
-        cmin = cv2.min(cv2.min(blue, green), red)
-        cmax = cv2.max(cv2.max(blue, green), red)
-        n_inside = cv2.countNonZero(inside)
-        if n_inside:
-            whiteness = cv2.mean(cmin, mask=inside)[0]
-            saturation = cv2.mean(cv2.subtract(cmax, cmin), mask=inside)[0]
-        else:
-            whiteness, saturation = 0.0, 255.0
-        # mean(B, G, R) in float32: the integer sum is exact, then one float32 division.
-        gray = cv2.add(blue, green, dtype=cv2.CV_32F)
-        cv2.add(gray, red, dst=gray, dtype=cv2.CV_32F)
-        np.divide(gray, 3, out=gray)
-        border = np.concatenate([gray[0], gray[-1], gray[:, 0], gray[:, -1]])
-        background = _median_float32(border)
-        excess = gray - background
-        peak = cv2.minMaxLoc(excess)[1]
-        half_peak = 0.5 * peak
-        n_bright = cv2.countNonZero(cv2.compare(excess, half_peak, cv2.CMP_GT))
-        # The border's excess, element for element as the window's (same float32 subtraction).
-        spill = float(np.count_nonzero((border - background) > half_peak)) / len(border)
-        peak_sat = cv2.minMaxLoc(cmax)[1] - cv2.minMaxLoc(cmin)[1]
-        window_std = float(cv2.meanStdDev(gray)[1][0, 0])
-        features = np.array((peak, background, math.log1p(n_bright), spill, whiteness, saturation,
-                             math.log1p(n_inside), peak_sat, window_std), dtype=np.float32)
-        if peak <= 0:
-            ys, xs = np.nonzero(inside)
+        mcrop = mask[my0:my1, mx0:mx1]
+        if mcrop.shape[:2] != (ch, cw):
+            mcrop = cv2.resize(mcrop, (cw, ch), interpolation=cv2.INTER_NEAREST)
+        inside[r0:r0 + ch, :cw] = mcrop
+
+    # Row bookkeeping: each window owns its rows and the blank row after it.
+    seg_rows = height + 1
+    row_width = np.repeat(np.stack([width, np.zeros_like(width)], axis=1).ravel(),
+                          np.stack([height, np.ones_like(height)], axis=1).ravel())
+    valid = np.arange(cols) < row_width[:, None]
+    local_row = np.arange(rows) - np.repeat(start, seg_rows)
+
+    def window_sum(per_row: np.ndarray) -> np.ndarray:
+        return np.add.reduceat(per_row, start)
+
+    def window_max(per_row: np.ndarray) -> np.ndarray:
+        return np.maximum.reduceat(per_row, start)
+
+    blue, green, red = cv2.split(canvas)
+    cmin = cv2.min(cv2.min(blue, green), red)
+    cmax = cv2.max(cv2.max(blue, green), red)
+    in_mask = inside > 0
+    n_inside = window_sum(np.count_nonzero(in_mask, axis=1))
+    white_sum = window_sum(cv2.bitwise_and(cmin, inside).sum(axis=1, dtype=np.int64))
+    sat_sum = window_sum(cv2.bitwise_and(cv2.subtract(cmax, cmin), inside).sum(axis=1, dtype=np.int64))
+    has_inside = n_inside > 0
+    whiteness[blobs] = np.where(has_inside, white_sum / np.maximum(n_inside, 1), 0.0)
+    saturation[blobs] = np.where(has_inside, sat_sum / np.maximum(n_inside, 1), 255.0)
+    # mean(B, G, R) in float32: the integer sum is exact, then one float32 division.
+    gray = cv2.add(blue, green, dtype=cv2.CV_32F)
+    cv2.add(gray, red, dst=gray, dtype=cv2.CV_32F)
+    np.divide(gray, 3, out=gray)
+
+    # Border of each window in numpy's order (top row, bottom row, left column, right column;
+    # corners twice), as flat canvas indices; then each window's median by one sort of
+    # (window, value) keys (exact: values are float32 below 256, windows are < 2^20 apart).
+    top = np.repeat(start * cols, width) + _ragged_arange(width)
+    bottom = np.repeat((start + height - 1) * cols, width) + _ragged_arange(width)
+    left = (np.repeat(start, height) + _ragged_arange(height)) * cols
+    right = left + np.repeat(width - 1, height)
+    border_owner = np.concatenate([np.repeat(np.arange(m), width)] * 2 + [np.repeat(np.arange(m), height)] * 2)
+    border = gray.ravel()[np.concatenate([top, bottom, left, right])]
+    border_len = 2 * (width + height)
+    keyed = np.sort(border_owner * 1024.0 + border)
+    first = np.zeros(m, dtype=np.intp)
+    np.cumsum(border_len[:-1], out=first[1:])
+    half_len = border_len // 2
+    upper = (keyed[first + half_len] - np.arange(m) * 1024.0).astype(np.float32)
+    lower = (keyed[first + half_len - 1] - np.arange(m) * 1024.0).astype(np.float32)
+    odd = border_len % 2 == 1
+    # np.median averages the two middle values in float32 (sum, then / 2).
+    background = np.where(odd, upper, (lower + upper) / np.float32(2)).astype(np.float32)
+
+    background_row = np.repeat(background, seg_rows)
+    excess = gray - background_row[:, None]
+    excess[~valid] = -np.inf
+    peak = window_max(excess.max(axis=1))
+    half_peak = np.float32(0.5) * peak
+    half_row = np.repeat(half_peak, seg_rows)
+    n_bright = window_sum(np.count_nonzero(excess > half_row[:, None], axis=1))
+    border_bright = (border - background[border_owner]) > half_peak[border_owner]
+    spill = np.bincount(border_owner, weights=border_bright, minlength=m) / border_len
+    peak_sat = (window_max(cmax.max(axis=1)).astype(np.float64)
+                - window_max(cmin.max(axis=1)).astype(np.float64))
+    n_pixels = height * width
+    mean = window_sum(gray.sum(axis=1, dtype=np.float64)) / n_pixels
+    deviation = gray - np.repeat(mean, seg_rows)[:, None]
+    deviation[~valid] = 0.0
+    window_std = np.sqrt(window_sum(np.einsum("ij,ij->i", deviation, deviation)) / n_pixels)
+    features[blobs] = np.stack([peak, background, np.log1p(n_bright), spill, whiteness[blobs],
+                                saturation[blobs], np.log1p(n_inside), peak_sat, window_std],
+                               axis=1)
+
+    # The position is measured on the blob's own pixels only (its mask, grown by one
+    # full-resolution pixel for the blur fringe): a light or a court line inside the window is
+    # brighter than the shuttle and used to drag the centroid towards itself. Off the support
+    # the excess counts as 0 (so a blob's peak is at least 0); padding stays -inf or 0.
+    support = cv2.dilate(inside, _GROW) > 0
+    blob_excess = np.where(support, excess, np.float32(0))
+    blob_peak = np.maximum(window_max(blob_excess.max(axis=1)), 0)
+    # No support, or nothing on it above the background: the whole window's excess instead.
+    whole = blob_peak <= 0
+    if whole.any():
+        whole_rows = np.repeat(whole, seg_rows)
+        blob_excess[whole_rows] = np.maximum(excess[whole_rows], 0)
+        blob_peak = np.where(whole, peak, blob_peak)
+    # Keep the part of the blob above ``head_fraction`` of its peak: the cork is whiter than
+    # the feathers (0 = the whole blob's intensity centroid). The cut is rounded to float32
+    # as numpy rounded ``float32 array - Python float``.
+    cut = (head_fraction * blob_peak.astype(np.float64)).astype(np.float32)
+    weights = blob_excess - np.repeat(cut, seg_rows)[:, None]
+    np.maximum(weights, 0, out=weights)
+    row_weight = weights.sum(axis=1, dtype=np.float64)
+    total = window_sum(row_weight)
+    # OpenCV's convention: integer coordinates are pixel centres (as projectPoints gives).
+    sum_x = window_sum(weights @ np.arange(cols, dtype=np.float64))
+    sum_y = window_sum(row_weight * local_row)
+    origin_x = np.array([win[0] for win in windows], dtype=float)
+    origin_y = np.array([win[1] for win in windows], dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        pos_x[blobs] = sum_x / total + origin_x
+        pos_y[blobs] = sum_y / total + origin_y
+    # Rare cases, window by window: nothing brighter than the border (the mask's centroid),
+    # or no weight above the cut (the whole blob's intensity centroid).
+    for k in np.flatnonzero((peak <= 0) | (total <= 0)).tolist():
+        i, (x0, y0, x1, y1), r0 = blobs[k], windows[k], int(start[k])
+        rows_k = slice(r0, r0 + int(height[k]))
+        cols_k = slice(0, int(width[k]))
+        if peak[k] <= 0:
+            ys, xs = np.nonzero(in_mask[rows_k, cols_k])
             if len(xs) == 0:
-                return box[0] + box[2] / 2, box[1] + box[3] / 2, whiteness, saturation, features
-            return x0 + xs.mean(), y0 + ys.mean(), whiteness, saturation, features
-        # The position is measured on the blob's own pixels only (its mask, grown by one
-        # full-resolution pixel for the blur fringe): a light or a court line inside the
-        # window is brighter than the shuttle and used to drag the centroid towards itself.
-        blob_peak = 0.0
-        if n_inside:
-            support = cv2.dilate(inside, _GROW)
-            # copyTo into a new array zero-fills outside the mask: excess on the support, else 0.
-            blob_excess = cv2.copyTo(excess, support)
-            blob_peak = cv2.minMaxLoc(blob_excess)[1]
-        if blob_peak <= 0:
-            blob_excess = np.maximum(excess, 0)
-            blob_peak = peak
-        # Keep the part of the blob above ``head_fraction`` of its peak: the cork is whiter
-        # than the feathers (0 = the whole blob's intensity centroid).
-        weights = blob_excess - head_fraction * blob_peak
-        np.maximum(weights, 0, out=weights)
-        moments = _raster_moments(weights)
-        if moments[0] <= 0:
-            moments = _raster_moments(np.maximum(blob_excess, 0))
-        # OpenCV's convention: integer coordinates are pixel centres (as projectPoints gives).
-        total, sum_x, sum_y = moments
-        return sum_x / total + x0, sum_y / total + y0, whiteness, saturation, features
+                box = boxes[i]
+                pos_x[i], pos_y[i] = box[0] + box[2] / 2, box[1] + box[3] / 2
+            else:
+                pos_x[i], pos_y[i] = x0 + xs.mean(), y0 + ys.mean()
+            continue
+        fallback = np.maximum(blob_excess[rows_k, cols_k], 0).astype(np.float64)
+        ys, xs = np.mgrid[0:fallback.shape[0], 0:fallback.shape[1]]
+        pos_x[i] = (fallback * xs).sum() / fallback.sum() + x0
+        pos_y[i] = (fallback * ys).sum() / fallback.sum() + y0
+    return pos_x, pos_y, whiteness, saturation, features
 
 
-def _median_float32(values: np.ndarray) -> float:
-    """``np.median`` of a 1-D float32 array, without its generic machinery (same result)."""
-    n = len(values)
-    k = n // 2
-    if n % 2:
-        return float(np.partition(values, k)[k])
-    part = np.partition(values, (k - 1, k))
-    # np.median averages the two middle values in the array's dtype (float32).
-    return float((part[k - 1] + part[k]) / np.float32(2))
-
-
-def _raster_moments(weights: np.ndarray) -> tuple[float, float, float]:
-    """(Σw, Σw·x, Σw·y) of a float32 image, accumulated in double (cv2.moments)."""
-    if weights.shape[1] == 2:
-        # cv2.moments reads an (N, 2) single-channel float array as N contour points.
-        ys, xs = np.mgrid[0:weights.shape[0], 0:weights.shape[1]]
-        return float(weights.sum(dtype=np.float64)), float((weights * xs).sum()), float((weights * ys).sum())
-    m = cv2.moments(weights)
-    return m["m00"], m["m10"], m["m01"]
+def _ragged_arange(lengths: np.ndarray) -> np.ndarray:
+    """``np.concatenate([np.arange(k) for k in lengths])`` in three vector operations."""
+    total = int(lengths.sum())
+    offsets = np.repeat(np.cumsum(lengths) - lengths, lengths)
+    return np.arange(total) - offsets
