@@ -6,7 +6,9 @@ the real MainWindow on the demo court as fast as the tracker goes, times (perf_c
 feed update path of each feed (``FeedView.set_frame`` + the ``paintEvent`` that follows), the
 whole display slot, the 3D view's ``paintGL`` and the 2D plots' paints, and compares the
 worker's results per second with the same worker running with no window at all, in
-alternating phases of the same run (shared machines drift; GUIDE §9). Run under Xvfb:
+alternating phases of the same run (shared machines drift; GUIDE §9). It ends with the issue's
+figures: display Hz per feed, frame-to-screen per feed (median / p95), tracking results/s with
+and without the window and their ratio, and the GUI-thread slot times. Run under Xvfb:
 
     QT_QPA_PLATFORM=xcb xvfb-run -a -s "-screen 0 1600x900x24" \
         .venv/bin/python scripts/gui-timing.py --seconds 20 --rounds 2
@@ -121,6 +123,7 @@ def main() -> int:
     # ---- instrumentation (class level, so every instance is timed) -------------------------
     times: dict[str, list[float]] = defaultdict(list)
     pending_set: dict[int, float] = {}     # feed id → set_frame ms waiting for its paint
+    shown_at: dict[str, list[float]] = defaultdict(list)   # feed → times a new frame was painted
     feed_ids: dict[int, str] = {}
 
     def timed(cls, name, key, after=None):
@@ -150,6 +153,7 @@ def main() -> int:
         times[f"paintEvent {name}"].append(ms)
         if id(feed) in pending_set:
             times[f"frame-to-screen {name}"].append(pending_set.pop(id(feed)) + ms)
+            shown_at[name].append(time.perf_counter())
 
     refresh_with_packet: list[float] = []
     refresh_all: list[float] = []
@@ -167,9 +171,9 @@ def main() -> int:
 
     timed(feed_view.FeedView, "set_frame", None, after_set)
     timed(feed_view.FeedView, "paintEvent", None, after_paint)
-    import pyqtgraph.opengl as gl
-    timed(gl.GLViewWidget, "paintGL", "3D paintGL")
     from badminton_gui.gui import court_views, main_window as mw
+    if not court_views.gl_unavailable_reason():
+        timed(court_views._gl_window_class(), "paintGL", "3D paintGL")
     timed(court_views.CourtGLView, "show_packet", "slot part: 3D show_packet")
     timed(court_views.CourtPlanView, "show_packet", "slot part: plan show_packet")
     timed(court_views.SideView, "show_packet", "slot part: side show_packet")
@@ -191,18 +195,18 @@ def main() -> int:
 
     def alone(seconds: float) -> tuple[float, float]:
         cpu0, t0 = _cpu_by_thread(), time.perf_counter()
+        # No window, nobody asks for display packets: the tracker as a headless user runs it.
         worker = TrackingWorker(opener, TrackerParams(), realtime=args.realtime)
-        worker.set_display_size(640, 360)          # what the window's feeds ask for at 1280×720
         thread = threading.Thread(target=worker.run, daemon=True, name="tracking")
         thread.start()
         samples, ms = [], []
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             time.sleep(0.25)
-            p = worker.output.take()
-            if p is not None:
-                samples.append((time.perf_counter(), p.stats.frames))
-                ms.append(p.stats.processing_ms)
+            st = worker.latest_stats
+            if st is not None:
+                samples.append((time.perf_counter(), st.frames))
+                ms.append(st.processing_ms)
         cpu_use = _cpu_delta(cpu0, _cpu_by_thread(), time.perf_counter() - t0)
         worker.abort()
         thread.join(10)
@@ -229,11 +233,13 @@ def main() -> int:
         while time.monotonic() < end:
             pump(0.25)
             p = window.latest_packet
-            if p is not None:
-                samples.append((time.perf_counter(), p.stats.frames))
-                ms.append(p.stats.processing_ms)
-                if t_first is None:
-                    t_first, n_first = time.perf_counter(), window.results_seen
+            st = window.worker.latest_stats if window.worker is not None else None
+            if st is not None:
+                samples.append((time.perf_counter(), st.frames))
+                ms.append(st.processing_ms)
+            if p is not None and t_first is None:
+                t_first, n_first = time.perf_counter(), window.results_seen
+        built = window.worker.packets_built if window.worker is not None else 0
         shown = (window.results_seen - n_first) / (time.perf_counter() - t_first) if t_first else 0.0
         cpu_use = _cpu_delta(cpu0, _cpu_by_thread(), time.perf_counter() - t0)
         span = time.perf_counter() - t0
@@ -241,7 +247,7 @@ def main() -> int:
         cpu_use += (f"; display timer ran {(len(refresh_all) - ticks0) / span:.1f} ticks/s; GUI thread "
                     f"on a CPU {(sched1[0] - sched0[0]) / span * 100:.0f}% of the time, runnable but "
                     f"waiting for a CPU {(sched1[1] - sched0[1]) / span * 100:.0f}%, the rest idle or "
-                    f"blocked (event loop, GIL)")
+                    f"blocked (event loop, GIL); worker built {built / span:.1f} display packets/s")
         window.stop_worker()
         warm = [s for s in samples if s[0] >= samples[0][0] + 2.0] if samples else []
         del n_before
@@ -254,23 +260,44 @@ def main() -> int:
           f"window {window.width()}×{window.height()}, feeds "
           f"{window.left_feed.width()}×{window.left_feed.height()}, "
           f"{'3D + 2D views' if window.gl_view is not None else '2D views only'}")
+    alone_fps, gui_fps, feed_hz = [], [], defaultdict(list)
     for r in range(args.rounds):
         fps_a, ms_a, cpu_a = alone(args.seconds)
+        alone_fps.append(fps_a)
         print(f"round {r + 1} tracker alone : {fps_a:6.1f} results/s, tracker {ms_a:5.1f} ms/pair (median)")
         print(f"    CPU (% of one core): {cpu_a}")
+        t_phase = time.perf_counter()
         fps_g, ms_g, shown, dropped, cpu_g = with_gui(args.seconds)
+        gui_fps.append(fps_g)
+        for name, stamps in shown_at.items():     # new frames painted per second, after 2 s warm-up
+            warm = [t for t in stamps if t >= t_phase + 2.0]
+            if len(warm) > 1:
+                feed_hz[name].append((len(warm) - 1) / (warm[-1] - warm[0]))
         print(f"round {r + 1} with the GUI  : {fps_g:6.1f} results/s, tracker {ms_g:5.1f} ms/pair (median), "
-              f"display {shown:5.1f} Hz, dropped {dropped}")
+              f"display {shown:5.1f} Hz, dropped {dropped}; with/alone {fps_g / fps_a:.2f}")
         print(f"    CPU (% of one core): {cpu_g}")
     window.close()
 
-    print(f"\nGUI thread, ms (n, median, p99, max) over all GUI phases:")
+    print(f"\nGUI thread, ms (n, median, p95, p99, max) over all GUI phases:")
     rows = [("display slot (refreshes that took a packet)", refresh_with_packet),
             ("display slot (all timer ticks)", refresh_all)]
     rows += [(k, v) for k, v in sorted(times.items())]
     for name, values in rows:
-        print(f"  {name:46s} n={len(values):5d}  median {_pct(values, 50):6.2f}  "
+        print(f"  {name:46s} n={len(values):5d}  median {_pct(values, 50):6.2f}  p95 {_pct(values, 95):6.2f}  "
               f"p99 {_pct(values, 99):6.2f}  max {max(values) if values else float('nan'):7.2f}")
+
+    # The issue's figures, in one place.
+    print("\nSummary (goal: both feeds at 30 Hz, tracking rate unchanged, frame-to-screen <= 2 ms per feed)")
+    print("  tracking results/s alone   : " + ", ".join(f"{v:.1f}" for v in alone_fps))
+    print("  tracking results/s with GUI: " + ", ".join(f"{v:.1f}" for v in gui_fps))
+    print("  ratio with/alone per round : " + ", ".join(f"{g / a:.2f}" for g, a in zip(gui_fps, alone_fps))
+          + f"; all rounds {sum(gui_fps) / sum(alone_fps):.2f}")
+    for name in ("left", "right"):
+        f2s = times.get(f"frame-to-screen {name}", [])
+        print(f"  {name:5s} feed: display " + "/".join(f"{v:.1f}" for v in feed_hz.get(name, [])) +
+              f" Hz per round; frame-to-screen median {_pct(f2s, 50):.2f} ms, p95 {_pct(f2s, 95):.2f} ms")
+    print(f"  display slot (ticks with a packet): median {_pct(refresh_with_packet, 50):.2f} ms, "
+          f"p95 {_pct(refresh_with_packet, 95):.2f} ms, max {max(refresh_with_packet, default=float('nan')):.2f} ms")
     app.quit()
     return 0
 

@@ -50,3 +50,169 @@ def test_3d_view_is_a_window_of_its_own_and_turns_with_the_mouse(main_window, qt
     QApplication.sendEvent(gl, wheel)
     assert gl.opts["distance"] < distance
     assert not window.grab_window().isNull()
+
+
+def _demo_opener():
+    from badminton_gui.io.demo_scene import DemoScene
+    scene = DemoScene(seed=0)
+    return scene, scene.rig
+
+
+def _run_headless(worker, until, timeout_s: float = 60.0):
+    """Run a TrackingWorker in a plain thread until ``until()`` (checked every 10 ms) or timeout."""
+    import threading
+    import time
+
+    thread = threading.Thread(target=worker.run, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + timeout_s
+    try:
+        while not until() and time.monotonic() < deadline:
+            time.sleep(0.01)
+    finally:
+        worker.abort()
+        thread.join(30)
+    assert until(), "the worker did not get there in time"
+
+
+def test_worker_builds_display_packets_only_when_asked(qapp):
+    """With nobody asking (a headless user), results are not shrunk and converted for a display."""
+    from badminton_gui.core.params import TrackerParams
+    from badminton_gui.gui.worker import TrackingWorker
+
+    worker = TrackingWorker(_demo_opener, TrackerParams(), realtime=False)
+    _run_headless(worker, lambda: worker.latest_stats is not None and worker.latest_stats.frames >= 12)
+    assert worker.packets_built == 1              # the first result is always wanted
+    first = worker.output.take()
+    assert first is not None and first.result.index == 0
+
+    packets = []
+
+    def take_and_ask() -> bool:
+        if len(packets) < 3 and (packet := worker.output.take()) is not None:
+            packets.append(packet)
+            worker.request_display()                # the next finished result, please
+        return len(packets) >= 3
+
+    worker = TrackingWorker(_demo_opener, TrackerParams(), realtime=False)
+    _run_headless(worker, take_and_ask)
+    indices = [p.result.index for p in packets]
+    assert indices == sorted(indices) and len(set(indices)) == 3
+    assert worker.packets_built <= worker.latest_stats.frames
+
+
+class _StandInWorker:
+    """What MainWindow's display tick uses of a TrackingWorker, fed by the test."""
+
+    def __init__(self) -> None:
+        from badminton_gui.gui.worker import LatestSlot
+        self.output = LatestSlot()
+        self.requests: list[float] = []
+        self.link_error = ""
+
+    def request_display(self, not_before: float = 0.0) -> None:
+        self.requests.append(not_before)
+
+    def set_display_size(self, width: int, height: int) -> None:
+        pass
+
+
+@pytest.fixture(scope="module")
+def demo_packets(qapp):
+    """A run of consecutive display packets from the demo court, with a flight in the air."""
+    from badminton_gui.core.params import TrackerParams
+    from badminton_gui.gui.worker import TrackingWorker
+
+    worker = TrackingWorker(_demo_opener, TrackerParams(), realtime=False)
+    worker.set_display_size(320, 180)
+    packets = []
+
+    def flying() -> list:
+        return [p for p in packets if p.result.point is not None and p.flight is not None and len(p.flight)]
+
+    def take_and_ask() -> bool:
+        if len(flying()) < 8 and (packet := worker.output.take()) is not None:
+            packets.append(packet)
+            worker.request_display()
+        return len(flying()) >= 8
+
+    _run_headless(worker, take_and_ask)
+    return flying()
+
+
+def test_display_tick_feeds_every_packet_and_throttles_the_slow_views(main_window, qtbot, monkeypatch,
+                                                                      demo_packets):
+    """Feeds take the newest packet on every tick; the court views, readouts and preview at most
+    once per SLOW_VIEW_INTERVAL_S, only when on screen and only when what they draw changed."""
+    from badminton_gui.gui import main_window as mw
+
+    window = main_window()
+    window._timer.stop()                         # the test drives the ticks and the clock
+    clock = [1000.0]
+    monkeypatch.setattr(mw.time, "perf_counter", lambda: clock[0])
+    worker = _StandInWorker()
+    window.worker = worker
+    try:
+        _drive_ticks(window, worker, clock, demo_packets)
+    finally:
+        window.worker = None
+
+
+def _drive_ticks(window, worker, clock, demo_packets) -> None:
+    import dataclasses
+
+    from badminton_gui.gui import main_window as mw
+
+    calls = {"plan": 0, "3D": 0}
+    for name, view in (("plan", window.plan), ("3D", window.gl_view)):
+        if view is None:
+            continue
+        original = view.show_packet
+
+        def counting(packet, name=name, original=original):
+            calls[name] += 1
+            original(packet)
+        view.show_packet = counting
+    feed_frames = []
+    original_set_frame = window.left_feed.set_frame
+    window.left_feed.set_frame = lambda image, *a: (feed_frames.append(image), original_set_frame(image, *a))
+
+    tick = mw.DISPLAY_INTERVAL_MS / 1000.0
+    for packet in demo_packets[:6]:              # one new packet per tick, 30 Hz
+        worker.output.put(packet)
+        window._refresh_display()
+        clock[0] += tick
+    assert len(feed_frames) == 6 and len(worker.requests) == 6
+    assert window.slow_view_updates["plan"] == 3          # 15 Hz: every other tick
+    assert window.slow_view_updates["readouts"] == 3
+
+    # With no new packet: the one the throttle held back is shown once, then nothing is redrawn.
+    assert window.packet_shown_in("plan") is demo_packets[4]
+    for _ in range(4):
+        window._refresh_display()
+        clock[0] += tick
+    assert window.packet_shown_in("plan") is demo_packets[5]
+    assert window.slow_view_updates["plan"] == 4 and len(feed_frames) == 6
+
+    # A hidden view is skipped, and catches up when it shows again.
+    if window.gl_view is not None:
+        window.gl_view.widget.hide()
+        worker.output.put(demo_packets[6])
+        window._refresh_display()
+        clock[0] += 2 * tick
+        assert window.packet_shown_in("3D") is not demo_packets[6]
+        assert window.packet_shown_in("plan") is demo_packets[6]
+        window.gl_view.widget.show()
+        window._refresh_display()
+        assert window.packet_shown_in("3D") is demo_packets[6]
+        clock[0] += 2 * tick
+
+    # A new packet that draws the same scene (same point, flight, prediction) is not redrawn.
+    plan_calls = calls["plan"]
+    same = dataclasses.replace(demo_packets[6], stats=dataclasses.replace(demo_packets[6].stats, frames=10**6))
+    before = window.plan._flight.getData()
+    window.plan._flight.setData([], [])         # a redraw would put the flight back
+    worker.output.put(same)
+    window._refresh_display()
+    assert calls["plan"] == plan_calls + 1 and len(window.plan._flight.getData()[0] or []) == 0
+    window.plan._flight.setData(*before)

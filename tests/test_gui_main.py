@@ -135,7 +135,8 @@ def test_2d_fallback_without_opengl(main_window, qtbot, monkeypatch):
     window.realtime_action.setChecked(False)
     window.start_opener(_demo_opener, "demo")
     qtbot.waitUntil(lambda: window.latest_packet is not None
-                    and window.latest_packet.result.point is not None, timeout=WAIT_MS)
+                    and window.latest_packet.result.point is not None
+                    and window.packet_shown_in("plan") is window.latest_packet, timeout=WAIT_MS)
     window._timer.stop()             # keep the packet with a 3D point on screen
     assert window.plan.widget.isVisible() and window.side.widget.isVisible()
     xs, _ = window.plan._position.getData()

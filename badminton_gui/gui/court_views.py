@@ -116,6 +116,21 @@ def to_display_frame(pts: np.ndarray, in_court_frame: bool) -> np.ndarray:
     return np.column_stack([pts[:, 0], pts[:, 2], -pts[:, 1]])
 
 
+def scene_key(packet: DisplayPacket) -> tuple:
+    """Everything the court views draw from a packet, as a value: equal keys, same picture.
+
+    Between rallies (no point, the same finished flight) successive packets draw the same thing;
+    comparing this key (a few KB of bytes at most) is far cheaper than pyqtgraph's setData and
+    the repaint it triggers.
+    """
+    r = packet.result
+    lp = r.flight.prediction
+    return (r.in_court_frame, r.point,
+            None if lp is None else (lp.x, lp.y, lp.radius, lp.call),
+            None if packet.flight is None else (packet.flight.shape, packet.flight.tobytes()),
+            None if packet.predicted is None else (packet.predicted.shape, packet.predicted.tobytes()))
+
+
 def _gl_window_class():
     """pyqtgraph's 3D view on a QOpenGLWindow (class built on first use: it imports OpenGL)."""
     global _GLWindow
@@ -197,9 +212,11 @@ class CourtGLView:
                      self._predicted, self._landing, self._position):
             self.window.addItem(item)
         self._in_court_frame = True
+        self._key: tuple | None = None
 
     def set_rig(self, rig: StereoRig) -> None:
         self._in_court_frame = rig.has_court_pose
+        self._key = None
         for item in (self._court, self._net, self._floor):
             item.setVisible(rig.has_court_pose)
         for item, segs in zip(self._cameras, camera_frustums(rig)):
@@ -208,6 +225,10 @@ class CourtGLView:
             self.window.opts["center"] = pg.Vector(0.0, 6.0, 0.0)
 
     def show_packet(self, packet: DisplayPacket) -> None:
+        key = scene_key(packet)
+        if key == self._key:
+            return
+        self._key = key
         r = packet.result
         cf = r.in_court_frame
         flight = packet.flight
@@ -267,8 +288,13 @@ class CourtPlanView:
         for item in (self._landing, self._position, self._call):
             self.widget.addItem(item)
         self.widget.setRange(xRange=(-7.6, 7.6), yRange=(-3.6, 3.6), padding=0)
+        self._key: tuple | None = None
 
     def show_packet(self, packet: DisplayPacket) -> None:
+        key = scene_key(packet)
+        if key == self._key:
+            return
+        self._key = key
         r = packet.result
         cf = r.in_court_frame
         f = packet.flight
@@ -308,8 +334,13 @@ class SideView:
         self.widget.addItem(self._position)
         self.widget.addItem(self._landing)
         self.widget.setRange(xRange=(-7.6, 7.6), yRange=(-0.3, 6.0), padding=0)
+        self._key: tuple | None = None
 
     def show_packet(self, packet: DisplayPacket) -> None:
+        key = scene_key(packet)
+        if key == self._key:
+            return
+        self._key = key
         r = packet.result
         cf = r.in_court_frame
         f = packet.flight

@@ -29,8 +29,14 @@ from .robot_panel import RobotLinkPanel
 from .sources import CameraPairDialog, VideoPairDialog, open_spec
 from .worker import DisplayPacket, RateMeter, SourceOpener, TrackingWorker
 
-DISPLAY_INTERVAL_MS = 33          # ≈30 Hz, whatever the tracking rate
-
+DISPLAY_INTERVAL_MS = 33          # feeds: ≈30 Hz, whatever the tracking rate
+# The worker is asked for a result finished at least this long before the next tick, so the
+# packet is ready when the tick comes, even with some timer jitter.
+DISPLAY_LEAD_S = 0.008
+# The court views (3D, plan, side), the readouts and the tuning preview: ≤15 Hz. Each of them
+# costs the GUI thread (and, through the GIL, the tracker) more than a feed, and a flight drawn
+# 15 times a second, or a number changing 15 times a second, looks no different to the operator.
+SLOW_VIEW_INTERVAL_S = 1.0 / 15.0
 
 
 def rig_save_dir() -> Path:
@@ -46,6 +52,11 @@ def rig_save_dir() -> Path:
     except OSError:
         return Path(QStandardPaths.writableLocation(
             QStandardPaths.StandardLocation.AppDataLocation) or Path.home()) / "rigs"
+
+def _on_screen(widget: QWidget) -> bool:
+    """Whether any of the widget is visible (shown, not collapsed to nothing by a splitter)."""
+    return widget.isVisible() and widget.width() > 0 and widget.height() > 0
+
 
 class Banner(QFrame):
     """A one-sentence error line across the top of the window, with a close button."""
@@ -170,6 +181,9 @@ class MainWindow(QMainWindow):
         self.latest_packet: DisplayPacket | None = None
         self.results_seen = 0               # packets taken from the worker
         self.display_refreshes = 0          # timer ticks that repainted
+        self.slow_view_updates: dict[str, int] = {}   # packets shown per slow view (tests read it)
+        self._slow_shown: dict[str, DisplayPacket] = {}
+        self._slow_shown_at = float("-inf")
         self._display_rate = RateMeter()
         self._tuning = None
         self._paused = False
@@ -408,6 +422,7 @@ class MainWindow(QMainWindow):
         if self.worker is not None:
             self.worker.output.clear()    # the stopped worker's last result must not redraw the numbers
         self.readouts.clear()
+        self._slow_shown["readouts"] = self.latest_packet     # nor a packet the throttle held back
         for feed in (self.left_feed, self.right_feed):
             feed.set_message("No frames: " + message)
 
@@ -497,31 +512,69 @@ class MainWindow(QMainWindow):
 
     # ---- display ---------------------------------------------------------------------------
     def _refresh_display(self) -> None:
+        """Timer tick (≈30 Hz): the feeds get the newest packet, the slower views maybe too.
+
+        Newest frame wins: the worker keeps one packet, built on request (see the worker's
+        module docstring), and the feeds show it; nothing queues up behind a slow display.
+        """
         if self.worker is None:
             return
+        now = time.perf_counter()
         packet = self.worker.output.take()
-        if packet is None:
-            return
-        # Frames arrive already shrunk to the feeds' size, so painting them is nearly a copy.
-        ratio = self.devicePixelRatioF()
-        self.worker.set_display_size(int(max(self.left_feed.width(), self.right_feed.width()) * ratio),
-                                     int(max(self.left_feed.height(), self.right_feed.height()) * ratio))
-        self.latest_packet = packet
-        self.results_seen += 1
-        self.display_refreshes += 1
-        self._display_rate.tick(time.perf_counter())
-        r = packet.result
-        self.left_feed.set_frame(packet.left, packet.display_scale, r.left, packet.trail_left)
-        self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right)
+        if packet is not None:
+            # Ask for the last result that can finish before the next tick: a tracker slower than
+            # the ticks (one result per period) is asked for its very next result, a fast one
+            # for a result just before the tick, so the packet shown is fresh either way.
+            period = 1.0 / max(packet.stats.processing_fps, 1.0)
+            self.worker.request_display(now + DISPLAY_INTERVAL_MS / 1000.0 - DISPLAY_LEAD_S - period)
+            # Frames arrive already shrunk to the feeds' size, so painting them is nearly a copy.
+            ratio = self.devicePixelRatioF()
+            self.worker.set_display_size(int(max(self.left_feed.width(), self.right_feed.width()) * ratio),
+                                         int(max(self.left_feed.height(), self.right_feed.height()) * ratio))
+            self.latest_packet = packet
+            self.results_seen += 1
+            self.display_refreshes += 1
+            self._display_rate.tick(now)
+            r = packet.result
+            self.left_feed.set_frame(packet.left, packet.display_scale, r.left, packet.trail_left)
+            self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right)
+        if now - self._slow_shown_at >= SLOW_VIEW_INTERVAL_S - 0.002:   # a tick may come a little early
+            self._refresh_slow_views(now)
+
+    def _slow_views(self) -> list[tuple[str, QWidget, Callable[[DisplayPacket], None]]]:
+        views = []
         if self.gl_view is not None:
-            self.gl_view.show_packet(packet)
-        self.plan.show_packet(packet)
-        self.side.show_packet(packet)
-        self.readouts.show_packet(packet, self._display_rate.rate())
-        if self.worker.link_error:
+            views.append(("3D", self.gl_view.widget, self.gl_view.show_packet))
+        views += [("plan", self.plan.widget, self.plan.show_packet),
+                  ("side", self.side.widget, self.side.show_packet),
+                  ("readouts", self.readouts,
+                   lambda p: self.readouts.show_packet(p, self._display_rate.rate()))]
+        if self._tuning is not None:
+            views.append(("tuning preview", self._tuning, self._tuning.show_preview))
+        return views
+
+    def packet_shown_in(self, view: str) -> DisplayPacket | None:
+        """The packet a slow view ("3D", "plan", "side", "readouts", "tuning preview") shows."""
+        return self._slow_shown.get(view)
+
+    def _refresh_slow_views(self, now: float) -> None:
+        """Show the newest packet in each slow view that is on screen and does not show it yet.
+
+        A view that is hidden (window minimised, splitter collapsed, dialog closed) is skipped
+        and catches up when it shows again; an unchanged packet (paused) is not redrawn.
+        """
+        packet = self.latest_packet
+        if packet is None or self.isMinimized():
+            return
+        self._slow_shown_at = now
+        for name, widget, show in self._slow_views():
+            if self._slow_shown.get(name) is packet or not _on_screen(widget):
+                continue
+            self._slow_shown[name] = packet
+            self.slow_view_updates[name] = self.slow_view_updates.get(name, 0) + 1
+            show(packet)
+        if self.worker is not None and self.worker.link_error:
             self.link_panel.status.setText(self.worker.link_error)
-        if self._tuning is not None and self._tuning.isVisible():
-            self._tuning.show_preview(packet)
 
     @property
     def display_rate(self) -> float:
