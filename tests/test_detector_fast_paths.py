@@ -194,3 +194,82 @@ def test_measure_equals_the_numpy_formulas_on_real_frames(monkeypatch):
     assert sum(len(args[2]) for args in seen) > 100
     for args in seen:
         assert_same_batch(*args)
+
+
+class ReferenceBrighterThanAverage:
+    """The brighter-than-average background model as first written (numpy, fresh arrays)."""
+
+    def __init__(self, bg, binarize):
+        self.bg, self.bin = bg, binarize
+        self.average = None
+        self.last_difference = None
+
+    def apply(self, gray):
+        if self.average is None:
+            self.average = gray.astype(np.float32)
+            return np.zeros_like(gray)
+        current = gray.astype(np.float32)
+        gain = 1.0
+        if self.bg.compensate_gain:
+            avg_s = self.average[::8, ::8]
+            cur_s = current[::8, ::8]
+            lit = avg_s > 20
+            if np.count_nonzero(lit) > 50:
+                gain = float(np.median(cur_s[lit] / avg_s[lit]))
+        reference = self.average
+        k = int(self.bg.shake_tolerance)
+        if k > 0:
+            reference = cv2.dilate(reference, cv2.getStructuringElement(cv2.MORPH_RECT, (2 * k + 1, 2 * k + 1)))
+        diff = cv2.subtract(current, reference * gain) if gain != 1.0 else cv2.subtract(current, reference)
+        if self.bin.max_background < 255:
+            diff[self.average >= float(self.bin.max_background)] = 0
+        self.last_difference = diff
+        _, mask = cv2.threshold(diff, float(self.bin.diff_threshold), 255, cv2.THRESH_BINARY)
+        mask = mask.astype(np.uint8)
+        alpha = float(self.bg.learning_rate)
+        if alpha > 0:
+            cv2.accumulateWeighted(gray, self.average, alpha, mask=cv2.bitwise_not(mask))
+            cv2.accumulateWeighted(gray, self.average, alpha * 0.1, mask=mask)
+        # BackgroundModel.apply's post-processing, unchanged.
+        k = int(self.bin.open_kernel)
+        if k >= 2:
+            mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
+        if self.bin.dilate_iterations > 0:
+            mask = cv2.dilate(mask, None, iterations=int(self.bin.dilate_iterations))
+        return mask
+
+
+@pytest.mark.parametrize("overrides", [
+    {},
+    {"binarize.max_background": 255, "background.compensate_gain": False},
+    {"background.shake_tolerance": 2, "binarize.diff_threshold": 12.5},
+    {"background.shake_tolerance": 0, "binarize.max_background": 120},
+    {"binarize.dilate_iterations": 0, "binarize.open_kernel": 3},
+])
+def test_background_model_equals_the_numpy_formulas(overrides):
+    from badminton_gui.core.background import BackgroundModel
+    from badminton_gui.core.params import TrackerParams
+
+    p = TrackerParams()
+    for key, value in overrides.items():
+        p = p.with_value(key, value)
+    fast = BackgroundModel(p.background, p.binarize)
+    ref = ReferenceBrighterThanAverage(p.background, p.binarize)
+    rng = np.random.default_rng(5)
+    base = cv2.GaussianBlur(rng.integers(0, 200, (120, 160), dtype=np.uint8), (5, 5), 0)
+    cv2.rectangle(base, (20, 20), (40, 30), 250, -1)          # a light
+    foreground = 0
+    for i in range(40):
+        gain = 1.0 + 0.06 * math.sin(i)                          # flicker
+        frame = np.clip(base * gain + rng.normal(0, 3, base.shape), 0, 255).astype(np.uint8)
+        cv2.circle(frame, (30 + 3 * i, 60 + i), 2, 240, -1)       # something bright moving
+        mask_fast = fast.apply(frame)
+        mask_ref = ref.apply(frame)
+        assert np.array_equal(mask_fast, mask_ref), f"frame {i}"
+        foreground += int(np.count_nonzero(mask_ref))
+        if ref.last_difference is not None:
+            diff = fast.last_difference
+            if fast.last_unlit is not None:
+                diff = np.where(fast.last_unlit > 0, diff, 0)
+            assert np.array_equal(diff, ref.last_difference), f"frame {i}"
+    assert foreground > 0

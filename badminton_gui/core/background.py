@@ -25,8 +25,13 @@ class BackgroundModel:
         self._mog: cv2.BackgroundSubtractorMOG2 | None = None
         self._previous: deque[np.ndarray] = deque(maxlen=2)
         self._average: np.ndarray | None = None
-        self.last_difference: np.ndarray | None = None  # signed difference (bright_diff only)
+        # Brighter-than-average method only: the signed difference of the last frame, and where
+        # it counts (255; 0 on lights, where readers must take the difference as 0), or None.
+        self.last_difference: np.ndarray | None = None
+        self.last_unlit: np.ndarray | None = None
         self._kernel: np.ndarray | None = None
+        self._shake_kernel: np.ndarray | None = None
+        self._raw_mask: np.ndarray | None = None
         self._configure()
 
     @property
@@ -75,6 +80,9 @@ class BackgroundModel:
             mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._kernel)
         if self._bin.dilate_iterations > 0:
             mask = cv2.dilate(mask, None, iterations=int(self._bin.dilate_iterations))
+        if mask is self._raw_mask:
+            # The caller keeps the mask (the GUI shows it): never hand out the reused buffer.
+            mask = mask.copy()
         return mask
 
     def is_blind(self, x: float, y: float) -> bool:
@@ -106,8 +114,17 @@ class BackgroundModel:
         """
         if self._average is None or self._average.shape != gray.shape:
             self._average = gray.astype(np.float32)
+            # Per-frame buffers, reused: at 2048×1536 (a 1024×768 model) every float image
+            # pass is 3 MB of memory traffic and a fresh one costs page faults too; this
+            # method is memory-bound, so it makes as few full-image float passes as it can.
+            # ``last_difference`` and ``last_unlit`` are buffers: valid until the next call
+            # (the detector reads them within the same frame).
+            self._reference = np.empty_like(self._average)
+            self._difference = np.empty_like(self._average)
+            self._unlit = np.empty(gray.shape, np.uint8)
+            self._raw_mask = np.empty(gray.shape, np.uint8)
+            self._still = np.empty(gray.shape, np.uint8)
             return np.zeros_like(gray)
-        current = gray.astype(np.float32)
         # Lights flicker (mains frequency seen by a 119 fps camera) and the hall's exposure
         # drifts: the whole scene brightens or darkens by a common *gain*. Estimated robustly
         # (median ratio on a sparse grid of reasonably lit pixels) and divided out, so a
@@ -115,7 +132,7 @@ class BackgroundModel:
         gain = 1.0
         if self._bg.compensate_gain:
             avg_s = self._average[::8, ::8]
-            cur_s = current[::8, ::8]
+            cur_s = gray[::8, ::8]   # uint8 / float32 divides in float32, as float32 / float32
             lit = avg_s > 20
             if np.count_nonzero(lit) > 50:
                 gain = float(np.median(cur_s[lit] / avg_s[lit]))
@@ -124,18 +141,31 @@ class BackgroundModel:
         if k > 0:
             # A camera that shakes by a pixel turns every bright edge (court lines, lights)
             # into foreground; compare with the brightest background pixel nearby instead.
-            reference = cv2.dilate(reference, cv2.getStructuringElement(
-                cv2.MORPH_RECT, (2 * k + 1, 2 * k + 1)))
-        diff = cv2.subtract(current, reference * gain) if gain != 1.0 else cv2.subtract(current, reference)
-        if self._bin.max_background < 255:
-            # Lights: a shuttle in front of them is invisible anyway, and they flicker.
-            diff[self._average >= float(self._bin.max_background)] = 0
+            if self._shake_kernel is None or self._shake_kernel.shape[0] != 2 * k + 1:
+                self._shake_kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (2 * k + 1, 2 * k + 1))
+            reference = cv2.dilate(reference, self._shake_kernel, dst=self._reference)
+        if gain != 1.0:
+            # numpy's float32 × float32(gain), as the classifiers' training data was made.
+            reference = np.multiply(reference, gain, out=self._reference)
+        # The grey frame is converted to float32 inside the subtraction, block by block.
+        diff = cv2.subtract(gray, reference, dst=self._difference, dtype=cv2.CV_32F)
+        # diff > threshold as 0 / 255 in one call.
+        mask = cv2.compare(diff, float(self._bin.diff_threshold), cv2.CMP_GT, dst=self._raw_mask)
         self.last_difference = diff
-        _, mask = cv2.threshold(diff, float(self._bin.diff_threshold), 255, cv2.THRESH_BINARY)
-        mask = mask.astype(np.uint8)
+        self.last_unlit = None
+        if self._bin.max_background < 255:
+            # Lights: a shuttle in front of them is invisible anyway, and they flicker. They
+            # are left out of the mask with a uint8 operation; the float difference keeps its
+            # values there (zeroing it would be two more float passes), so readers of
+            # ``last_difference`` must count it as 0 where ``last_unlit`` is 0.
+            unlit = cv2.compare(self._average, float(self._bin.max_background), cv2.CMP_LT,
+                                dst=self._unlit)
+            cv2.bitwise_and(mask, unlit, dst=mask)
+            self.last_unlit = unlit
         alpha = float(self._bg.learning_rate)
         if alpha > 0:
-            cv2.accumulateWeighted(gray, self._average, alpha, mask=cv2.bitwise_not(mask))
+            cv2.accumulateWeighted(gray, self._average, alpha,
+                                   mask=cv2.bitwise_not(mask, dst=self._still))
             # Slow leak under the foreground too, so a change that stays (a light switched on)
             # is absorbed eventually.
             cv2.accumulateWeighted(gray, self._average, alpha * 0.1, mask=mask)

@@ -118,28 +118,42 @@ class CameraDetector:
         sy = h / mask.shape[0]
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
 
-        geometric: list[tuple[int, float, float, float, tuple[int, int, int, int]]] = []
+        # Filters 1 and 2 (contour length, short side of the tilted rectangle). OpenCV measures
+        # each contour; the scaling and the decisions are done for all contours at once.
         candidates: list[Candidate] = []
         s_mean = 0.5 * (sx + sy)
-        for contour in contours:
-            length = cv2.arcLength(contour, True) * s_mean
+        n_contours = len(contours)
+        raw = np.empty((n_contours, 8))
+        for k, contour in enumerate(contours):
             (_cx, _cy), (rw, rh), _angle = cv2.minAreaRect(contour)
-            short_side = min(rw, rh) * s_mean
-            area = cv2.contourArea(contour) * sx * sy
-            bx, by, bw, bh = cv2.boundingRect(contour)
-            box = (int(bx * sx), int(by * sy), int(math.ceil(bw * sx)), int(math.ceil(bh * sy)))
-            reason = None
-            if not (p.contour_length.min_length <= length <= p.contour_length.max_length):
-                reason = REJECT_LENGTH
-            elif not (p.tilted_rect.min_short_side <= short_side <= p.tilted_rect.max_short_side):
-                reason = REJECT_SHORT_SIDE
-            if reason is None:
-                geometric.append((len(geometric), length, short_side, area, box))
-            else:
-                cx = (bx + bw / 2) * sx
-                cy = (by + bh / 2) * sy
+            raw[k] = (cv2.arcLength(contour, True), min(rw, rh), cv2.contourArea(contour),
+                      *cv2.boundingRect(contour), 0.0)
+        length_all = raw[:, 0] * s_mean
+        short_all = raw[:, 1] * s_mean
+        area_all = raw[:, 2] * sx * sy
+        bx, by, bw, bh = raw[:, 3], raw[:, 4], raw[:, 5], raw[:, 6]
+        boxes_all = np.stack([np.floor(bx * sx), np.floor(by * sy), np.ceil(bw * sx),
+                              np.ceil(bh * sy)], axis=1).astype(np.int64)
+        length_ok = ((p.contour_length.min_length <= length_all)
+                     & (length_all <= p.contour_length.max_length))
+        short_ok = ((p.tilted_rect.min_short_side <= short_all)
+                    & (short_all <= p.tilted_rect.max_short_side))
+        passed = length_ok & short_ok
+        rejected = np.flatnonzero(~passed)
+        if len(rejected):
+            reasons = np.where(length_ok[rejected], REJECT_SHORT_SIDE, REJECT_LENGTH).tolist()
+            for cx, cy, length, short_side, area, reason in zip(
+                    ((bx[rejected] + bw[rejected] / 2) * sx).tolist(),
+                    ((by[rejected] + bh[rejected] / 2) * sy).tolist(),
+                    length_all[rejected].tolist(), short_all[rejected].tolist(),
+                    area_all[rejected].tolist(), reasons):
                 candidates.append(Candidate(cx, cy, length, short_side, math.nan, area,
                                             math.nan, 0.0, reason))
+        kept = np.flatnonzero(passed)
+        geometric: list[tuple[int, float, float, float, tuple[int, int, int, int]]] = [
+            (k, length, short_side, area, tuple(box)) for k, (length, short_side, area, box) in enumerate(zip(
+                length_all[kept].tolist(), short_all[kept].tolist(), area_all[kept].tolist(),
+                boxes_all[kept].tolist()))]
 
         limit = min(int(p.association.max_measured), MAX_COLOUR_CHECKS)
         if len(geometric) > limit:
@@ -147,36 +161,36 @@ class CameraDetector:
             # the strongest brightening; only the best get the full-resolution measurement.
             diff = self._background.last_difference
             live = self._associator.live_predictions(t)
-            boxes = np.array([g[4] for g in geometric], dtype=float)
+            boxes = boxes_all[kept]
             centre_x = boxes[:, 0] + boxes[:, 2] / 2
             centre_y = boxes[:, 1] + boxes[:, 3] / 2
             if len(live):
                 near = (np.hypot(live[None, :, 0] - centre_x[:, None],
                                  live[None, :, 1] - centre_y[:, None])
-                        <= live[None, :, 2]).any(axis=1).tolist()
+                        <= live[None, :, 2]).any(axis=1)
             else:
-                near = [False] * len(geometric)
-            ranked = []
-            for g, is_near in zip(geometric, near):
-                box = g[4]
-                if diff is not None:
-                    bx0, by0 = int(box[0] / sx), int(box[1] / sy)
-                    window = (slice(by0, by0 + max(int(box[3] / sy), 1)),
-                              slice(bx0, bx0 + max(int(box[2] / sx), 1)))
-                    # Brightening, plus plain brightness: a shuttle held still before the
-                    # serve fades into the average but stays the brightest thing around.
-                    # (cv2.minMaxLoc: the windows' maxima at a fraction of numpy's overhead.)
-                    strength = (cv2.minMaxLoc(diff[window])[1]
-                                + 0.5 * cv2.minMaxLoc(gray[window])[1])
-                else:
-                    strength = -g[3]   # MOG2 gives no strength: smaller blobs first
-                ranked.append((is_near, strength, g))
-            ranked.sort(key=lambda r: (r[0], r[1]), reverse=True)
-            for _, _, (_, length, short_side, area, box) in ranked[limit:]:
+                near = np.zeros(len(geometric), dtype=bool)
+            if diff is not None:
+                # Brightening, plus plain brightness: a shuttle held still before the serve
+                # fades into the average but stays the brightest thing around. Each box's
+                # window at the processing scale, maxima of all windows in one gather.
+                x0 = (boxes[:, 0] / sx).astype(np.int64)
+                y0 = (boxes[:, 1] / sy).astype(np.int64)
+                win_w = np.minimum(np.maximum((boxes[:, 2] / sx).astype(np.int64), 1), mask.shape[1] - x0)
+                win_h = np.minimum(np.maximum((boxes[:, 3] / sy).astype(np.int64), 1), mask.shape[0] - y0)
+                strength = (_window_maxima(diff, x0, y0, win_w, win_h,
+                                           self._background.last_unlit).astype(np.float64)
+                            + 0.5 * _window_maxima(gray, x0, y0, win_w, win_h).astype(np.float64))
+            else:
+                strength = -area_all[kept]   # MOG2 gives no strength: smaller blobs first
+            # Near first, then strongest; ties keep the contour order (a stable sort).
+            order = np.lexsort((-strength, ~near)).tolist()
+            for i in order[limit:]:
+                _, length, short_side, area, box = geometric[i]
                 candidates.append(Candidate(box[0] + box[2] / 2, box[1] + box[3] / 2, length,
                                             short_side, math.nan, area, math.nan, 0.0,
                                             REJECT_WHITENESS))
-            geometric = [r[2] for r in ranked[:limit]]
+            geometric = [geometric[i] for i in order[:limit]]
 
         # Filter 3 and the appearance features of all the frame's blobs at once; the
         # classifier then scores them in one call too.
@@ -506,6 +520,24 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
         pos_x[i] = (fallback * xs).sum() / fallback.sum() + x0
         pos_y[i] = (fallback * ys).sum() / fallback.sum() + y0
     return pos_x, pos_y, whiteness, saturation, features
+
+
+def _window_maxima(image: np.ndarray, x0: np.ndarray, y0: np.ndarray, width: np.ndarray,
+                   height: np.ndarray, counts_where: np.ndarray | None = None) -> np.ndarray:
+    """Maximum of ``image`` in each window (all non-empty, inside the image), one gather.
+
+    ``counts_where``: an image of the same size, 0 where ``image`` is to be taken as 0.
+    """
+    counts = height * width
+    local = _ragged_arange(counts)
+    row_width = np.repeat(width, counts)
+    rows = local // row_width
+    flat = ((np.repeat(y0, counts) + rows) * image.shape[1] + np.repeat(x0, counts)
+            + local - rows * row_width)
+    values = image.ravel()[flat]
+    if counts_where is not None:
+        values = np.where(counts_where.ravel()[flat] != 0, values, values.dtype.type(0))
+    return np.maximum.reduceat(values, np.cumsum(counts) - counts)
 
 
 def _ragged_arange(lengths: np.ndarray) -> np.ndarray:
