@@ -139,8 +139,13 @@ def test_2d_fallback_without_opengl(main_window, qtbot, monkeypatch):
                     and window.packet_shown_in("plan") is window.latest_packet, timeout=WAIT_MS)
     window._timer.stop()             # keep the packet with a 3D point on screen
     assert window.plan.widget.isVisible() and window.side.widget.isVisible()
-    xs, _ = window.plan._position.getData()
-    assert len(xs) == 1
+    point = window.latest_packet.result.point
+    for view, (u, v) in ((window.plan, (point[1], point[0])), (window.side, (point[1], point[2]))):
+        dot = view._position
+        assert dot.isVisible() and (dot.pos().x(), dot.pos().y()) == pytest.approx((u, v))
+        flight = window.latest_packet.flight
+        if flight is not None and len(flight) >= 2:
+            assert view._flight.isVisible() and view._flight.path().elementCount() == len(flight)
 
 
 def test_pause_and_single_step(main_window, qtbot):
