@@ -32,7 +32,7 @@ from .worker import DisplayPacket, RateMeter, SourceOpener, TrackingWorker
 DISPLAY_INTERVAL_MS = 33          # feeds: ≈30 Hz, whatever the tracking rate
 # The worker is asked for a result finished at least this long before the next tick, so the
 # packet is ready when the tick comes, even with some timer jitter.
-DISPLAY_LEAD_S = 0.008
+DISPLAY_LEAD_S = 0.016
 # The court views (3D, plan, side), the readouts and the tuning preview: ≤15 Hz. Each of them
 # costs the GUI thread (and, through the GIL, the tracker) more than a feed, and a flight drawn
 # 15 times a second, or a number changing 15 times a second, looks no different to the operator.
