@@ -68,6 +68,8 @@ class CameraDetector:
         self._classifier = None
         self._load_classifier()
         self._previous_positions = np.zeros((0, 2))
+        self._small: np.ndarray | None = None   # the frame at the processing scale (buffer)
+        self._gray: np.ndarray | None = None
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -106,13 +108,16 @@ class CameraDetector:
         p = self.params
         h, w = frame_bgr.shape[:2]
         scale = float(p.background.processing_scale)
-        gray_full = None
         if scale < 1.0:
-            small = cv2.resize(frame_bgr, (max(1, round(w * scale)), max(1, round(h * scale))),
-                               interpolation=cv2.INTER_AREA)
-            gray = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
+            size = (max(1, round(w * scale)), max(1, round(h * scale)))
+            if self._small is None or self._small.shape[:2] != (size[1], size[0]):
+                # Reused every frame (the grey image is read only within this call).
+                self._small = np.empty((size[1], size[0], 3), np.uint8)
+                self._gray = np.empty((size[1], size[0]), np.uint8)
+            small = cv2.resize(frame_bgr, size, dst=self._small, interpolation=cv2.INTER_AREA)
+            gray = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY, dst=self._gray)
         else:
-            gray = gray_full = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY)
+            gray = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY)
         mask = self._background.apply(gray)
         sx = w / mask.shape[1]
         sy = h / mask.shape[0]
@@ -122,16 +127,12 @@ class CameraDetector:
         # each contour; the scaling and the decisions are done for all contours at once.
         candidates: list[Candidate] = []
         s_mean = 0.5 * (sx + sy)
-        n_contours = len(contours)
-        raw = np.empty((n_contours, 8))
-        for k, contour in enumerate(contours):
-            (_cx, _cy), (rw, rh), _angle = cv2.minAreaRect(contour)
-            raw[k] = (cv2.arcLength(contour, True), min(rw, rh), cv2.contourArea(contour),
-                      *cv2.boundingRect(contour), 0.0)
-        length_all = raw[:, 0] * s_mean
-        short_all = raw[:, 1] * s_mean
-        area_all = raw[:, 2] * sx * sy
-        bx, by, bw, bh = raw[:, 3], raw[:, 4], raw[:, 5], raw[:, 6]
+        # (one list per measurement: a row assignment per contour costs as much as a call)
+        length_all = np.array([cv2.arcLength(c, True) for c in contours], dtype=float) * s_mean
+        short_all = np.array([min(cv2.minAreaRect(c)[1]) for c in contours], dtype=float) * s_mean
+        area_all = np.array([cv2.contourArea(c) for c in contours], dtype=float) * sx * sy
+        rects = np.array([cv2.boundingRect(c) for c in contours], dtype=float).reshape(-1, 4)
+        bx, by, bw, bh = rects[:, 0], rects[:, 1], rects[:, 2], rects[:, 3]
         boxes_all = np.stack([np.floor(bx * sx), np.floor(by * sy), np.ceil(bw * sx),
                               np.ceil(bh * sy)], axis=1).astype(np.int64)
         length_ok = ((p.contour_length.min_length <= length_all)
@@ -414,16 +415,20 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     def window_sum(per_row: np.ndarray) -> np.ndarray:
         return np.add.reduceat(per_row, start)
 
-    def window_max(per_row: np.ndarray) -> np.ndarray:
-        return np.maximum.reduceat(per_row, start)
+    def row_sums(image: np.ndarray, depth: int) -> np.ndarray:
+        # cv2.reduce: 3-4x faster than numpy's axis-1 sum on these narrow images
+        return cv2.reduce(image, 1, cv2.REDUCE_SUM, dtype=depth)[:, 0]
+
+    def window_max(image: np.ndarray) -> np.ndarray:
+        # A window's rows (and its blank row) are one contiguous range of the flat canvas.
+        return np.maximum.reduceat(image.ravel(), start * cols)
 
     blue, green, red = cv2.split(canvas)
     cmin = cv2.min(cv2.min(blue, green), red)
     cmax = cv2.max(cv2.max(blue, green), red)
-    in_mask = inside > 0
-    n_inside = window_sum(np.count_nonzero(in_mask, axis=1))
-    white_sum = window_sum(cv2.bitwise_and(cmin, inside).sum(axis=1, dtype=np.int64))
-    sat_sum = window_sum(cv2.bitwise_and(cv2.subtract(cmax, cmin), inside).sum(axis=1, dtype=np.int64))
+    n_inside = window_sum(row_sums(inside, cv2.CV_32S)) // 255
+    white_sum = window_sum(row_sums(cv2.bitwise_and(cmin, inside), cv2.CV_32S))
+    sat_sum = window_sum(row_sums(cv2.bitwise_and(cv2.subtract(cmax, cmin), inside), cv2.CV_32S))
     has_inside = n_inside > 0
     whiteness[blobs] = np.where(has_inside, white_sum / np.maximum(n_inside, 1), 0.0)
     saturation[blobs] = np.where(has_inside, sat_sum / np.maximum(n_inside, 1), 255.0)
@@ -455,19 +460,19 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     background_row = np.repeat(background, seg_rows)
     excess = gray - background_row[:, None]
     excess[~valid] = -np.inf
-    peak = window_max(excess.max(axis=1))
+    peak = window_max(excess)
     half_peak = np.float32(0.5) * peak
     half_row = np.repeat(half_peak, seg_rows)
-    n_bright = window_sum(np.count_nonzero(excess > half_row[:, None], axis=1))
+    n_bright = window_sum(row_sums((excess > half_row[:, None]).view(np.uint8), cv2.CV_32S))
     border_bright = (border - background[border_owner]) > half_peak[border_owner]
     spill = np.bincount(border_owner, weights=border_bright, minlength=m) / border_len
-    peak_sat = (window_max(cmax.max(axis=1)).astype(np.float64)
-                - window_max(cmin.max(axis=1)).astype(np.float64))
+    peak_sat = window_max(cmax).astype(np.float64) - window_max(cmin).astype(np.float64)
+    # Standard deviation from the sums of g and g² in double (products of float32 values are
+    # exact there; padding is 0 and adds nothing).
     n_pixels = height * width
-    mean = window_sum(gray.sum(axis=1, dtype=np.float64)) / n_pixels
-    deviation = gray - np.repeat(mean, seg_rows)[:, None]
-    deviation[~valid] = 0.0
-    window_std = np.sqrt(window_sum(np.einsum("ij,ij->i", deviation, deviation)) / n_pixels)
+    mean = window_sum(row_sums(gray, cv2.CV_64F)) / n_pixels
+    mean_square = window_sum(row_sums(cv2.multiply(gray, gray, dtype=cv2.CV_64F), cv2.CV_64F)) / n_pixels
+    window_std = np.sqrt(np.maximum(mean_square - mean * mean, 0.0))
     features[blobs] = np.stack([peak, background, np.log1p(n_bright), spill, whiteness[blobs],
                                 saturation[blobs], np.log1p(n_inside), peak_sat, window_std],
                                axis=1)
@@ -478,7 +483,7 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     # the excess counts as 0 (so a blob's peak is at least 0); padding stays -inf or 0.
     support = cv2.dilate(inside, _GROW) > 0
     blob_excess = np.where(support, excess, np.float32(0))
-    blob_peak = np.maximum(window_max(blob_excess.max(axis=1)), 0)
+    blob_peak = np.maximum(window_max(blob_excess), 0)
     # No support, or nothing on it above the background: the whole window's excess instead.
     whole = blob_peak <= 0
     if whole.any():
@@ -491,7 +496,7 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     cut = (head_fraction * blob_peak.astype(np.float64)).astype(np.float32)
     weights = blob_excess - np.repeat(cut, seg_rows)[:, None]
     np.maximum(weights, 0, out=weights)
-    row_weight = weights.sum(axis=1, dtype=np.float64)
+    row_weight = row_sums(weights, cv2.CV_64F)
     total = window_sum(row_weight)
     # OpenCV's convention: integer coordinates are pixel centres (as projectPoints gives).
     sum_x = window_sum(weights @ np.arange(cols, dtype=np.float64))
@@ -508,7 +513,7 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
         rows_k = slice(r0, r0 + int(height[k]))
         cols_k = slice(0, int(width[k]))
         if peak[k] <= 0:
-            ys, xs = np.nonzero(in_mask[rows_k, cols_k])
+            ys, xs = np.nonzero(inside[rows_k, cols_k])
             if len(xs) == 0:
                 box = boxes[i]
                 pos_x[i], pos_y[i] = box[0] + box[2] / 2, box[1] + box[3] / 2
