@@ -37,7 +37,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from badminton_gui.core.evaluation import Outcomes, evaluate, tolerance_px  # noqa: E402
 from badminton_gui.core.rig import StereoRig  # noqa: E402
 from badminton_gui.io.labels import read_point_labels  # noqa: E402
-from clips import broadcast_clips, nycu_cfgs, stereo_clips  # noqa: E402
+from clips import LABELS_MISALIGNED, broadcast_clips, nycu_cfgs, stereo_clips  # noqa: E402
 
 CLI = [sys.executable, "-m", "badminton_gui.cli"]
 
@@ -246,6 +246,12 @@ def main() -> int:
             rates = [r.rate for r in sel if r.rate == r.rate]
             print(f"  {kind:9s} {mode:6s} {'held-out' if held else 'tuned-on':8s} {tot.summary()}"
                   f"  median speed {np.median(rates) if rates else float('nan'):.1f} {sel[0].unit}")
+            aligned = [r for r in sel if r.clip not in LABELS_MISALIGNED]
+            if 0 < len(aligned) < len(sel):
+                tot = sum((r.outcomes for r in aligned), Outcomes())
+                print(f"  {'':9s} {'':6s} {'':8s} {tot.summary()}  without "
+                      f"{', '.join(sorted({r.clip for r in sel} & LABELS_MISALIGNED))} (labels not on its "
+                      f"decoded frames: benchmarks/label_alignment.py)")
     if errs:
         d = np.concatenate(errs)
         if len(d):

@@ -17,6 +17,13 @@ DATA_DIR = Path(os.environ.get("BADMINTON_DATA",
 HELD_OUT = {"rally_11-48-10", "rally_11-49-21", "rally_11-47-41", "launcher-stereo",
             "bwf_00041", "1_06_06"}
 
+# Clips whose labels do not follow the decoded frames: on launcher-stereo 81–84 % of the labels
+# our detections meet are met 3–17 frames later (2–14 % on the NYCU rallies, where the shuttle
+# at rest makes such matches); its videos have irregular timestamps and the labels were numbered
+# on a time-resampled copy. Their rows stay in the tables; totals are also given without them.
+# Evidence: benchmarks/label_alignment.py.
+LABELS_MISALIGNED = {"launcher-stereo"}
+
 
 @dataclass(frozen=True)
 class StereoClip:
