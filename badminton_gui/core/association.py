@@ -134,19 +134,24 @@ class TrackletAssociator:
             # with a bonus for history), so a new blob cannot steal a long track's point.
             cost = cost - 0.5 * np.minimum(np.array([tr.hits for tr in self.tracklets]), 20)[:, None] / 20
             order = np.argsort(cost, axis=None)
+            # Only pairs inside the tracklet's gate can be taken: drop the others before the
+            # Python loop (it used to visit all tracklets × candidates, ~800 pairs a frame, to
+            # take a dozen), keeping the cost order; stop once either side is used up.
+            in_gate = (d <= gates[:, None]).ravel()[order]
             used_t = set()
             used_c = set()
-            for flat in order:
-                i, j = divmod(int(flat), n)
+            n_tracklets = len(self.tracklets)
+            for flat in order[in_gate].tolist():
+                i, j = divmod(flat, n)
                 if i in used_t or j in used_c:
-                    continue
-                if d[i, j] > gates[i]:
                     continue
                 used_t.add(i)
                 used_c.add(j)
                 assigned_track[j] = self.tracklets[i].ident
                 motion[j] = float(d[i, j])
                 self._extend(self.tracklets[i], t, positions[j], scores[j], float(d[i, j]))
+                if len(used_t) == n_tracklets or len(used_c) == n:
+                    break
         # Drop lost tracklets; start new ones from unassigned candidates.
         kept = []
         for tr in self.tracklets:
