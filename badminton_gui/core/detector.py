@@ -25,6 +25,13 @@ The chain per frame (coarse to fine, GUIDE §4):
    up to ``motion.coast_blind`` frames, flagged ``Candidate.predicted`` and never triangulated.
 
 Latency: none (causal); a flight costs its first ``association.min_hits`` frames.
+
+Speed (issue #7): both cameras run this in two threads, and only OpenCV calls and numpy
+operations on large arrays release the GIL, so per-blob and per-contour Python is kept out of
+the hot path — contour measurements are gathered in lists and decided for all contours at
+once, the ranking's window maxima come from one gather, the measured windows share one canvas
+(``measure_blobs``), the classifier scores all blobs in one call. Every value is the one the
+plain per-blob code gave (tests/test_detector_fast_paths.py).
 """
 
 from __future__ import annotations
@@ -354,15 +361,16 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     Speed: up to ``association.max_measured`` blobs per frame and camera come here. Their
     windows are copied into one canvas, one below the other (left-aligned, a blank row between
     two, so growing a mask by a pixel never reaches the next window), and every step runs once
-    on the canvas, with per-window sums and maxima taken row by row and then over each
-    window's rows (``np.add.reduceat``): a few dozen calls per frame instead of ~30 per blob
-    (each with numpy's overhead and the GIL held, so the two camera threads queued on it).
-    Padding pixels are made neutral for every step (0 for counts and sums, -inf for maxima).
-    The values are those of the plain per-window numpy formulas the classifiers were trained
-    on (``tests/test_detector_fast_paths.py`` keeps them as the reference): grey is
+    on the canvas: per-window sums as row sums (``cv2.reduce``) added over each window's rows,
+    per-window maxima over each window's contiguous range of the flat canvas (both by
+    ``reduceat``). A few dozen calls per frame instead of ~30 per blob (each with numpy's
+    overhead and the GIL held, so the two camera threads queued on it). Padding pixels are
+    made neutral for every step (0 for counts and sums, -inf for maxima). The values are those
+    of the plain per-window numpy formulas the classifiers were trained on
+    (``tests/test_detector_fast_paths.py`` keeps them as the reference): grey is
     ``mean(B, G, R)`` in float32, the border median is numpy's, counts and sums of integers are
-    exact; only the window's standard deviation and the centroid's sums are accumulated in
-    double instead of float32 (relative differences ~1e-7).
+    exact; only the window's standard deviation (from the sums of g and g²) and the centroid's
+    sums are accumulated in double instead of float32 (relative differences ~1e-7).
     """
     n = len(boxes)
     h, w = frame.shape[:2]
@@ -439,7 +447,7 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
 
     # Border of each window in numpy's order (top row, bottom row, left column, right column;
     # corners twice), as flat canvas indices; then each window's median by one sort of
-    # (window, value) keys (exact: values are float32 below 256, windows are < 2^20 apart).
+    # window × 1024 + value keys (exact in double: the values are float32 below 256).
     top = np.repeat(start * cols, width) + _ragged_arange(width)
     bottom = np.repeat((start + height - 1) * cols, width) + _ragged_arange(width)
     left = (np.repeat(start, height) + _ragged_arange(height)) * cols
