@@ -448,11 +448,14 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     # Border of each window in numpy's order (top row, bottom row, left column, right column;
     # corners twice), as flat canvas indices; then each window's median by one sort of
     # window × 1024 + value keys (exact in double: the values are float32 below 256).
-    top = np.repeat(start * cols, width) + _ragged_arange(width)
-    bottom = np.repeat((start + height - 1) * cols, width) + _ragged_arange(width)
-    left = (np.repeat(start, height) + _ragged_arange(height)) * cols
-    right = left + np.repeat(width - 1, height)
-    border_owner = np.concatenate([np.repeat(np.arange(m), width)] * 2 + [np.repeat(np.arange(m), height)] * 2)
+    along_row = _ragged_arange(width)
+    row_owner = np.repeat(np.arange(m), width)
+    col_owner = np.repeat(np.arange(m), height)
+    top = start[row_owner] * cols + along_row
+    bottom = top + ((height - 1) * cols)[row_owner]
+    left = (start[col_owner] + _ragged_arange(height)) * cols
+    right = left + (width - 1)[col_owner]
+    border_owner = np.concatenate([row_owner, row_owner, col_owner, col_owner])
     border = gray.ravel()[np.concatenate([top, bottom, left, right])]
     border_len = 2 * (width + height)
     keyed = np.sort(border_owner * 1024.0 + border)
