@@ -86,6 +86,13 @@ def _cpu_delta(before: dict, after: dict, seconds: float) -> str:
     return ", ".join(f"{k} {v * 100:.0f}%" for v, k in rows if v >= 0.01)
 
 
+def _display_side_cpu(before: dict, after: dict) -> float:
+    """CPU seconds between two snapshots of the threads that only serve the display: the GUI
+    thread, Mesa's llvmpipe rasterizer threads and the X server."""
+    return sum(value - before.get(key, 0.0) for key, value in after.items()
+               if key[1] in ("GUI thread", "X server") or key[1].startswith("llvmpipe"))
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=20.0, help="length of each phase")
@@ -241,16 +248,18 @@ def main() -> int:
                 t_first, n_first = time.perf_counter(), window.results_seen
         built = window.worker.packets_built if window.worker is not None else 0
         shown = (window.results_seen - n_first) / (time.perf_counter() - t_first) if t_first else 0.0
-        cpu_use = _cpu_delta(cpu0, _cpu_by_thread(), time.perf_counter() - t0)
+        cpu1 = _cpu_by_thread()
+        cpu_use = _cpu_delta(cpu0, cpu1, time.perf_counter() - t0)
         span = time.perf_counter() - t0
         sched1 = _gui_thread_sched()
+        frames_shown = window.results_seen - n_before
+        display_cpu_ms.append(_display_side_cpu(cpu0, cpu1) * 1000.0 / max(frames_shown, 1))
         cpu_use += (f"; display timer ran {(len(refresh_all) - ticks0) / span:.1f} ticks/s; GUI thread "
                     f"on a CPU {(sched1[0] - sched0[0]) / span * 100:.0f}% of the time, runnable but "
                     f"waiting for a CPU {(sched1[1] - sched0[1]) / span * 100:.0f}%, the rest idle or "
                     f"blocked (event loop, GIL); worker built {built / span:.1f} display packets/s")
         window.stop_worker()
         warm = [s for s in samples if s[0] >= samples[0][0] + 2.0] if samples else []
-        del n_before
         return (rate_of(warm[0], warm[-1]) if len(warm) > 1 else float("nan"),
                 statistics.median(ms) if ms else float("nan"), shown,
                 p.stats.dropped if p is not None else 0, cpu_use)
@@ -260,7 +269,7 @@ def main() -> int:
           f"window {window.width()}×{window.height()}, feeds "
           f"{window.left_feed.width()}×{window.left_feed.height()}, "
           f"{'3D + 2D views' if window.gl_view is not None else '2D views only'}")
-    alone_fps, gui_fps, feed_hz = [], [], defaultdict(list)
+    alone_fps, gui_fps, feed_hz, display_cpu_ms = [], [], defaultdict(list), []
     for r in range(args.rounds):
         fps_a, ms_a, cpu_a = alone(args.seconds)
         alone_fps.append(fps_a)
@@ -296,6 +305,8 @@ def main() -> int:
         f2s = times.get(f"frame-to-screen {name}", [])
         print(f"  {name:5s} feed: display " + "/".join(f"{v:.1f}" for v in feed_hz.get(name, [])) +
               f" Hz per round; frame-to-screen median {_pct(f2s, 50):.2f} ms, p95 {_pct(f2s, 95):.2f} ms")
+    print("  display-side CPU (GUI thread + GL rasterizer + X server) per frame pair shown: "
+          + ", ".join(f"{v:.1f}" for v in display_cpu_ms) + " ms per round")
     print(f"  display slot (ticks with a packet): median {_pct(refresh_with_packet, 50):.2f} ms, "
           f"p95 {_pct(refresh_with_packet, 95):.2f} ms, max {max(refresh_with_packet, default=float('nan')):.2f} ms")
     app.quit()

@@ -2,9 +2,12 @@
 
 Why this file exists: it wires the pieces and nothing more. It never processes a frame: it
 starts a :class:`~.worker.TrackingWorker` on a QThread for the chosen source, polls the worker's
-one-slot output with a ~30 Hz timer, and hands the newest packet to the views. Errors from the
-worker arrive as one sentence and are shown in a banner; the window stays usable and another
-source can be chosen.
+one-slot output with a ~30 Hz timer, and hands the newest packet to the feeds on every tick and
+to the court views, readouts and tuning preview at most 15 times a second (only those on screen,
+only when what they draw changed): every millisecond of Python on this thread holds the GIL the
+tracker's threads need (scripts/gui-timing.py measures the cost). Errors from the worker arrive
+as one sentence and are shown in a banner; the window stays usable and another source can be
+chosen.
 """
 
 from __future__ import annotations
