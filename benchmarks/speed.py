@@ -17,7 +17,9 @@ Then the file processing figures (`track` on a NYCU rally, decoding included: pa
 share of time spent decoding vs tracking), resident memory after 1000 and after ``--long`` pairs
 (current RSS, and the peak since the long run began: the kernel's peak is reset first, so the
 frames held in memory by the timing runs do not hide growth), and
-with ``--profile`` a cProfile summary of where the tracker's time goes.
+with ``--profile`` a cProfile summary of where the tracker's time goes. ``--cv-threads 1`` runs
+the tracker with one OpenCV thread (the plain chain keeps OpenCV's default): the two camera
+threads already use both cores, and OpenCV's own pool on top of them costs CPU.
 
 First of all it prints how fast the demo court renders at 1280×720 (the GUI's demo must render
 faster than the cameras' rate it imitates); that part needs no data.
@@ -140,6 +142,21 @@ def scaled_rig(rig: StereoRig, size: tuple[int, int]) -> StereoRig:
     s = np.diag([sx, sy, 1.0])
     return StereoRig(s @ rig.M1, rig.D1, s @ rig.M2, rig.D2, rig.R, rig.T, size,
                      R_court=rig.R_court, T_court=rig.T_court)
+
+
+class opencv_threads:
+    """Context: OpenCV's own thread count set to ``n`` (None: leave it), restored on exit."""
+
+    def __init__(self, n: int | None) -> None:
+        self.n = n
+        self.saved = cv2.getNumThreads()
+
+    def __enter__(self):
+        if self.n is not None:
+            cv2.setNumThreads(self.n)
+
+    def __exit__(self, *exc) -> None:
+        cv2.setNumThreads(self.saved)
 
 
 def time_plain(pairs) -> float:
@@ -267,6 +284,10 @@ def main() -> None:
     ap.add_argument("--long", type=int, default=10000, help="pairs for the memory run (0: skip)")
     ap.add_argument("--preset", default=None)
     ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--cv-threads", type=int, default=None,
+                    help="OpenCV's own thread count while the tracker runs (default: OpenCV's "
+                         "choice; 1 is what core.tracker.configure_opencv_threads sets). The "
+                         "plain chain always runs with OpenCV's default")
     ap.add_argument("--f1-rallies", nargs="*", default=list(F1_RALLIES),
                     help="NYCU rallies scored at each resolution (none: skip the F1 column)")
     ap.add_argument("--f1-pairs", type=int, default=100000, help="at most this many pairs per rally for F1")
@@ -278,11 +299,14 @@ def main() -> None:
         sys.exit(f"needs {DATA}")
     params = load_preset(args.preset)
     full_rig = rig_from_nycu(DATA / RALLY / "CameraReader_1.cfg", DATA / RALLY / "CameraReader_2.cfg")
-    print(f"cv2 {cv2.__version__}, {cv2.getNumberOfCPUs()} CPUs, preset {args.preset or 'default'}")
+    print(f"cv2 {cv2.__version__}, {cv2.getNumberOfCPUs()} CPUs, preset {args.preset or 'default'}, "
+          f"OpenCV threads in the tracker: {args.cv_threads or cv2.getNumThreads()}")
+    tracker_threads = opencv_threads(args.cv_threads)
     sizes = (None, (1280, 720), (640, 480))
     f1 = {}
     if args.f1_rallies:
-        f1 = f1_by_resolution(full_rig, params, sizes, args.f1_rallies, args.f1_pairs)
+        with tracker_threads:
+            f1 = f1_by_resolution(full_rig, params, sizes, args.f1_rallies, args.f1_pairs)
         print(f"F1 on {', '.join(args.f1_rallies)} (both cameras, first {args.f1_pairs} pairs at most)")
     print(f"{'resolution':>10} {'plain/s':>8} {'tracker/s':>9} {'ratio':>6} {'p50 ms':>7} {'p99 ms':>7} "
           f"{'RSS MB':>7} {'F1':>6} {'acc':>6}")
@@ -290,7 +314,8 @@ def main() -> None:
         pairs = load_pairs(args.pairs, size)
         rig = full_rig if size is None else scaled_rig(full_rig, size)
         plain = time_plain(pairs)
-        rate, p50, p99 = time_tracker(pairs, rig, params)
+        with tracker_threads:
+            rate, p50, p99 = time_tracker(pairs, rig, params)
         w, h = pairs[0][0].shape[1], pairs[0][0].shape[0]
         score = f1.get(size)
         quality = f"{100 * score.f1:6.2f} {100 * score.accuracy:6.2f}" if score else f"{'-':>6} {'-':>6}"
@@ -299,16 +324,18 @@ def main() -> None:
         if args.profile and size is None:
             prof = cProfile.Profile()
             tracker = StereoTracker(rig, params, parallel=False)
-            prof.enable()
-            for lf, rf, t in pairs:
-                tracker.process(lf, rf, t, keep_masks=False)
-            prof.disable()
+            with tracker_threads:
+                prof.enable()
+                for lf, rf, t in pairs:
+                    tracker.process(lf, rf, t, keep_masks=False)
+                prof.disable()
             tracker.close()
             out = io.StringIO()
             pstats.Stats(prof, stream=out).sort_stats("tottime").print_stats(12)
             profile_text = out.getvalue()
         del pairs
-    rate, decode_share = file_processing(full_rig, params, 600)
+    with tracker_threads:
+        rate, decode_share = file_processing(full_rig, params, 600)
     print(f"file processing ({RALLY}, decoding included): {rate:.1f} pairs/s, "
           f"decoding {100 * decode_share:.0f} % / tracking {100 - 100 * decode_share:.0f} % of the time")
     if args.long:
@@ -317,11 +344,12 @@ def main() -> None:
         tracker = StereoTracker(rig, params)
         reset = reset_peak_rss()
         rss = {}
-        for i in range(args.long):
-            lf, rf, _ = pairs[i % len(pairs)]
-            tracker.process(lf, rf, i / 119.0, keep_masks=False)
-            if i + 1 in (1000, args.long):
-                rss[i + 1] = (_status_mb("VmRSS"), _status_mb("VmHWM"))
+        with tracker_threads:
+            for i in range(args.long):
+                lf, rf, _ = pairs[i % len(pairs)]
+                tracker.process(lf, rf, i / 119.0, keep_masks=False)
+                if i + 1 in (1000, args.long):
+                    rss[i + 1] = (_status_mb("VmRSS"), _status_mb("VmHWM"))
         tracker.close()
         peak = "peak since start" if reset else "process peak (reset refused)"
         print("memory (640x480 loop): " + "; ".join(
