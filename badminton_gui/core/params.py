@@ -257,6 +257,13 @@ class StereoParams(ParamGroup):
     head_min_speed: float = param(1.0, 0.0, 50.0, step=0.5, unit="m/s", label="Cork correction from",
                                   help="The cork correction needs a flight direction: below this speed the "
                                        "point is left as measured")
+    guided_search: bool = flag(True, label="Look where the flight says",
+                               help="When a camera has no detection near the 3D flight's projection, look "
+                                    "there for a small white spot (a shuttle merged with a player or a line)")
+    guided_min_contrast: float = param(25.0, 1.0, 255.0, step=1.0, unit="grey levels", label="Spot contrast ≥",
+                                       help="The spot's whiteness (min of B, G, R) above its window's median")
+    guided_override: bool = flag(False, label="... also against a detection",
+                                 help="Also replace a detection that is off the flight's projection")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and

@@ -20,6 +20,7 @@ Usage::
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections import deque
@@ -29,6 +30,7 @@ import cv2
 import numpy as np
 
 from .detector import CameraDetector
+from .guided import find_spot
 from .params import TrackerParams
 from .rig import StereoRig
 from .trajectory import Trajectory
@@ -54,6 +56,7 @@ class StereoTracker:
         self._pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="camera") if parallel else None
         self._trajectory = Trajectory(self.params.trajectory, rig.has_court_pose)
         self._checked_size = False
+        self._previous: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
         # Epipolar errors of long, confident tracklets seen by both cameras: what the rig
         # really achieves (a rig calibrated by clicking court points is off by tens of px).
         self._epipolar_samples: deque[float] = deque(maxlen=600)
@@ -71,6 +74,7 @@ class StereoTracker:
         self.right.reset()
         self._trajectory.reset()
         self._epipolar_samples.clear()
+        self._previous = (None, None)
 
     def epipolar_tolerance(self) -> float:
         """The epipolar gate in use: the configured one, widened to the rig's measured error."""
@@ -131,6 +135,21 @@ class StereoTracker:
             det_right = self.right.choose(res_right.candidates)
         self.left.commit(det_left, timestamp, res_left.candidates)
         self.right.commit(det_right, timestamp, res_right.candidates)
+        if self.params.stereo.guided_search:
+            guide = self._trajectory.guide(timestamp)
+            if guide is not None:
+                found_left = self._guided(0, left_bgr, det_left, guide)
+                found_right = self._guided(1, right_bgr, det_right, guide)
+                if found_left is not None or found_right is not None:
+                    if found_left is not None:
+                        det_left = found_left
+                        res_left = dataclasses.replace(res_left, candidates=res_left.candidates + (found_left,))
+                    if found_right is not None:
+                        det_right = found_right
+                        res_right = dataclasses.replace(res_right, candidates=res_right.candidates + (found_right,))
+                    point_left, epi = self._pair_point(det_left, det_right)
+        # The sources hand out a new array per frame: keeping the reference costs no copy.
+        self._previous = (left_bgr, right_bgr)
         res_left = CameraDetector.finalise(res_left, det_left)
         res_right = CameraDetector.finalise(res_right, det_right)
 
@@ -204,6 +223,49 @@ class StereoTracker:
             return None, None, None, None
         _, i, j, point, err = best
         return left[i], right[j], point, err
+
+    def _guided(self, camera: int, frame: np.ndarray, detection: Candidate | None,
+                guide: tuple[np.ndarray, np.ndarray]) -> Candidate | None:
+        """A spot found where the flight projects, when this camera's detection is not there."""
+        sp = self.params.stereo
+        position, covariance = guide
+        depth = float(self.rig.depth(camera, position[None])[0])
+        if depth <= 0.1:
+            return None
+        u, v = self.rig.project(camera, position[None])[0]
+        h, w = frame.shape[:2]
+        if not (0 <= u < w and 0 <= v < h):
+            return None
+        focal = float((self.rig.M1 if camera == 0 else self.rig.M2)[0, 0])
+        sigma_px = focal * math.sqrt(max(float(np.trace(covariance)) / 3.0, 0.0)) / depth
+        radius = min(3.0 * sigma_px + 3.0 * w / 1280.0, 0.02 * w)
+        if detection is not None and (not sp.guided_override
+                                      or math.hypot(detection.x - u, detection.y - v) <= radius):
+            return None
+        skirt_px = focal * 0.065 / depth            # a shuttle's skirt is 6.5 cm across
+        max_area = 4.0 * skirt_px * skirt_px + 12.0
+        spot = find_spot(frame, u, v, radius, sp.guided_min_contrast, max_area, self._previous[camera])
+        if spot is None:
+            return None
+        x, y, contrast, area = spot
+        return Candidate(x=x, y=y, length=float("nan"), short_side=float("nan"), whiteness=contrast,
+                         area=area, motion=math.hypot(x - u, y - v), score=0.0)
+
+    def _pair_point(self, det_left: Candidate | None, det_right: Candidate | None
+                    ) -> tuple[np.ndarray | None, float | None]:
+        """Triangulate a pair of detections if they are stereo-consistent (else None)."""
+        if det_left is None or det_right is None or det_left.predicted or det_right.predicted:
+            return None, None
+        sp = self.params.stereo
+        pl, pr = [[det_left.x, det_left.y]], [[det_right.x, det_right.y]]
+        err = float(self.rig.epipolar_errors(pl, pr)[0, 0])
+        if err > self.epipolar_tolerance():
+            return None, None
+        point = self.rig.triangulate(pl, pr)[0]
+        dist = float(np.linalg.norm(point))
+        if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
+            return None, None
+        return point, err
 
     def _resting_cork(self, point: tuple[float, float, float]) -> tuple[float, float, float]:
         """A shuttle lying where the last flight landed: move the blob's point to the cork."""

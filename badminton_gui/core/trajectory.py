@@ -402,6 +402,21 @@ class Trajectory:
             return None
         return tuple(float(v) for v in self._flight.x[:3])
 
+    def guide(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """Where the followed flight puts the shuttle at time t: (position (3,), its covariance
+        (3, 3)), or None when there is no established flight to trust (fewer than ``min_points``
+        points, lost for longer than ``max_gap``, or a new track is being confirmed: a hit)."""
+        f = self._flight
+        p = self.params
+        if (f is None or len(f.points) < p.min_points or t - f.t > p.max_gap
+                or (self._tentative is not None and len(self._tentative.points) >= 3)):
+            return None
+        saved = (f.x, f.P, f.t)
+        f.predict(t, p.model_noise)
+        position, covariance = f.x[:3].copy(), f.P[0:3, 0:3].copy()
+        f.x, f.P, f.t = saved
+        return position, covariance
+
     def resting_direction(self, point) -> tuple[float, float] | None:
         """The horizontal direction (unit x, y) of the flight that came down next to ``point``, when
         the point is a shuttle lying on the floor there (no flight followed, at floor height,
