@@ -175,6 +175,8 @@ def main() -> int:
         if self.results_seen != before:
             refresh_with_packet.append(ms)
     MainWindow._refresh_display = refresh
+    if hasattr(MainWindow, "_late_poll"):
+        timed(MainWindow, "_late_poll", "late-poll slot (a tick found no packet)")
 
     timed(feed_view.FeedView, "set_frame", None, after_set)
     timed(feed_view.FeedView, "paintEvent", None, after_paint)

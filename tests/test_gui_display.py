@@ -214,3 +214,22 @@ def _drive_ticks(window, worker, clock, demo_packets) -> None:
     worker.output.put(same)
     window._refresh_display()
     assert calls["plan"] == plan_calls + 1 and not window.plan._flight.isVisible()
+
+
+def test_a_packet_that_misses_the_tick_is_shown_before_the_next_one(main_window, qtbot, demo_packets):
+    """A result that comes just after the tick (a loaded machine) is not left a whole tick behind."""
+    window = main_window()
+    window._timer.stop()
+    worker = _StandInWorker()
+    window.worker = worker
+    try:
+        window._timer.start(10_000)                # the next regular tick is far away
+        window._refresh_display()                  # finds nothing: looks again shortly
+        assert window._late_timer.isActive() and window.results_seen == 0
+        worker.output.put(demo_packets[0])
+        qtbot.waitUntil(lambda: window.results_seen == 1, timeout=2000)
+        assert window.latest_packet is demo_packets[0] and not window._late_timer.isActive()
+        assert len(worker.requests) == 1           # and the next packet is asked for
+    finally:
+        window._timer.stop()
+        window.worker = None

@@ -36,6 +36,9 @@ DISPLAY_INTERVAL_MS = 33          # feeds: ≈30 Hz, whatever the tracking rate
 # The worker is asked for a result finished at least this long before the next tick, so the
 # packet is ready when the tick comes, even with some timer jitter.
 DISPLAY_LEAD_S = 0.016
+# A tick that found no packet (the result was late: a loaded machine) looks again this often until
+# one comes or the next tick does, instead of leaving the feeds a whole tick behind.
+LATE_POLL_MS = 4
 # The court views (3D, plan, side), the readouts and the tuning preview: ≤15 Hz. Each of them
 # costs the GUI thread (and, through the GIL, the tracker) more than a feed, and a flight drawn
 # 15 times a second, or a number changing 15 times a second, looks no different to the operator.
@@ -198,6 +201,10 @@ class MainWindow(QMainWindow):
         self._timer.setTimerType(Qt.TimerType.PreciseTimer)
         self._timer.timeout.connect(self._refresh_display)
         self._timer.start(DISPLAY_INTERVAL_MS)
+        self._late_timer = QTimer(self)
+        self._late_timer.setSingleShot(True)
+        self._late_timer.setTimerType(Qt.TimerType.PreciseTimer)
+        self._late_timer.timeout.connect(self._late_poll)
         geometry = self.settings.value("window/geometry")
         if geometry is not None:
             self.restoreGeometry(geometry)
@@ -520,29 +527,46 @@ class MainWindow(QMainWindow):
         Newest frame wins: the worker keeps one packet, built on request (see the worker's
         module docstring), and the feeds show it; nothing queues up behind a slow display.
         """
+        self._late_timer.stop()
         if self.worker is None:
             return
         now = time.perf_counter()
-        packet = self.worker.output.take()
-        if packet is not None:
-            # Ask for the last result that can finish before the next tick: a tracker slower than
-            # the ticks (one result per period) is asked for its very next result, a fast one
-            # for a result just before the tick, so the packet shown is fresh either way.
-            period = 1.0 / max(packet.stats.processing_fps, 1.0)
-            self.worker.request_display(now + DISPLAY_INTERVAL_MS / 1000.0 - DISPLAY_LEAD_S - period)
-            # Frames arrive already shrunk to the feeds' size, so painting them is nearly a copy.
-            ratio = self.devicePixelRatioF()
-            self.worker.set_display_size(int(max(self.left_feed.width(), self.right_feed.width()) * ratio),
-                                         int(max(self.left_feed.height(), self.right_feed.height()) * ratio))
-            self.latest_packet = packet
-            self.results_seen += 1
-            self.display_refreshes += 1
-            self._display_rate.tick(now)
-            r = packet.result
-            self.left_feed.set_frame(packet.left, packet.display_scale, r.left, packet.trail_left)
-            self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right)
+        if not self._show_newest(now):
+            self._late_timer.start(LATE_POLL_MS)
         if now - self._slow_shown_at >= SLOW_VIEW_INTERVAL_S - 0.002:   # a tick may come a little early
             self._refresh_slow_views(now)
+
+    def _late_poll(self) -> None:
+        """The tick found no packet: show it as soon as it comes, up to the next tick."""
+        if self.worker is None or self._show_newest(time.perf_counter()):
+            return
+        if self._timer.remainingTime() > 2 * LATE_POLL_MS:
+            self._late_timer.start(LATE_POLL_MS)
+
+    def _show_newest(self, now: float) -> bool:
+        """Give the feeds the worker's packet, if there is one, and ask for the next."""
+        packet = self.worker.output.take()
+        if packet is None:
+            return False
+        # Ask for the last result that can finish before the next tick: a tracker slower than
+        # the ticks (one result per period) is asked for its very next result, a fast one for
+        # a result just before the tick, so the packet shown is fresh either way.
+        remaining = self._timer.remainingTime()
+        next_tick = now + (remaining if remaining >= 0 else DISPLAY_INTERVAL_MS) / 1000.0
+        period = 1.0 / max(packet.stats.processing_fps, 1.0)
+        self.worker.request_display(next_tick - DISPLAY_LEAD_S - period)
+        # Frames arrive already shrunk to the feeds' size, so painting them is nearly a copy.
+        ratio = self.devicePixelRatioF()
+        self.worker.set_display_size(int(max(self.left_feed.width(), self.right_feed.width()) * ratio),
+                                     int(max(self.left_feed.height(), self.right_feed.height()) * ratio))
+        self.latest_packet = packet
+        self.results_seen += 1
+        self.display_refreshes += 1
+        self._display_rate.tick(now)
+        r = packet.result
+        self.left_feed.set_frame(packet.left, packet.display_scale, r.left, packet.trail_left)
+        self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right)
+        return True
 
     def _slow_views(self) -> list[tuple[str, QWidget, Callable[[DisplayPacket], None]]]:
         views = []
@@ -596,6 +620,7 @@ class MainWindow(QMainWindow):
 
     def closeEvent(self, event) -> None:  # noqa: N802 - Qt naming
         self._timer.stop()
+        self._late_timer.stop()
         self.stop_worker()
         if self.link_panel.link is not None:
             self.link_panel.disconnect_link()
