@@ -41,6 +41,8 @@ from .types import REJECT_STEREO, CameraResult, Candidate, TrackResult
 # flight direction for the cork correction: long enough to resolve the direction, short
 # enough that the image path is still straight.
 HEAD_DIRECTION_DT = 0.01
+# px: the least epipolar error taken as typical of a good pair (see _epipolar_inflation)
+EPIPOLAR_TYPICAL_MIN = 0.5
 
 
 class StereoTracker:
@@ -161,6 +163,8 @@ class StereoTracker:
         if point_left is not None:
             measured = tuple(float(v) for v in self.rig.to_output(point_left)[0])
             noise_shape = self.rig.noise_shape([[det_left.x, det_left.y]], [[det_right.x, det_right.y]])[0]
+            if epi is not None:
+                noise_shape = noise_shape * self._epipolar_inflation(epi)
 
         flight = self._trajectory.update(timestamp, measured, noise_shape)
         speed = None
@@ -223,6 +227,19 @@ class StereoTracker:
             return None, None, None, None
         _, i, j, point, err = best
         return left[i], right[j], point, err
+
+    def _epipolar_inflation(self, epi: float) -> float:
+        """How much less to trust a pair whose epipolar error is large for this rig.
+
+        Two detections of one point meet their epipolar lines to a fraction of a pixel on a good
+        rig; a pair several times further off has one centroid pulled aside (by a court line, the
+        net's tape, a player's blob): the pair's 3D point is then biased, so the flight filter gets
+        it with its noise scaled by 1 + (error / typical)².
+        """
+        samples = self._epipolar_samples
+        typical = max(EPIPOLAR_TYPICAL_MIN, 1.5 * float(np.median(samples))) if len(samples) >= 20 \
+            else EPIPOLAR_TYPICAL_MIN
+        return 1.0 + (epi / typical) ** 2
 
     def _guided(self, camera: int, frame: np.ndarray, detection: Candidate | None,
                 guide: tuple[np.ndarray, np.ndarray]) -> Candidate | None:
