@@ -108,16 +108,20 @@ def _synthetic_frame(seed):
     return frame
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
-@pytest.mark.parametrize("scale", [0.5, 1.0])
-def test_measure_equals_the_numpy_formulas_on_synthetic_blobs(seed, scale):
-    frame = _synthetic_frame(seed)
+def _thresholded(frame, scale):
+    """The frame's grey image and a bright-blob mask at ``scale``, with the mask→frame scale factors."""
     gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
     if scale < 1.0:
         gray = cv2.resize(gray, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
     mask = cv2.threshold(gray, 120, 255, cv2.THRESH_BINARY)[1]
-    sx = frame.shape[1] / mask.shape[1]
-    sy = frame.shape[0] / mask.shape[0]
+    return gray, mask, frame.shape[1] / mask.shape[1], frame.shape[0] / mask.shape[0]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("scale", [0.5, 1.0])
+def test_measure_equals_the_numpy_formulas_on_synthetic_blobs(seed, scale):
+    frame = _synthetic_frame(seed)
+    gray, mask, sx, sy = _thresholded(frame, scale)
     boxes = [(168, 78, 9, 9), (148, 38, 45, 35), (0, 0, 6, 7), (238, 184, 25, 13), (56, 196, 9, 9),
              (100, 120, 8, 8),            # nothing in the mask: no support, plain background
              (315, 235, 5, 5),            # clipped by the bottom-right corner
@@ -161,12 +165,7 @@ def test_windows_measured_together_do_not_interact(scale):
     # Neighbouring windows in the shared canvas (different widths, a mask touching a window's
     # last row, empty and clipped windows in between) must give each its own values.
     frame = _synthetic_frame(3)
-    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-    if scale < 1.0:
-        gray = cv2.resize(gray, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
-    mask = cv2.threshold(gray, 120, 255, cv2.THRESH_BINARY)[1]
-    sx = frame.shape[1] / mask.shape[1]
-    sy = frame.shape[0] / mask.shape[0]
+    gray, mask, sx, sy = _thresholded(frame, scale)
     boxes = [(148, 38, 45, 35), (168, 78, 9, 9), (100, 120, 8, 8), (315, 235, 5, 5),
              (0, 0, 6, 7), (238, 184, 25, 13), (56, 196, 9, 9), (170, 60, 10, 30),
              (400, 400, 5, 5)]   # entirely outside the frame: an empty window
