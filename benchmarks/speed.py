@@ -24,7 +24,7 @@ threads already use both cores, and OpenCV's own pool on top of them costs CPU.
 First of all it prints how fast the demo court renders at 1280×720 (the GUI's demo must render
 faster than the cameras' rate it imitates); that part needs no data.
 
-The rest needs ../shared/data/nycu-stereo. Tests never assert on these figures.
+The rest needs ../shared/data/nycu-stereo (or $BADMINTON_DATA/nycu-stereo). Tests never assert on these figures.
 """
 
 from __future__ import annotations
@@ -53,7 +53,10 @@ from badminton_gui.io.nycu import rig_from_nycu  # noqa: E402
 from badminton_gui.io.presets import load_preset  # noqa: E402
 from badminton_gui.io.video import VideoPair  # noqa: E402
 
-DATA = REPO.parent / "shared" / "data" / "nycu-stereo"
+sys.path.insert(0, str(REPO / "benchmarks"))
+from clips import DATA_DIR  # noqa: E402  (../shared/data, or $BADMINTON_DATA as for accuracy.py)
+
+DATA = DATA_DIR / "nycu-stereo"
 RALLY = "rally_11-46-04"
 
 
