@@ -34,7 +34,7 @@ from .guided import find_spot
 from .params import TrackerParams
 from .rig import StereoRig
 from .trajectory import Trajectory
-from .types import REJECT_STEREO, CameraResult, Candidate, TrackResult
+from .types import CameraResult, Candidate, TrackResult
 
 
 # Time step (s) over which the tracklets' image velocities are followed back to find the
