@@ -137,7 +137,10 @@ class StereoTracker:
             det_right = self.right.choose(res_right.candidates)
         self.left.commit(det_left, timestamp, res_left.candidates)
         self.right.commit(det_right, timestamp, res_right.candidates)
-        if self.params.stereo.guided_search:
+        sp = self.params.stereo
+        # Without override the guided look only serves a camera with no detection: when both
+        # have one, skip predicting the flight (an RK4 propagation per frame on the hot path).
+        if sp.guided_search and (sp.guided_override or det_left is None or det_right is None):
             guide = self._trajectory.guide(timestamp)
             if guide is not None:
                 found_left = self._guided(0, left_bgr, det_left, guide)
