@@ -18,6 +18,7 @@ so the speeds printed are under full load (pessimistic), not isolated measuremen
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import re
 import subprocess
@@ -87,16 +88,17 @@ def read_detect(path: Path) -> dict:
     return read_point_labels(path).as_dict()
 
 
-def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path):
-    """(label, callable) jobs for one stereo clip."""
+def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path, preset: str | None = None):
+    """Jobs for one stereo clip: `track` first, then `detect` per camera."""
     out_track = tmp / f"{clip.name}_track.csv"
     extra = ["--max-frames", str(max_frames)] if max_frames else []
+    preset_args = ["--preset", preset] if preset else []
 
     def track():
         rate, _ = run_cli(["track", "--left", str(clip.left), "--right", str(clip.right),
                            "--calib", str(rig_path), "-o", str(out_track),
                            "--left-times", str(clip.left_labels),
-                           "--right-times", str(clip.right_labels)] + extra)
+                           "--right-times", str(clip.right_labels)] + extra + preset_args)
         t0 = time.perf_counter()
         left, right, rows = read_track(out_track)
         rows_out = [Row(clip.name, "left", "track", clip.held_out, "stereo",
@@ -109,9 +111,9 @@ def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path):
         def job():
             out = tmp / f"{clip.name}_{camera}_detect.csv"
             if max_frames:
-                rate = detect_in_process(video, out, max_frames, None)
+                rate = detect_in_process(video, out, max_frames, preset)
             else:
-                rate, _ = run_cli(["detect", str(video), "-o", str(out)])
+                rate, _ = run_cli(["detect", str(video), "-o", str(out)] + preset_args)
                 rate = rate if rate == rate else _rate_from_elapsed(video)
             return [Row(clip.name, camera, "detect", clip.held_out, "stereo",
                         score(read_detect(out), labels, 2048, max_frames), rate, "frames/s")], None
@@ -204,6 +206,12 @@ def main() -> int:
     ap.add_argument("--quick", action="store_true", help="3 clips, first 900 frames each")
     ap.add_argument("--jobs", type=int, default=2, help="CLI runs in parallel")
     ap.add_argument("--only", default=None, help="regex on clip names")
+    ap.add_argument("--track-only", action="store_true",
+                    help="stereo clips: `track` only (no one-camera `detect` rows, half the time)")
+    ap.add_argument("--preset", default=None,
+                    help="preset name or .json for the stereo clips (default: the default preset)")
+    ap.add_argument("--keep", default=None, metavar="DIR",
+                    help="write the CLI outputs (track/detect CSVs, rig) here and keep them for diagnosis")
     args = ap.parse_args()
     stereo = stereo_clips()
     broadcast = broadcast_clips()
@@ -218,14 +226,19 @@ def main() -> int:
     if args.only:
         stereo = [c for c in stereo if re.search(args.only, c.name)]
         broadcast = [c for c in broadcast if re.search(args.only, c.name)]
-    with tempfile.TemporaryDirectory(prefix="accuracy_") as tmpdir:
-        tmp = Path(tmpdir)
+    with contextlib.ExitStack() as stack:
+        if args.keep:
+            tmp = Path(args.keep)
+            tmp.mkdir(parents=True, exist_ok=True)
+        else:
+            tmp = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="accuracy_")))
         rig_path = tmp / "nycu_rig.yaml"
         cfg1, cfg2 = nycu_cfgs()
         run_cli(["import-calib", "--nycu", str(cfg1), str(cfg2), "-o", str(rig_path)])
         jobs = []
         for c in stereo:
-            jobs += stereo_jobs(c, tmp, max_frames, rig_path)
+            clip_jobs = stereo_jobs(c, tmp, max_frames, rig_path, args.preset)
+            jobs += clip_jobs[:1] if args.track_only else clip_jobs
         jobs += [broadcast_job(c, tmp, max_frames) for c in broadcast]
         start = time.perf_counter()
         with ThreadPoolExecutor(args.jobs) as pool:
