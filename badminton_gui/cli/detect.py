@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..core.detector import CameraDetector
 from ..io.labels import write_point_labels
+from ..io.prefetch import PrefetchingReader
 from ..io.video import VideoFile
 from .common import INPUT_ERRORS, Progress, UserError, add_preset_argument, params_from_args
 
@@ -25,7 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     params = params_from_args(args)
     try:
-        video = VideoFile(args.video)
+        # Decoded ahead on a reader thread while this one detects (io/prefetch.py).
+        video = PrefetchingReader(VideoFile(args.video))
     except INPUT_ERRORS as exc:
         raise UserError(str(exc)) from None
     detector = CameraDetector(params)

@@ -10,6 +10,7 @@ from pathlib import Path
 from ..core.rig import StereoRig
 from ..core.tracker import StereoTracker
 from ..io.labels import TRACK_COLUMNS, read_timestamps, track_row
+from ..io.prefetch import PrefetchingReader
 from ..io.video import VideoPair
 from .common import INPUT_ERRORS, Progress, UserError, add_preset_argument, params_from_args
 
@@ -49,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
         rig.check_image_size(*source.image_size, what="the videos")
     except INPUT_ERRORS as exc:
         raise UserError(str(exc)) from None
+    # Decode the next pairs on a reader thread while this one tracks (io/prefetch.py).
+    source = PrefetchingReader(source)
 
     link = None
     if args.robot:
