@@ -187,6 +187,11 @@ class TrackletAssociator:
         for j in range(n):
             tr = by_id.get(ids[j])
             merit = self.merit(tr) if tr is not None else -1.0
+            if merit >= 0 and p.candidate_weight > 0:
+                # The running quality remembers ~5 frames: a followed tracklet that slid from
+                # the shuttle onto a player's shoe keeps its good mean for a while; this
+                # frame's own score tells sooner which candidate looks like the shuttle now.
+                merit += p.candidate_weight * float(scores[j])
             out.append((ids[j], motion[j], merit))
         return out
 
