@@ -71,3 +71,23 @@ def test_broadcast_preset_on_a_real_tv_rally():
     cap.release()
     out = evaluate(pred, {f: v for f, v in labels.items() if f in pred}, tolerance_px(1280))
     assert out.accuracy >= 0.85, out.summary()
+
+
+def test_only_the_followed_tracklet_gets_the_long_pause():
+    """Two tracklets fly, then stop; after the short allowance only the followed one may rest."""
+    p = (TrackerParams().with_value("association.pause_frames", 2)
+         .with_value("association.followed_pause_frames", 100))
+    assoc = TrackletAssociator(p.motion, p.association)
+    out = []
+    for i in range(30):
+        step = min(i, 10)   # 30 px per frame for 10 frames, then still
+        pos = np.array([[100.0 + 30 * step, 300.0], [100.0 + 30 * step, 500.0]])
+        out = assoc.update(i / FPS, pos, np.array([0.9, 0.9]))
+        if i == 5:
+            assoc.select(out[0][0])
+    assert out[0][2] >= 0      # followed: still within its long allowance
+    assert out[1][2] < 0       # the other one: its 2-frame allowance is over
+
+
+def test_followed_pause_is_off_by_default():
+    assert TrackerParams().association.followed_pause_frames == 0

@@ -303,7 +303,12 @@ class TrackletAssociator:
         # court); clutter (lights, screens) never flies far, a shuttle on the floor stays
         # still for longer than the allowance.
         moving = tr.recent_travel(p.travel_window) >= p.min_travel
-        pausing = tr.travel >= p.flight_travel and tr.still_for <= p.pause_frames
+        allowance = p.pause_frames
+        if p.followed_pause_frames > 0 and tr.ident == self.selected:
+            # The shuttle being followed may rest for long (held before the serve, lying after
+            # the rally: TV labels mark it visible), other tracklets only for a moment.
+            allowance = p.followed_pause_frames
+        pausing = tr.travel >= p.flight_travel and tr.still_for <= allowance
         if not (moving or pausing):
             return -1.0
         merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation

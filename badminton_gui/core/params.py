@@ -180,6 +180,9 @@ class AssociationParams(ParamGroup):
                                  help="A tracklet that has travelled this far may pause (apex, far court)")
     pause_frames: int = param(40, 0, 1000, step=1, unit="frames", label="Pause allowance",
                               help="How long such a tracklet may stay below the minimum travel")
+    followed_pause_frames: int = param(0, 0, 100000, step=1, unit="frames", label="Pause allowance, followed",
+                                       help="The pause allowance of the tracklet being followed, when larger "
+                                            "(0 = the same as the others)")
     min_track_quality: float = param(0.15, 0.0, 1.0, step=0.01, label="Tracklet quality ≥",
                                      help="Running mean of the candidates' quality a tracklet needs to be the shuttle")
     quality_weight: float = param(2.0, 0.0, 10.0, step=0.1, label="Quality weight",
