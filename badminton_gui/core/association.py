@@ -187,6 +187,11 @@ class TrackletAssociator:
         for j in range(n):
             tr = by_id.get(ids[j])
             merit = self.merit(tr) if tr is not None else -1.0
+            if merit >= 0 and p.candidate_weight > 0:
+                # The running quality remembers ~5 frames: a followed tracklet that slid from
+                # the shuttle onto a player's shoe keeps its good mean for a while; this
+                # frame's own score tells sooner which candidate looks like the shuttle now.
+                merit += p.candidate_weight * float(scores[j])
             out.append((ids[j], motion[j], merit))
         return out
 
@@ -298,7 +303,12 @@ class TrackletAssociator:
         # court); clutter (lights, screens) never flies far, a shuttle on the floor stays
         # still for longer than the allowance.
         moving = tr.recent_travel(p.travel_window) >= p.min_travel
-        pausing = tr.travel >= p.flight_travel and tr.still_for <= p.pause_frames
+        allowance = p.pause_frames
+        if p.followed_pause_frames > 0 and tr.ident == self.selected:
+            # The shuttle being followed may rest for long (held before the serve, lying after
+            # the rally: TV labels mark it visible), other tracklets only for a moment.
+            allowance = p.followed_pause_frames
+        pausing = tr.travel >= p.flight_travel and tr.still_for <= allowance
         if not (moving or pausing):
             return -1.0
         merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation

@@ -180,10 +180,16 @@ class AssociationParams(ParamGroup):
                                  help="A tracklet that has travelled this far may pause (apex, far court)")
     pause_frames: int = param(40, 0, 1000, step=1, unit="frames", label="Pause allowance",
                               help="How long such a tracklet may stay below the minimum travel")
+    followed_pause_frames: int = param(0, 0, 100000, step=1, unit="frames", label="Pause allowance, followed",
+                                       help="The pause allowance of the tracklet being followed, when larger "
+                                            "(0 = the same as the others)")
     min_track_quality: float = param(0.15, 0.0, 1.0, step=0.01, label="Tracklet quality ≥",
                                      help="Running mean of the candidates' quality a tracklet needs to be the shuttle")
     quality_weight: float = param(2.0, 0.0, 10.0, step=0.1, label="Quality weight",
                                   help="Weight of the tracklet's quality in its merit (history counts 1)")
+    candidate_weight: float = param(0.0, 0.0, 10.0, step=0.1, label="This frame's quality weight",
+                                    help="Weight of the candidate's own quality this frame in its merit, on top "
+                                         "of its tracklet's running quality (0 = off)")
     rebirth_radius: float = param(60.0, 0.0, 2000.0, step=1.0, unit="px", label="Hit continuity",
                                   help="When the followed tracklet misses (a racket hit), a new blob this close "
                                        "to its last position inherits its history (0 = off)")
