@@ -172,7 +172,7 @@ def test_head_position_is_not_pulled_towards_a_nearby_light():
     # stay on the blob (it used to be dragged 6–7 px towards the light once the light was
     # inside the measuring window, 8 px away).
     rng = np.random.default_rng(2)
-    det = CameraDetector(_params())
+    det = CameraDetector(_params(colour__head_lead=0.0))   # the measured centroid itself
     errors = []
     for i in range(62):
         img = np.full((360, 640, 3), 40, np.uint8)
@@ -185,3 +185,45 @@ def test_head_position_is_not_pulled_towards_a_nearby_light():
             if math.isfinite(c.whiteness) and math.hypot(c.x - x, c.y - y) < 20 and 300 <= x <= 322:
                 errors.append(math.hypot(c.x - round(x), c.y - round(y)))
     assert errors and max(errors) <= 1.0, errors
+
+
+def _shuttle_flight(n=70):
+    """A cork (small, brightest) with a dimmer skirt trailing behind it, flying right and down."""
+    rng = np.random.default_rng(4)
+    frames, corks = [], []
+    for i in range(n):
+        img = np.full((360, 640, 3), 30, np.uint8)
+        img = cv2.add(img, rng.integers(0, 6, img.shape, dtype=np.uint8))
+        x, y = 80.0 + 7.0 * i, 60.0 + 3.0 * i
+        direction = np.array([7.0, 3.0]) / math.hypot(7.0, 3.0)
+        skirt = (x - 5 * direction[0], y - 5 * direction[1])
+        angle = math.degrees(math.atan2(direction[1], direction[0]))
+        cv2.ellipse(img, (int(round(skirt[0])), int(round(skirt[1]))), (6, 3), angle, 0, 360,
+                    (205, 205, 205), -1)
+        cv2.circle(img, (int(round(x)), int(round(y))), 2, (250, 250, 250), -1)
+        frames.append(img)
+        corks.append((round(x), round(y)))
+    return frames, corks
+
+
+def test_a_moving_detection_is_led_forward_to_the_cork():
+    frames, corks = _shuttle_flight()
+    runs = {}
+    for lead in (0.0, 0.5):
+        det = CameraDetector(_params(colour__head_lead=lead))
+        rows = []
+        for i, img in enumerate(frames):
+            res = det.process(img, i / FPS, keep_mask=False)
+            d = res.detection
+            rows.append(None if d is None else (d.x, d.y))
+            # The moved detection is the one in the candidate list, and still the accepted one.
+            assert d is None or sum(c is d for c in res.candidates) == 1
+        runs[lead] = rows
+    # The lead changes what is reported, never what is tracked: same frames detected.
+    assert [r is None for r in runs[0.0]] == [r is None for r in runs[0.5]]
+    errors = {lead: [math.hypot(r[0] - cx, r[1] - cy) for r, (cx, cy) in zip(rows, corks)
+                     if r is not None] for lead, rows in runs.items()}
+    assert len(errors[0.0]) >= 40
+    # The bright centroid trails the cork; the led position is on it.
+    assert np.median(errors[0.0]) >= 2.0
+    assert np.median(errors[0.5]) <= 0.5 * np.median(errors[0.0])

@@ -107,6 +107,7 @@ class CameraDetector:
         result = self.find_candidates(frame_bgr, t, keep_mask)
         chosen = self.choose(result.candidates)
         self.commit(chosen, t, result.candidates)
+        result, chosen = self.lead_to_head(result, chosen)
         return self.finalise(result, chosen)
 
     # ---- steps, so the stereo tracker can choose with both cameras --------------------------
@@ -287,6 +288,35 @@ class CameraDetector:
             if tr.ident == ident:
                 return (tr.vx, tr.vy) if tr.velocity_known else None
         return None
+
+    def lead_to_head(self, result: CameraResult, chosen: Candidate | None
+                     ) -> tuple[CameraResult, Candidate | None]:
+        """Move a moving detection forward along its tracklet to the cork (``colour.head_lead``).
+
+        The bright centroid of a moving shuttle trails its cork: the skirt is behind it and the
+        motion blur smears the white backwards too. The lead is proportional to the blob's width
+        (the shuttle's apparent size, which blur does not stretch). Call after ``commit`` (the
+        tracklet's velocity then includes this frame); the associator keeps the measured
+        position, only the reported one moves. Returns the result with the moved candidate in
+        place of the old one, and the moved candidate.
+        """
+        c = self.params.colour
+        if (chosen is None or c.head_lead <= 0 or chosen.predicted
+                or not math.isfinite(chosen.short_side)):
+            return result, chosen
+        velocity = self.tracklet_velocity(chosen)
+        if velocity is None:
+            return result, chosen
+        speed = math.hypot(*velocity)
+        if speed < c.head_lead_min_speed:
+            return result, chosen
+        lead = c.head_lead * chosen.short_side / speed
+        moved = dataclasses.replace(chosen, x=chosen.x + lead * velocity[0], y=chosen.y + lead * velocity[1])
+        ident = self._tracklet_of.get(id(chosen))
+        if ident is not None:
+            self._tracklet_of[id(moved)] = ident
+        candidates = tuple(moved if cand is chosen else cand for cand in result.candidates)
+        return dataclasses.replace(result, candidates=candidates), moved
 
     def choose(self, candidates: tuple[Candidate, ...]) -> Candidate | None:
         """The best candidate that passed every filter, or None."""
