@@ -303,6 +303,10 @@ def test_large_frames_get_the_coarser_model_only_when_asked():
     coarse = p.with_value("background.coarse_from_width", 1600).background
     assert model_scale(coarse, 2048) == 0.25
     assert model_scale(coarse, 1280) == 0.5                  # the demo court, broadcast: unchanged
+    fast = load_preset("coarse")                             # the shipped opt-in preset
+    assert model_scale(fast.background, 2048) == 0.25
+    assert fast.classifier.model == "candidate_classifier_coarse"
+    CameraDetector(fast)                                     # its classifier file loads
     det = CameraDetector(p.with_value("background.coarse_from_width", 256))
     frame = _synthetic_frame(6)
     for i in range(3):

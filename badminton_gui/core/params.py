@@ -228,8 +228,10 @@ class ClassifierParams(ParamGroup):
     enabled: bool = flag(True, label="Use the classifier",
                          help="Score candidates with the learned classifier instead of contrast + size")
     model: str = choice("candidate_classifier", ("candidate_classifier",
-                                                 "candidate_classifier_broadcast"),
-                        label="Model", help="Classifier file in resources/")
+                                                 "candidate_classifier_broadcast",
+                                                 "candidate_classifier_coarse"),
+                        label="Model", help="Classifier file in resources/ (_coarse: trained with "
+                                            "background.coarse_from_width on, for the coarse preset)")
 
 
 @dataclass(frozen=True, slots=True)
