@@ -8,6 +8,7 @@ of the label, trains a small MLP and writes it as JSON. Held-out clips are never
 
     .venv/bin/python benchmarks/train_classifier.py --kind stereo      # → resources/candidate_classifier.json
     .venv/bin/python benchmarks/train_classifier.py --kind broadcast   # → resources/candidate_classifier_broadcast.json
+    .venv/bin/python benchmarks/train_classifier.py --kind stereo-coarse   # → resources/candidate_classifier_coarse.json
 """
 
 from __future__ import annotations
@@ -105,13 +106,16 @@ def dump_video(video: str, labels_path: str, preset: str, max_frames: int
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--kind", choices=("stereo", "broadcast"), default="stereo")
+    ap.add_argument("--kind", choices=("stereo", "stereo-coarse", "broadcast"), default="stereo")
     ap.add_argument("--max-frames", type=int, default=100000)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--hidden", type=int, default=16)
     args = ap.parse_args()
-    if args.kind == "stereo":
-        preset, out_name = "default", "candidate_classifier"
+    if args.kind in ("stereo", "stereo-coarse"):
+        # stereo-coarse: the candidates of the coarse preset's quarter-scale model
+        # (background.coarse_from_width), whose mask-based features differ from the default's.
+        preset, out_name = (("default", "candidate_classifier") if args.kind == "stereo"
+                            else ("coarse", "candidate_classifier_coarse"))
         jobs = []
         for c in stereo_clips():
             if not c.held_out:

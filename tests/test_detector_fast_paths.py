@@ -272,3 +272,43 @@ def test_background_model_equals_the_numpy_formulas(overrides):
                 diff = np.where(fast.last_unlit > 0, diff, 0)
             assert np.array_equal(diff, ref.last_difference), f"frame {i}"
     assert foreground > 0
+
+
+def test_model_grey_at_half_scale_is_the_area_resize():
+    # The default path: INTER_AREA of the colour frame, then grey (what the model was tuned on).
+    frame = _synthetic_frame(4)
+    det = CameraDetector(load_preset("default"))
+    expected = cv2.cvtColor(cv2.resize(frame, (160, 120), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2GRAY)
+    assert np.array_equal(det._model_grey(frame, 0.5), expected)
+
+
+def test_quarter_scale_model_grey_averages_every_other_row():
+    # The row-sampled quarter path: each model pixel is the mean of rows 4k and 4k + 2 of its
+    # 4×4 block, four columns each, in grey (three rounding steps: within 1.5 grey levels).
+    frame = cv2.add(_synthetic_frame(5), np.random.default_rng(5).integers(0, 60, (240, 320, 3), dtype=np.uint8))
+    det = CameraDetector(load_preset("default"))
+    gray = det._model_grey(frame, 0.25)
+    assert gray.shape == (60, 80)
+    full = frame.astype(np.float64) @ np.array([0.114, 0.587, 0.299])
+    blocks = full.reshape(60, 4, 80, 4)[:, [0, 2]].mean(axis=(1, 3))
+    assert np.abs(gray - blocks).max() <= 1.5
+
+
+def test_large_frames_get_the_coarser_model_only_when_asked():
+    from badminton_gui.core.detector import model_scale
+
+    p = load_preset("default")
+    assert p.background.coarse_from_width == 0              # off: the default keeps its accuracy
+    assert model_scale(p.background, 2048) == 0.5
+    coarse = p.with_value("background.coarse_from_width", 1600).background
+    assert model_scale(coarse, 2048) == 0.25
+    assert model_scale(coarse, 1280) == 0.5                  # the demo court, broadcast: unchanged
+    fast = load_preset("coarse")                             # the shipped opt-in preset
+    assert model_scale(fast.background, 2048) == 0.25
+    assert fast.classifier.model == "candidate_classifier_coarse"
+    CameraDetector(fast)                                     # its classifier file loads
+    det = CameraDetector(p.with_value("background.coarse_from_width", 256))
+    frame = _synthetic_frame(6)
+    for i in range(3):
+        result = det.find_candidates(frame, i / 119.0)
+    assert result.mask.shape == (60, 80) and result.mask_scale == 0.25

@@ -41,7 +41,8 @@ class BackgroundModel:
     def set_params(self, background: BackgroundParams, binarize: BinarizeParams) -> None:
         """Apply new parameters; the learnt model survives unless its structure changed."""
         rebuild = (background.method != self._bg.method
-                   or background.processing_scale != self._bg.processing_scale)
+                   or background.processing_scale != self._bg.processing_scale
+                   or background.coarse_from_width != self._bg.coarse_from_width)
         self._bg, self._bin = background, binarize
         if rebuild:
             self.reset()
