@@ -21,12 +21,17 @@ import cv2
 FPS = 120.0
 
 
+def _noisy_frame(rng, level, size=(360, 640)):
+    """A flat grey frame with 0–5 grey levels of sensor noise."""
+    img = np.full((*size, 3), level, np.uint8)
+    return cv2.add(img, rng.integers(0, 6, img.shape, dtype=np.uint8))
+
+
 def _scene(n=160, seed=0):
     rng = np.random.default_rng(seed)
     frames, truth = [], []
     for i in range(n):
-        img = np.full((480, 640, 3), 25, np.uint8)
-        img = cv2.add(img, rng.integers(0, 6, img.shape, dtype=np.uint8))
+        img = _noisy_frame(rng, 25, (480, 640))
         # A flickering light (static) and a bright blob lying still.
         level = 255 if i % 2 else 150
         cv2.circle(img, (80, 60), 6, (level, level, level), -1)
@@ -134,8 +139,7 @@ def _bar_scene(n=90):
     rng = np.random.default_rng(1)
     frames, truth = [], []
     for i in range(n):
-        img = np.full((360, 640, 3), 25, np.uint8)
-        img = cv2.add(img, rng.integers(0, 6, img.shape, dtype=np.uint8))
+        img = _noisy_frame(rng, 25, (360, 640))
         cv2.rectangle(img, (300, 0), (339, 359), (250, 250, 250), -1)
         x = 60 + 6.0 * i
         y = 180.0
@@ -175,8 +179,7 @@ def test_head_position_is_not_pulled_towards_a_nearby_light():
     det = CameraDetector(_params(colour__head_lead=0.0))   # the measured centroid itself
     errors = []
     for i in range(62):
-        img = np.full((360, 640, 3), 40, np.uint8)
-        img = cv2.add(img, rng.integers(0, 6, img.shape, dtype=np.uint8))
+        img = _noisy_frame(rng, 40, (360, 640))
         cv2.rectangle(img, (330, 150), (380, 190), (252, 252, 252), -1)
         x, y = 200 + 2.0 * i, 160.0 + 0.5 * i
         cv2.circle(img, (int(round(x)), int(round(y))), 2, (200, 200, 200), -1)
@@ -192,8 +195,7 @@ def _shuttle_flight(n=70):
     rng = np.random.default_rng(4)
     frames, corks = [], []
     for i in range(n):
-        img = np.full((360, 640, 3), 30, np.uint8)
-        img = cv2.add(img, rng.integers(0, 6, img.shape, dtype=np.uint8))
+        img = _noisy_frame(rng, 30, (360, 640))
         x, y = 80.0 + 7.0 * i, 60.0 + 3.0 * i
         direction = np.array([7.0, 3.0]) / math.hypot(7.0, 3.0)
         skirt = (x - 5 * direction[0], y - 5 * direction[1])
