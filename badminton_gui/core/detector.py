@@ -399,11 +399,12 @@ def model_scale(background, width: int) -> float:
 
     The processing scale, halved for large frames when ``coarse_from_width`` asks for it: at
     2048×1536 a 512 px model instead of 1024 px cuts the image work ~4× and, with far fewer
-    noise contours to measure, the CPU per camera frame by ~45 % (issue #7). It is off by
-    default because it costs accuracy with today's classifier: on rally_11-46-04 the F1 fell
-    from 96.9 % to 95.1–95.5 % (the 4× coarser mask lets dilated noise pass the length filter
-    and shifts the mask-based features the classifier was trained on at half scale); a
-    classifier trained on coarse-scale features is the way to make it the default.
+    noise contours to measure, the CPU per camera frame by ~45 % (issue #7). With the default
+    classifier (trained at half scale) it costs accuracy: on rally_11-46-04 the F1 fell from
+    96.9 % to 95.1–95.5 % (the 4× coarser mask lets dilated noise pass the length filter and
+    shifts the mask-based features). The ``coarse`` preset pairs it with a classifier trained
+    on coarse-scale candidates; still 0.7 F1 points below the default on held-out rallies, so
+    it stays opt-in.
     """
     scale = float(background.processing_scale)
     if 0 < int(background.coarse_from_width) <= width:

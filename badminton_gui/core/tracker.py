@@ -159,7 +159,6 @@ class StereoTracker:
         # triangulated from the measured centroids: each camera's lead is estimated on its own
         # and their small disagreement would be a disparity error, ≈ 12 cm of depth per px at
         # 5 m on the demo rig; the same bias is removed in 3D instead (``_to_head``).
-        shown_left, shown_right = det_left, det_right
         res_left, shown_left = self.left.lead_to_head(res_left, det_left)
         res_right, shown_right = self.right.lead_to_head(res_right, det_right)
         res_left = CameraDetector.finalise(res_left, shown_left)
