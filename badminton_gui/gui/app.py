@@ -39,6 +39,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    # Ctrl+C while Qt and the tracker are still loading (seconds on a busy machine) is
+    # remembered and honoured once the window exists, rather than ending in a traceback.
+    early_interrupt: list[bool] = []
+    signal.signal(signal.SIGINT, lambda *_: early_interrupt.append(True))
     sys.setswitchinterval(GIL_SWITCH_INTERVAL)
     # Scanning for cameras makes OpenCV warn once per absent device; the dialog says it better.
     os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
@@ -81,6 +85,8 @@ def main(argv: list[str] | None = None) -> int:
     # 3D view's paintGL, and closing the window there crashed (segfault in 2 of 4 tries).
     from PySide6.QtCore import QTimer
     signal.signal(signal.SIGINT, lambda *_: QTimer.singleShot(0, window.close))
+    if early_interrupt:
+        QTimer.singleShot(0, window.close)
 
     status = {"code": 0}
     if args.quit_after is not None:
