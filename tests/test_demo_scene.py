@@ -404,3 +404,20 @@ def test_occlusion_prefilter_keeps_the_exact_decision():
                 assert got == reference(players, uv, depth)
                 hits += got
     assert hits > 300, hits           # seed 0: 723
+
+
+def test_lying_shuttle_rests_on_cork_and_rim():
+    """A shuttle on the floor touches it with its cork and its skirt's rim: no part below it."""
+    from badminton_gui.io import demo_render as dr
+    from badminton_gui.io.demo_rally import CORK_RADIUS
+
+    h = np.array([0.6, -0.8, 0.0])
+    d = dr.lying_direction(h)
+    assert np.linalg.norm(d) == pytest.approx(1.0)
+    assert np.allclose(d[:2] / np.linalg.norm(d[:2]), h[:2])
+    cork = np.array([0.0, 0.0, CORK_RADIUS])
+    rim_centre = cork - dr.SKIRT_LENGTH * d
+    # The rim's lowest point: its centre minus the radius times the cosine of the axis' tilt.
+    lowest = rim_centre[2] - dr.SKIRT_RADIUS * math.hypot(d[0], d[1])
+    assert lowest == pytest.approx(0.0, abs=1e-9)
+    assert rim_centre[2] > cork[2]           # the skirt's end is held up

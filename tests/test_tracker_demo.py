@@ -3,7 +3,7 @@
 A smaller sample than the benchmark (``benchmarks/demo_accuracy.py`` runs 1000 frames × 3 seeds
 at 1280×720) to keep the suite fast: seed 3, 400 frames, whose serve passes within 6 m of the
 rig. Issue 2 asks for 2D accuracy ≥ 99 % per camera and a 3D RMS ≤ 1 cm within 6 m. The 3D
-bound is asserted as the issue states it (measured 0.42 cm over 25 points: the reported point is
+bound is asserted as the issue states it (measured 0.41 cm over 25 points: the reported point is
 the flight filter's, weighing each triangulation by its stereo noise shape; 0.83 cm unfiltered). The 2D bound is not met yet on the benchmark (the
 remaining misses: a shuttle merged with the player's blob around a hit, flights the candidate
 classifier scores low, a flight's first frames before confirmation), so the test holds the level
@@ -37,3 +37,30 @@ def test_3d_error_near_the_rig(score):
     assert len(near) >= 20
     assert score.rms_3d(6.0) <= 0.01, f"RMS {score.rms_3d(6.0):.4f} m over {len(near)} points"
     assert np.median(score.errors_3d) <= 0.03
+
+
+def test_cork_correction_variance_follows_the_3d_step():
+    """The cork correction is doubted (its variance) by how far it is from the one the 3D step
+    since the last frame asks for: none along the step, 2·offset² across it (a tracklet velocity
+    still pointing along the flight before a hit), offset² for an uncorrected point with no step
+    to tell; a step too short to be sure of is ignored."""
+    from badminton_gui.core.tracker import StereoTracker
+    from badminton_gui.io.demo_scene import make_rig
+
+    tracker = StereoTracker(make_rig("binocular", (1280, 720)), parallel=False)
+    offset = tracker.params.stereo.head_offset
+    last = np.array([0.5, 0.2, 5.0])
+    step = np.array([0.0, 0.0, -0.2])             # 24 m/s at 120 fps, towards the camera
+    blob = last + step
+    tracker._last_blob = (0.0, last)
+    along = offset * step / np.linalg.norm(step)
+    across = offset * np.array([1.0, 0.0, 0.0])
+    assert tracker._head_variance(1 / 120, blob, along) == pytest.approx(0.0, abs=1e-12)
+    assert tracker._head_variance(1 / 120, blob, across) == pytest.approx(2 * offset ** 2)
+    assert tracker._head_variance(1 / 120, blob, np.zeros(3)) == pytest.approx(offset ** 2)
+    # Too old a previous point, or too short a step: no direction to check against.
+    assert tracker._head_variance(0.5, blob, across) == 0.0
+    assert tracker._head_variance(0.5, blob, np.zeros(3)) == pytest.approx(offset ** 2)
+    tracker._last_blob = (0.0, blob - 0.01 * step)
+    assert tracker._head_variance(1 / 120, blob, across) == 0.0
+    tracker.close()

@@ -354,3 +354,48 @@ def test_a_shuttle_lying_where_the_flight_landed_gives_the_landing_direction():
     assert direction[0] * vx + direction[1] * vy > 0.99 * math.hypot(vx, vy)
     assert traj.resting_direction((lx + 2.0, ly, 0.03)) is None      # elsewhere on the floor
     assert traj.resting_direction((lx, ly, 1.0)) is None             # in the air
+
+
+def _young_flight_with(bias_at: int, bias, extra=None, **params):
+    """A clear with exact stereo-shaped points except one biased point at index ``bias_at``;
+    returns the filtered error (m) at that point (None: not filtered) and whether it was refused."""
+    shot = landing.make_shot(np.random.default_rng(6), "clear", 4.8, dt=1e-3)
+    times = np.arange(0.0, 0.2, 1 / 120)
+    truth, _ = shot.at(times)
+    traj = Trajectory(TrajectoryParams(pixel_noise=0.2, **params), court_frame=True)
+    err, rejected = None, False
+    for i, (t, p) in enumerate(zip(times, truth)):
+        z = p + (np.asarray(bias) if i == bias_at else 0.0)
+        traj.update(t, tuple(z), _stereo_shape(p), extra if i == bias_at else None)
+        if i == bias_at:
+            filtered = traj.filtered_position()
+            err = None if filtered is None else float(np.linalg.norm(np.asarray(filtered) - p))
+            rejected = traj.point_rejected
+    return err, rejected
+
+
+def test_extra_noise_weighs_a_point_less_but_does_not_widen_the_gate():
+    """``extra_noise`` (a doubtful cork correction) lowers a point's pull on the flight, and a
+    point the gate refuses stays refused however large the extra noise."""
+    bias = (0.0, 0.0, 0.02)                   # 2 cm up: across the line of sight, well measured
+    plain, _ = _young_flight_with(12, bias)
+    doubted, _ = _young_flight_with(12, bias, extra=np.eye(3) * 0.02 ** 2)
+    assert plain is not None and doubted is not None
+    assert doubted < 0.5 * plain, (plain, doubted)
+    far = (0.0, 0.6, 0.4)
+    assert _young_flight_with(12, far)[0] is None
+    err, rejected = _young_flight_with(12, far, extra=np.eye(3) * 1.0)
+    assert err is None and rejected
+
+
+def test_robust_sigma_limits_the_pull_of_a_point_inside_the_gate():
+    """A point 2 cm off across the line of sight (inside the 5σ gate of a young flight) drags
+    the flight less with the Huber weight than without, and exact points are not affected."""
+    bias = (0.0, 0.0, 0.02)
+    plain, _ = _young_flight_with(12, bias, robust_sigma=0.0)
+    huber, _ = _young_flight_with(12, bias, robust_sigma=2.0)
+    assert plain is not None and huber is not None, "the point must pass the gate"
+    assert huber < 0.6 * plain, (plain, huber)
+    clean_plain, _ = _young_flight_with(12, (0.0, 0.0, 0.0), robust_sigma=0.0)
+    clean_huber, _ = _young_flight_with(12, (0.0, 0.0, 0.0), robust_sigma=2.0)
+    assert clean_huber == pytest.approx(clean_plain, abs=1e-4)

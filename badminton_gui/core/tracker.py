@@ -43,6 +43,11 @@ from .types import CameraResult, Candidate, TrackResult
 HEAD_DIRECTION_DT = 0.01
 # px: the least epipolar error taken as typical of a good pair (see _epipolar_inflation)
 EPIPOLAR_TYPICAL_MIN = 0.5
+# The cork correction's direction is checked against the 3D step from the previous blob point
+# when that point is at most this old (s) and the step at least this many head offsets long
+# (shorter steps are mostly the points' noise): see _head_variance.
+HEAD_CHECK_DT = 0.02
+HEAD_CHECK_STEPS = 4.0
 
 
 class StereoTracker:
@@ -62,6 +67,9 @@ class StereoTracker:
         # Epipolar errors of long, confident tracklets seen by both cameras: what the rig
         # really achieves (a rig calibrated by clicking court points is off by tens of px).
         self._epipolar_samples: deque[float] = deque(maxlen=600)
+        # The last frame's triangulated blob point (left-camera frame) and its time: the 3D step
+        # checks the direction of the cork correction (see _head_variance).
+        self._last_blob: tuple[float, np.ndarray] | None = None
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -77,6 +85,7 @@ class StereoTracker:
         self._trajectory.reset()
         self._epipolar_samples.clear()
         self._previous = (None, None)
+        self._last_blob = None
 
     def epipolar_tolerance(self) -> float:
         """The epipolar gate in use: the configured one, widened to the rig's measured error."""
@@ -164,8 +173,12 @@ class StereoTracker:
         res_left = CameraDetector.finalise(res_left, shown_left)
         res_right = CameraDetector.finalise(res_right, shown_right)
 
+        head_var = 0.0
+        blob = point_left
         if point_left is not None and self.params.stereo.head_offset > 0:
             point_left = self._to_head(det_left, det_right, point_left)
+            head_var = self._head_variance(timestamp, blob, point_left - blob)
+        self._last_blob = None if blob is None else (timestamp, blob)
 
         measured = None
         noise_shape = None
@@ -175,7 +188,8 @@ class StereoTracker:
             if epi is not None:
                 noise_shape = noise_shape * self._epipolar_inflation(epi)
 
-        flight = self._trajectory.update(timestamp, measured, noise_shape)
+        flight = self._trajectory.update(timestamp, measured, noise_shape,
+                                         np.eye(3) * head_var if head_var > 0 else None)
         speed = None
         if flight.velocity is not None:
             speed = float(math.sqrt(sum(v * v for v in flight.velocity)))
@@ -301,6 +315,32 @@ class StereoTracker:
         sp = self.params.stereo
         return (point[0] + sp.rest_cork_ahead * direction[0], point[1] + sp.rest_cork_ahead * direction[1],
                 point[2] - sp.rest_cork_below)
+
+    def _head_variance(self, timestamp: float, blob: np.ndarray, moved: np.ndarray) -> float:
+        """Variance (m², per axis) of the cork correction ``moved`` applied to the blob point.
+
+        The correction follows the tracklets' image velocities, which are smoothed over several
+        frames: for the first frames after a hit they still point along the old flight (on the
+        demo court the correction was 90° off one frame after a smash and 55° off the next),
+        and the first frames of a tracklet get no correction at all. Either way the point is off
+        by up to twice ``head_offset`` across the flight, in the directions the stereo pair
+        measures best, and a young flight bends to fit it. The 3D step from the last frame's
+        blob point shows the real direction when it is long enough to be sure of
+        (``HEAD_CHECK_STEPS`` × ``head_offset``): the mismatch between the correction made and
+        the one that direction asks for is the variance. Without such a step, an uncorrected
+        point gets ``head_offset``² (it may be moving), a corrected one nothing.
+        """
+        offset = float(self.params.stereo.head_offset)
+        last = self._last_blob
+        step = None
+        if last is not None and 0.0 < timestamp - last[0] <= HEAD_CHECK_DT:
+            step = blob - last[1]
+            if float(np.linalg.norm(step)) < HEAD_CHECK_STEPS * offset:
+                step = None
+        if step is None:
+            return 0.0 if float(np.linalg.norm(moved)) > 0.0 else offset * offset
+        wanted = offset * step / float(np.linalg.norm(step))
+        return float(np.sum((moved - wanted) ** 2))
 
     def _to_head(self, det_left: Candidate, det_right: Candidate, point: np.ndarray) -> np.ndarray:
         """Move the triangulated blob point forward along the flight to the cork (GUIDE §7).

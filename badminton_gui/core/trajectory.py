@@ -357,7 +357,8 @@ class Trajectory:
         return None if self._flight is None else 1.0 / float(self._flight.x[6])
 
     # ---- the per-frame entry point ------------------------------------------------------------
-    def update(self, t: float, point: tuple | None, noise_shape: np.ndarray | None = None) -> FlightInfo:
+    def update(self, t: float, point: tuple | None, noise_shape: np.ndarray | None = None,
+               extra_noise: np.ndarray | None = None) -> FlightInfo:
         """Feed one frame pair's 3D point (or None) at time t (s); returns the flight state.
 
         ``noise_shape`` (3×3, m² per px²) is the point's covariance for 1 px of noise on each
@@ -365,6 +366,8 @@ class Trajectory:
         several times less sure in depth than across, and far points less than near ones, so the
         filter weighs each point by its own geometry and the scale (px) is measured from the
         flight's innovations. Without it the noise is isotropic (``measurement_noise``, m).
+        ``extra_noise`` (3×3, m²) is added to that: an error the point may carry that its image
+        noise does not explain (the tracker's cork correction made in a doubtful direction).
         """
         if self._last_t is not None and t < self._last_t - 1e-9:
             self.reset()        # the clock went back: a new video / replay
@@ -390,7 +393,8 @@ class Trajectory:
             z = np.asarray(point, dtype=float)
             if np.all(np.isfinite(z)):
                 following = self._flight is not None
-                accepted = self._feed(t, z, self._noise_matrix(noise_shape))
+                extra = None if extra_noise is None else np.asarray(extra_noise, dtype=float)
+                accepted = self._feed(t, z, self._noise_matrix(noise_shape), extra)
                 self._rejected_now = following and not accepted
         self._accepted_now = accepted
         return self._info(t, accepted)
@@ -449,8 +453,13 @@ class Trajectory:
         return np.eye(3) * (sigma * sigma)
 
     # ---- court-frame machinery ---------------------------------------------------------------
-    def _feed(self, t: float, z: np.ndarray, r: np.ndarray) -> bool:
-        """Use one point with noise covariance ``r``; True when it extended the current flight."""
+    def _feed(self, t: float, z: np.ndarray, r: np.ndarray, extra: np.ndarray | None = None) -> bool:
+        """Use one point with noise covariance ``r``; True when it extended the current flight.
+
+        ``extra`` (m²) is added to ``r`` for weighing the point, not for gating it: the doubt it
+        stands for (a cork correction in the wrong direction, right after a hit) is also a sign
+        that the point may not belong to the flight, and must not widen the gate.
+        """
         p = self.params
         flight = self._flight
         if flight is not None and t > flight.t:
@@ -461,13 +470,22 @@ class Trajectory:
             if len(flight.points) >= p.min_points:
                 self._observe_noise(nu, flight.P, r)
             if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
-                flight.correct(t, z, nu, S, r)
+                weigh = r if extra is None else r + extra
+                robust = p.robust_sigma
+                if robust > 0.0 and d2 > robust * robust:
+                    # Huber: beyond robust_sigma σ a point's pull grows like √d2, not like d2 (a
+                    # blob merged with a line or a racket for a frame passes a 5σ gate of a
+                    # young flight and dragged it by centimetres for ten frames).
+                    weigh = weigh * (d2 / (robust * robust))
+                if weigh is not r:
+                    nu, S, _ = flight.innovation(z, weigh)
+                flight.correct(t, z, nu, S, weigh)
                 self._after_flight_update()
                 self._tentative = None
                 self._seed = None
                 return True
             flight.x, flight.P, flight.t = saved
-        self._feed_tentative(t, z, r)
+        self._feed_tentative(t, z, r, extra)
         return self._flight is not None and self._flight.t == t
 
     def _observe_noise(self, nu: np.ndarray, P: np.ndarray, r: np.ndarray) -> None:
@@ -514,14 +532,19 @@ class Trajectory:
                 self._sigma_cache = floor
         return self._sigma_cache
 
-    def _feed_tentative(self, t: float, z: np.ndarray, r: np.ndarray) -> None:
+    def _feed_tentative(self, t: float, z: np.ndarray, r: np.ndarray, extra: np.ndarray | None = None) -> None:
         """A point the flight could not explain: grow (or restart) the tentative track."""
         p = self.params
         tent = self._tentative
+        if extra is not None:
+            r_gate, r = r, r + extra
+        else:
+            r_gate = r
         if tent is not None and t > tent.t:
             saved = (tent.x, tent.P, tent.t)
             tent.predict(t, p.model_noise)
-            nu, S, d2 = tent.innovation(z, r)
+            _, _, d2 = tent.innovation(z, r_gate)
+            nu, S, _ = tent.innovation(z, r)
             if d2 <= p.outlier_sigma ** 2 and float(np.linalg.norm(nu)) <= p.outlier_distance:
                 tent.correct(t, z, nu, S, r)
                 needed = CONFIRM_POINTS if self._flight is None else TAKEOVER_POINTS

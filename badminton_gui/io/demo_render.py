@@ -21,6 +21,7 @@ Cameras here are pinhole (the demo rig has D = 0); ``PinholeCamera`` is derived 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import NamedTuple
@@ -37,6 +38,12 @@ SHIFT = 4                  # sub-pixel bits for cv2 drawing
 SCALE = float(1 << SHIFT)
 SKIRT_LENGTH = 0.06        # cork centre to the skirt's open end (m)
 SKIRT_RADIUS = 0.032       # radius of the skirt's open end (m)
+# A shuttle lying on the floor rests on its cork and on its skirt's rim, so its axis rises
+# towards the skirt: SKIRT_RADIUS·cos θ − SKIRT_LENGTH·sin θ = CORK_RADIUS (≈ 17°). Drawn with a
+# level axis, half the skirt was below the floor and the blob's stereo point was 2.6 cm off in
+# depth (the two views cut the sunken skirt differently).
+REST_TILT = (math.acos(CORK_RADIUS / math.hypot(SKIRT_RADIUS, SKIRT_LENGTH))
+             - math.atan2(SKIRT_LENGTH, SKIRT_RADIUS))
 SUPERSAMPLE = 4
 
 # BGR colours.
@@ -328,6 +335,13 @@ def draw_capsule(img, c: ProjectedCapsule, gain: float) -> None:
 
 
 # ---- shuttle ---------------------------------------------------------------------------------
+
+def lying_direction(horizontal) -> np.ndarray:
+    """The axis direction (cork ahead, as ``draw_shuttle`` takes it) of a shuttle lying on the
+    floor along the horizontal unit vector ``horizontal``: tilted by REST_TILT, skirt up."""
+    h = np.asarray(horizontal, dtype=float)
+    return np.array([h[0] * math.cos(REST_TILT), h[1] * math.cos(REST_TILT), -math.sin(REST_TILT)])
+
 
 def draw_shuttle(img: np.ndarray, cam: PinholeCamera, positions: np.ndarray,
                  directions: np.ndarray, gain: float) -> None:

@@ -269,7 +269,7 @@ class DemoScene:
             if p is None:
                 continue
             speed = float(np.linalg.norm(v))
-            d = v / speed if speed > 0.3 else np.asarray(seg.rest_dir, float)
+            d = v / speed if speed > 0.3 else dr.lying_direction(seg.rest_dir)
             positions.append(p)
             directions.append(d)
         if not positions:
