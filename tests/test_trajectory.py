@@ -390,7 +390,7 @@ def test_extra_noise_weighs_a_point_less_but_does_not_widen_the_gate():
 
 def test_robust_sigma_limits_the_pull_of_a_point_inside_the_gate():
     """A point 2 cm off across the line of sight (inside the 5σ gate of a young flight) drags
-    the flight less with the Huber weight than without, and exact points are not affected."""
+    the flight less with the robust down-weighting than without, and exact points are not affected."""
     bias = (0.0, 0.0, 0.02)
     plain, _ = _young_flight_with(12, bias, robust_sigma=0.0)
     huber, _ = _young_flight_with(12, bias, robust_sigma=2.0)

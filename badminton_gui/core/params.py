@@ -320,8 +320,8 @@ class TrajectoryParams(ParamGroup):
                                     help="3D points this far from the flight's prediction are ignored")
     robust_sigma: float = param(2.0, 0.0, 20.0, step=0.5, unit="σ", label="Down-weigh beyond",
                                 help="A point farther than this many standard deviations from the flight's "
-                                     "prediction (but inside the outlier gate) has its noise scaled up so its "
-                                     "pull on the flight grows only like its distance (Huber; 0 = off)")
+                                     "prediction (but inside the outlier gate) has its noise scaled by (distance / this)², "
+                                     "so the farther it lies the less it moves the flight (0 = off)")
     hit_acceleration: float = param(150.0, 10.0, 5000.0, step=5.0, unit="m/s²",
                                     label="Hit acceleration",
                                     help="A velocity change this abrupt starts a new shot")

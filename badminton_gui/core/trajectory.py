@@ -473,9 +473,11 @@ class Trajectory:
                 weigh = r if extra is None else r + extra
                 robust = p.robust_sigma
                 if robust > 0.0 and d2 > robust * robust:
-                    # Huber: beyond robust_sigma σ a point's pull grows like √d2, not like d2 (a
-                    # blob merged with a line or a racket for a frame passes a 5σ gate of a
-                    # young flight and dragged it by centimetres for ten frames).
+                    # Beyond robust_sigma σ the point's noise is scaled by (d / robust_sigma)²
+                    # (an iteratively-reweighted, redescending weight: once the flight is surer
+                    # than the point, the farther the point the less it moves the flight). A
+                    # blob merged with a line or a racket for a frame passes the 5σ gate of a
+                    # young flight and had dragged it by centimetres for ten frames.
                     weigh = weigh * (d2 / (robust * robust))
                 if weigh is not r:
                     nu, S, _ = flight.innovation(z, weigh)
