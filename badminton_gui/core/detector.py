@@ -469,15 +469,17 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     canvas = np.zeros((rows, cols, 3), np.uint8)
     inside = np.zeros((rows, cols), np.uint8)
     for (x0, y0, x1, y1), r0 in zip(windows, start.tolist()):
-        ch, cw = y1 - y0, x1 - x0
-        canvas[r0:r0 + ch, :cw] = frame[y0:y1, x0:x1]
-        # The blob's pixels at full resolution: the mask window, resized (0 / 255).
+        r1, cw = r0 + y1 - y0, x1 - x0
+        canvas[r0:r1, :cw] = frame[y0:y1, x0:x1]
+        # The blob's pixels at full resolution: the mask window, resized (0 / 255) straight
+        # into its place on the canvas (no temporary, no second copy).
         mx0, my0 = int(x0 / sx), int(y0 / sy)
-        mx1, my1 = max(int(math.ceil(x1 / sx)), mx0 + 1), max(int(math.ceil(y1 / sy)), my0 + 1)
+        mx1, my1 = max(math.ceil(x1 / sx), mx0 + 1), max(math.ceil(y1 / sy), my0 + 1)
         mcrop = mask[my0:my1, mx0:mx1]
-        if mcrop.shape[:2] != (ch, cw):
-            mcrop = cv2.resize(mcrop, (cw, ch), interpolation=cv2.INTER_NEAREST)
-        inside[r0:r0 + ch, :cw] = mcrop
+        if mcrop.shape == (r1 - r0, cw):
+            inside[r0:r1, :cw] = mcrop
+        else:
+            cv2.resize(mcrop, (cw, r1 - r0), dst=inside[r0:r1, :cw], interpolation=cv2.INTER_NEAREST)
 
     # Row bookkeeping: each window owns its rows and the blank row after it.
     seg_rows = height + 1
