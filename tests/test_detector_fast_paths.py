@@ -118,7 +118,7 @@ def _thresholded(frame, scale):
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-@pytest.mark.parametrize("scale", [0.5, 1.0])
+@pytest.mark.parametrize("scale", [0.25, 0.5, 1.0])   # 0.25: the coarse preset's mask, resized ×4
 def test_measure_equals_the_numpy_formulas_on_synthetic_blobs(seed, scale):
     frame = _synthetic_frame(seed)
     gray, mask, sx, sy = _thresholded(frame, scale)
@@ -160,7 +160,7 @@ def assert_same_batch(frame, mask, boxes, sx, sy, head_fraction=0.5):
         np.testing.assert_allclose(fast, ref, rtol=1e-5, atol=1e-5, err_msg=f"box {box}")
 
 
-@pytest.mark.parametrize("scale", [0.5, 1.0])
+@pytest.mark.parametrize("scale", [0.25, 0.5, 1.0])
 def test_windows_measured_together_do_not_interact(scale):
     # Neighbouring windows in the shared canvas (different widths, a mask touching a window's
     # last row, empty and clipped windows in between) must give each its own values.
@@ -312,3 +312,20 @@ def test_large_frames_get_the_coarser_model_only_when_asked():
     for i in range(3):
         result = det.find_candidates(frame, i / 119.0)
     assert result.mask.shape == (60, 80) and result.mask_scale == 0.25
+
+
+def test_window_maxima_of_several_images_share_the_windows():
+    # The ranking reads the difference (counted as 0 where ``counts_where`` is 0) and the grey
+    # image in the same windows: each maximum is the plain per-window numpy maximum.
+    rng = np.random.default_rng(5)
+    diff = rng.normal(0, 20, (40, 60)).astype(np.float32)
+    gray = rng.integers(0, 256, (40, 60), dtype=np.uint8)
+    unlit = np.where(rng.random((40, 60)) < 0.3, 0, 255).astype(np.uint8)
+    x0, y0 = np.array([0, 10, 55, 30]), np.array([0, 5, 35, 20])
+    width, height = np.array([1, 7, 5, 12]), np.array([1, 9, 5, 3])
+    diff_max, gray_max = detector_module._window_maxima((diff, gray), x0, y0, width, height, unlit)
+    for k in range(len(x0)):
+        window = np.s_[y0[k]:y0[k] + height[k], x0[k]:x0[k] + width[k]]
+        assert diff_max[k] == np.where(unlit[window] != 0, diff[window], np.float32(0)).max()
+        assert gray_max[k] == gray[window].max()
+    assert diff_max.dtype == np.float32 and gray_max.dtype == np.uint8

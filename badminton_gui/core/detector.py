@@ -178,9 +178,9 @@ class CameraDetector:
                 y0 = (boxes[:, 1] / sy).astype(np.int64)
                 win_w = np.minimum(np.maximum((boxes[:, 2] / sx).astype(np.int64), 1), mask.shape[1] - x0)
                 win_h = np.minimum(np.maximum((boxes[:, 3] / sy).astype(np.int64), 1), mask.shape[0] - y0)
-                strength = (_window_maxima(diff, x0, y0, win_w, win_h,
-                                           self._background.last_unlit).astype(np.float64)
-                            + 0.5 * _window_maxima(gray, x0, y0, win_w, win_h).astype(np.float64))
+                diff_max, gray_max = _window_maxima((diff, gray), x0, y0, win_w, win_h,
+                                                    self._background.last_unlit)
+                strength = diff_max.astype(np.float64) + 0.5 * gray_max.astype(np.float64)
             else:
                 strength = -area_all[kept]   # MOG2 gives no strength: smaller blobs first
             # Near first, then strongest; ties keep the contour order (a stable sort).
@@ -469,15 +469,17 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     canvas = np.zeros((rows, cols, 3), np.uint8)
     inside = np.zeros((rows, cols), np.uint8)
     for (x0, y0, x1, y1), r0 in zip(windows, start.tolist()):
-        ch, cw = y1 - y0, x1 - x0
-        canvas[r0:r0 + ch, :cw] = frame[y0:y1, x0:x1]
-        # The blob's pixels at full resolution: the mask window, resized (0 / 255).
+        r1, cw = r0 + y1 - y0, x1 - x0
+        canvas[r0:r1, :cw] = frame[y0:y1, x0:x1]
+        # The blob's pixels at full resolution: the mask window, resized (0 / 255) straight
+        # into its place on the canvas (no temporary, no second copy).
         mx0, my0 = int(x0 / sx), int(y0 / sy)
-        mx1, my1 = max(int(math.ceil(x1 / sx)), mx0 + 1), max(int(math.ceil(y1 / sy)), my0 + 1)
+        mx1, my1 = max(math.ceil(x1 / sx), mx0 + 1), max(math.ceil(y1 / sy), my0 + 1)
         mcrop = mask[my0:my1, mx0:mx1]
-        if mcrop.shape[:2] != (ch, cw):
-            mcrop = cv2.resize(mcrop, (cw, ch), interpolation=cv2.INTER_NEAREST)
-        inside[r0:r0 + ch, :cw] = mcrop
+        if mcrop.shape == (r1 - r0, cw):
+            inside[r0:r1, :cw] = mcrop
+        else:
+            cv2.resize(mcrop, (cw, r1 - r0), dst=inside[r0:r1, :cw], interpolation=cv2.INTER_NEAREST)
 
     # Row bookkeeping: each window owns its rows and the blank row after it.
     seg_rows = height + 1
@@ -604,22 +606,28 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     return pos_x, pos_y, whiteness, saturation, features
 
 
-def _window_maxima(image: np.ndarray, x0: np.ndarray, y0: np.ndarray, width: np.ndarray,
-                   height: np.ndarray, counts_where: np.ndarray | None = None) -> np.ndarray:
-    """Maximum of ``image`` in each window (all non-empty, inside the image), one gather.
+def _window_maxima(images: tuple[np.ndarray, ...], x0: np.ndarray, y0: np.ndarray,
+                   width: np.ndarray, height: np.ndarray,
+                   counts_where: np.ndarray | None = None) -> list[np.ndarray]:
+    """Maximum of each image in each window (all non-empty, inside the images), one gather each.
 
-    ``counts_where``: an image of the same size, 0 where ``image`` is to be taken as 0.
+    The images have the same size, so they share the windows' pixel indices (computed once).
+    ``counts_where``: an image of that size, 0 where the *first* image is to be taken as 0.
     """
     counts = height * width
     local = _ragged_arange(counts)
     row_width = np.repeat(width, counts)
     rows = local // row_width
-    flat = ((np.repeat(y0, counts) + rows) * image.shape[1] + np.repeat(x0, counts)
+    flat = ((np.repeat(y0, counts) + rows) * images[0].shape[1] + np.repeat(x0, counts)
             + local - rows * row_width)
-    values = image.ravel()[flat]
-    if counts_where is not None:
-        values = np.where(counts_where.ravel()[flat] != 0, values, values.dtype.type(0))
-    return np.maximum.reduceat(values, np.cumsum(counts) - counts)
+    starts = np.cumsum(counts) - counts
+    maxima = []
+    for k, image in enumerate(images):
+        values = image.ravel()[flat]
+        if k == 0 and counts_where is not None:
+            values = np.where(counts_where.ravel()[flat] != 0, values, values.dtype.type(0))
+        maxima.append(np.maximum.reduceat(values, starts))
+    return maxima
 
 
 def _ragged_arange(lengths: np.ndarray) -> np.ndarray:
