@@ -77,6 +77,7 @@ class CameraDetector:
         self._previous_positions = np.zeros((0, 2))
         self._small: np.ndarray | None = None   # the frame at the processing scale (buffer)
         self._gray: np.ndarray | None = None
+        self._mask_scale = 0.0   # mask px per full-resolution px (0: no frame yet)
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -120,6 +121,7 @@ class CameraDetector:
         mask = self._background.apply(gray)
         sx = w / mask.shape[1]
         sy = h / mask.shape[0]
+        self._mask_scale = mask.shape[1] / w
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
 
         # Filters 1 and 2 (contour length, short side of the tilted rectangle). OpenCV measures
@@ -290,6 +292,11 @@ class CameraDetector:
         if quarter:
             gray = cv2.resize(gray, size, interpolation=cv2.INTER_LINEAR)
         return gray
+
+    def is_blind(self, x: float, y: float) -> bool:
+        """True when a shuttle at full-resolution (x, y) cannot show in this camera's mask."""
+        scale = self._mask_scale
+        return scale > 0 and self._background.is_blind(x * scale, y * scale)
 
     def tracklet_hits(self, candidate: Candidate) -> int:
         """Frames the candidate's tracklet has been seen (0 when it is on none)."""

@@ -286,6 +286,10 @@ class StereoParams(ParamGroup):
                                     "there for a small white spot (a shuttle merged with a player or a line)")
     guided_min_contrast: float = param(25.0, 1.0, 255.0, step=1.0, unit="grey levels", label="Spot contrast ≥",
                                        help="The spot's whiteness (min of B, G, R) above its window's median")
+    guided_coast: bool = flag(True, label="... and coast on it where blind",
+                              help="A camera coasting through a blind spot (a light, a white line) reports "
+                                   "the 3D flight's projection instead of a straight image path; with no "
+                                   "detection, the projection is reported when it lies in a blind spot")
     guided_override: bool = flag(False, label="... also against a detection",
                                  help="Also replace a detection that is off the flight's projection")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
