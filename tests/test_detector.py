@@ -107,6 +107,28 @@ def test_association_speed_aware_gate_keeps_a_fast_track():
     assert track.hits == 12
 
 
+def test_followed_tracklet_loses_its_hysteresis_on_a_blob_that_does_not_look_like_a_shuttle():
+    """After a racket contact the followed tracklet goes on with the racket, whose running
+    quality still remembers the shuttle: its hysteresis holds only while this frame's candidate
+    scores at least ``association.hysteresis_min_quality`` (0 = always, the old behaviour)."""
+    for gate in (0.1, 0.0):
+        p = TrackerParams().with_value("association.hysteresis_min_quality", gate)
+        assoc = TrackletAssociator(p.motion, p.association)
+        for i in range(12):
+            out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([0.9]))
+        assoc.select(out[0][0])
+        # The same tracklet, this frame on a blob that scores 0.02 (a racket's frame).
+        ident, _, merit = assoc.update(12 / FPS, np.array([[220.0, 300.0]]), np.array([0.02]))[0]
+        track = next(t for t in assoc.tracklets if t.ident == ident)
+        without = assoc.merit(track, 0.02)
+        with_bonus = assoc.merit(track, 0.9)
+        assert merit == pytest.approx(without)
+        if gate > 0:
+            assert with_bonus == pytest.approx(without + p.association.hysteresis)
+        else:
+            assert with_bonus == pytest.approx(without)
+
+
 def test_shipped_classifier_loads_and_scores_in_unit_interval():
     clf = load_classifier(TrackerParams().classifier.model)
     assert clf.mean.shape == (len(FEATURE_NAMES),)

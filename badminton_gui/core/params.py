@@ -229,6 +229,10 @@ class AssociationParams(ParamGroup):
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
                               help="Merit bonus of the tracklet already followed")
+    hysteresis_min_quality: float = param(0.1, 0.0, 1.0, step=0.01, label="... while quality ≥",
+                                          help="The followed tracklet keeps its hysteresis only while this frame's "
+                                               "candidate on it scores at least this (after a hit it goes on with the "
+                                               "racket or a hand); 0 = always")
     max_measured: int = param(32, 1, 500, step=1, label="Blobs measured",
                               help="At most this many blobs per frame get the full-resolution measurement: "
                                    "those near a live tracklet first, then the strongest differences")
@@ -290,6 +294,9 @@ class StereoParams(ParamGroup):
                               help="A camera coasting through a blind spot (a light, a white line) reports "
                                    "the 3D flight's projection instead of a straight image path; with no "
                                    "detection, the projection is reported when it lies in a blind spot")
+    guided_merged: bool = flag(True, label="... and where merged",
+                               help="With no detection, the 3D flight's projection is also reported where it "
+                                    "falls on a blob too large for a shuttle (merged with a player, a racket)")
     guided_override: bool = flag(False, label="... also against a detection",
                                  help="Also replace a detection that is off the flight's projection")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius

@@ -30,7 +30,7 @@ import cv2
 import numpy as np
 
 from .detector import CameraDetector
-from .guided import find_spot
+from .guided import find_spot, white_near
 from .params import TrackerParams
 from .rig import StereoRig
 from .trajectory import Trajectory
@@ -155,8 +155,8 @@ class StereoTracker:
                         res_right = dataclasses.replace(res_right, candidates=res_right.candidates + (found_right,))
                     point_left, epi = self._pair_point(det_left, det_right)
                 if sp.guided_coast:
-                    res_left, det_left = self._coast_on_flight(0, res_left, det_left, guide)
-                    res_right, det_right = self._coast_on_flight(1, res_right, det_right, guide)
+                    res_left, det_left = self._coast_on_flight(0, left_bgr, res_left, det_left, guide)
+                    res_right, det_right = self._coast_on_flight(1, right_bgr, res_right, det_right, guide)
         # The sources hand out a new array per frame: keeping the reference costs no copy.
         self._previous = (left_bgr, right_bgr)
         # The 2D readout is the cork, not the trailing bright centroid. The 3D point is still
@@ -281,8 +281,9 @@ class StereoTracker:
         return Candidate(x=x, y=y, length=float("nan"), short_side=float("nan"), whiteness=contrast,
                          area=area, motion=math.hypot(x - u, y - v), score=0.0)
 
-    def _coast_on_flight(self, camera: int, result: CameraResult, detection: Candidate | None,
-                         guide: tuple[np.ndarray, np.ndarray]) -> tuple[CameraResult, Candidate | None]:
+    def _coast_on_flight(self, camera: int, frame: np.ndarray, result: CameraResult,
+                         detection: Candidate | None, guide: tuple[np.ndarray, np.ndarray]
+                         ) -> tuple[CameraResult, Candidate | None]:
         """Where the 3D flight projects, for a camera that cannot see the shuttle there.
 
         A camera's own coasting (``motion.coast_blind``) carries its tracklet on a straight image
@@ -290,10 +291,12 @@ class StereoTracker:
         curve, so a coasting prediction is moved to the flight's projection. A camera with no
         detection at all whose flight projection lies in its blind spot (a light, a white line:
         the mask cannot show the shuttle there) reports that projection too — the followed
-        tracklet may have been taken by clutter, or the blind stretch outlasted ``coast_blind``.
-        Both are flagged ``predicted`` (never triangulated); a projection outside the image or
-        outside a blind spot with no detection gives nothing (nothing is invented where the
-        detector could see).
+        tracklet may have been taken by clutter, or the blind stretch outlasted ``coast_blind``
+        — and so does one whose projection falls on a blob too large for a shuttle where a white
+        pixel shows (``stereo.guided_merged``: the shuttle crossing a player's arm or a racket
+        merges with it; one hidden behind the player shows no white). Both are flagged ``predicted`` (never triangulated); a projection outside the
+        image, or on plain background with no detection, gives nothing (nothing is invented
+        where the detector could have seen the shuttle).
         """
         if detection is not None and not detection.predicted:
             return result, detection
@@ -306,7 +309,10 @@ class StereoTracker:
             return result, detection
         detector = self.left if camera == 0 else self.right
         if detection is None:
-            if not detector.is_blind(u, v):
+            sp = self.params.stereo
+            merged = (sp.guided_merged and detector.is_merged(u, v)
+                      and white_near(frame, u, v, 2.0 * w / 1280.0, sp.guided_min_contrast))
+            if not (merged or detector.is_blind(u, v)):
                 return result, None
             moved = Candidate(u, v, math.nan, math.nan, math.nan, math.nan, 0.0, 0.0, None, predicted=True)
             return dataclasses.replace(result, candidates=result.candidates + (moved,)), moved
