@@ -251,3 +251,17 @@ def test_a_moving_detection_is_led_forward_to_the_cork():
     # The bright centroid trails the cork; the led position is on it.
     assert np.median(errors[0.0]) >= 2.0
     assert np.median(errors[0.5]) <= 0.5 * np.median(errors[0.0])
+
+
+def test_a_cork_led_out_of_the_image_is_not_reported():
+    """Leaving the image, the skirt still shows at the border after the cork has gone: the
+    detection whose led position falls outside the frame is dropped, never reported outside."""
+    frames, corks = _shuttle_flight(n=86)      # x = 80 + 7 i: the cork leaves at i ≈ 80
+    runs = {}
+    for lead in (0.0, 0.5):
+        det = CameraDetector(_params(colour__head_lead=lead))
+        runs[lead] = [det.process(img, i / FPS, keep_mask=False).detection for i, img in enumerate(frames)]
+    for d in runs[0.5]:
+        assert d is None or (-0.5 <= d.x < 639.5 and -0.5 <= d.y < 359.5)
+    dropped = [i for i, (a, b) in enumerate(zip(runs[0.0], runs[0.5])) if a is not None and b is None]
+    assert dropped and all(corks[i][0] >= 630 for i in dropped)

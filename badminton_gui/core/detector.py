@@ -348,7 +348,8 @@ class CameraDetector:
         (the shuttle's apparent size, which blur does not stretch). Call after ``commit`` (the
         tracklet's velocity then includes this frame); the associator keeps the measured
         position, only the reported one moves. Returns the result with the moved candidate in
-        place of the old one, and the moved candidate.
+        place of the old one, and the moved candidate; no candidate (None) when the cork is led
+        out of the image.
         """
         c = self.params.colour
         if (chosen is None or c.head_lead <= 0 or chosen.predicted
@@ -362,6 +363,11 @@ class CameraDetector:
             return result, chosen
         lead = c.head_lead * chosen.short_side / speed
         moved = dataclasses.replace(chosen, x=chosen.x + lead * velocity[0], y=chosen.y + lead * velocity[1])
+        w, h = result.image_size
+        if w > 0 and not (-0.5 <= moved.x < w - 0.5 and -0.5 <= moved.y < h - 0.5):
+            # The cork has left the image (only the skirt's end still shows at the border): no
+            # point inside the frame is the shuttle's, and none outside it can be reported.
+            return result, None
         ident = self._tracklet_of.get(id(chosen))
         if ident is not None:
             self._tracklet_of[id(moved)] = ident
