@@ -45,7 +45,8 @@ def main() -> None:
             def on_frame(result, truth, codes, seed=seed, listing=listing):
                 listing.extend(_error_lines(seed, result, truth, codes))
         s = evaluate_demo(seed, args.frames, size, args.rig, on_frame=on_frame)
-        print("\n".join(listing))
+        if listing:
+            print("\n".join(listing))
         total_l = s.left if total_l is None else total_l + s.left
         total_r = s.right if total_r is None else total_r + s.right
         errs.append(s.errors_3d)
