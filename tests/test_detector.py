@@ -129,6 +129,30 @@ def test_followed_tracklet_loses_its_hysteresis_on_a_blob_that_does_not_look_lik
             assert with_bonus == pytest.approx(without)
 
 
+def test_a_path_break_forgets_the_old_residual():
+    """A tracklet that jitters (clutter) and is then taken over by a smooth flight: after the
+    break (a step beyond ``association.jump_residual``) its residual starts afresh, unless
+    ``jump_resets_residual`` is off."""
+    for reset in (True, False):
+        p = TrackerParams().with_value("association.jump_resets_residual", reset)
+        assoc = TrackletAssociator(p.motion, p.association)
+        rng = np.random.default_rng(1)
+        for i in range(20):     # clutter jittering by ±12 px around (300, 300)
+            out = assoc.update(i / FPS, np.array([[300.0, 300.0] + rng.uniform(-12, 12, 2)]), np.array([0.2]))
+        ident = out[0][0]
+        jittery = next(t for t in assoc.tracklets if t.ident == ident).residual
+        assert jittery > 3.0
+        # The shuttle leaves from there: 40 px away, then 12 px a frame in a straight line.
+        for k in range(4):
+            out = assoc.update((20 + k) / FPS, np.array([[340.0 + 12 * k, 300.0]]), np.array([0.9]))
+        track = next(t for t in assoc.tracklets if t.ident == out[0][0])
+        assert track.ident == ident
+        if reset:
+            assert track.residual < 0.5 * jittery
+        else:
+            assert track.residual > 0.5 * jittery
+
+
 def test_shipped_classifier_loads_and_scores_in_unit_interval():
     clf = load_classifier(TrackerParams().classifier.model)
     assert clf.mean.shape == (len(FEATURE_NAMES),)

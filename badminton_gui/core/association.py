@@ -278,6 +278,11 @@ class TrackletAssociator:
             # what the tracklet follows now, so the travel and pause rules start afresh.
             tr.start_x, tr.start_y, tr.travel = x, y, 0.0
             tr.recent.clear()
+            if self.params.jump_resets_residual:
+                # ... and so does its smoothness record: after a racket contact the shuttle may
+                # take over a clutter tracklet (the racket head's, a hand's), whose old
+                # residual would cost the new path its merit for ~10 frames.
+                tr.residual = 0.0
         tr.hits += 1
         tr.misses = 0
         tr.hit_now = True

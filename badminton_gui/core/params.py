@@ -225,6 +225,10 @@ class AssociationParams(ParamGroup):
                                  help="A step this far from the tracklet's prediction breaks its path: travel and "
                                       "pause allowance count again from there (a clutter hop cannot inherit a "
                                       "flight's travel; 0 = off)")
+    jump_resets_residual: bool = flag(True, label="... and its residual",
+                                      help="A path break also forgets the tracklet's prediction residual: a "
+                                           "shuttle leaving the racket on a clutter tracklet (a racket head, a "
+                                           "hand) is not held back for ~10 frames by that tracklet's old misses")
     hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
