@@ -1,14 +1,18 @@
 """Tracker against the demo court's ground truth: 2D accuracy per camera and 3D error.
 
-    .venv/bin/python benchmarks/demo_accuracy.py [--frames 1000] [--seeds 0 1 2] [--size 1280x720] [--rig binocular]
+    .venv/bin/python benchmarks/demo_accuracy.py [--frames 1000] [--seeds 0 1 2] [--size 1280x720] [--rig binocular] [--errors]
 
 Prints one line per seed and the totals: the figures of the tracking-engine issue
 (2D accuracy ≥ 99 % per camera at GUIDE §6's tolerance; 3D RMS ≤ 1 cm within 6 m of the rig).
+``--errors`` also lists every FP1 / FP2 / FN frame: the truth and the reported point, their
+distance, the shot and how far into it, and the candidates near the truth with the filter that
+rejected each (``-`` for the reported one) — where to look first when tuning.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -26,6 +30,7 @@ def main() -> None:
     ap.add_argument("--size", default="1280x720")
     ap.add_argument("--rig", default="binocular", choices=("binocular", "ends"))
     ap.add_argument("--range", type=float, default=6.0, help="3D error within this distance of the left camera")
+    ap.add_argument("--errors", action="store_true", help="list every FP1 / FP2 / FN frame with its candidates")
     args = ap.parse_args()
     size = tuple(int(v) for v in args.size.split("x"))
     total_l = total_r = None
@@ -34,7 +39,14 @@ def main() -> None:
     print(f"{'seed':>4} {'acc L':>7} {'acc R':>7} {'F1 L':>7} {'F1 R':>7} {'3D pts':>6} "
           f"{'RMS≤' + str(args.range) + 'm':>9} {'med all':>8} {'pairs/s':>8}")
     for seed in args.seeds:
-        s = evaluate_demo(seed, args.frames, size, args.rig)
+        listing: list[str] = []
+        on_frame = None
+        if args.errors:
+            def on_frame(result, truth, codes, seed=seed, listing=listing):
+                listing.extend(_error_lines(seed, result, truth, codes))
+        s = evaluate_demo(seed, args.frames, size, args.rig, on_frame=on_frame)
+        if listing:
+            print("\n".join(listing))
         total_l = s.left if total_l is None else total_l + s.left
         total_r = s.right if total_r is None else total_r + s.right
         errs.append(s.errors_3d)
@@ -55,6 +67,32 @@ def main() -> None:
               f"p90 {100 * np.percentile(near, 90):.2f} cm, "
               f"{int((near > 0.05).sum())} points > 5 cm, {int((near > 0.5).sum())} > 50 cm; "
               f"RMS of the points ≤ 5 cm {100 * np.sqrt(np.mean(near[near <= 0.05] ** 2)):.2f} cm")
+
+
+def _error_lines(seed: int, result, truth, codes, near: float = 40.0) -> list[str]:
+    """One line per camera whose outcome is an error, then its candidates within ``near`` px."""
+    lines = []
+    for cam, res, vis, uv, code in (("L", result.left, truth.visible_left, truth.uv_left, codes[0]),
+                                    ("R", result.right, truth.visible_right, truth.uv_right, codes[1])):
+        if code in ("TP", "TN"):
+            continue
+        d = res.detection
+        truth_s = f"({uv[0]:7.1f},{uv[1]:6.1f})" if uv else "(   none    )"
+        det_s = (f"({d.x:7.1f},{d.y:6.1f}){' pred' if d.predicted else ''}" if d else "-")
+        dist = f"{math.hypot(d.x - uv[0], d.y - uv[1]):6.1f}" if (d and uv) else "     -"
+        lines.append(f"seed {seed} frame {truth.index:5d} {cam} {code:3s} visible {int(vis)} "
+                     f"{truth.shot_kind or '-':5s} truth {truth_s} reported {det_s} distance {dist}")
+        ref = uv or ((d.x, d.y) if d else None)
+        if ref is None:
+            continue
+        for c in sorted(res.candidates, key=lambda c: math.hypot(c.x - ref[0], c.y - ref[1])):
+            dc = math.hypot(c.x - ref[0], c.y - ref[1])
+            if dc > near:
+                break
+            lines.append(f"      {dc:6.1f} px ({c.x:7.1f},{c.y:6.1f}) {c.rejected_by or '-':10s} "
+                         f"score {c.score:5.2f} length {c.length:5.0f} short side {c.short_side:5.1f}"
+                         f"{' predicted' if c.predicted else ''}")
+    return lines
 
 
 if __name__ == "__main__":

@@ -107,6 +107,52 @@ def test_association_speed_aware_gate_keeps_a_fast_track():
     assert track.hits == 12
 
 
+def test_followed_tracklet_loses_its_hysteresis_on_a_blob_that_does_not_look_like_a_shuttle():
+    """After a racket contact the followed tracklet goes on with the racket, whose running
+    quality still remembers the shuttle: its hysteresis holds only while this frame's candidate
+    scores at least ``association.hysteresis_min_quality`` (0 = always, the old behaviour)."""
+    for gate in (0.1, 0.0):
+        p = TrackerParams().with_value("association.hysteresis_min_quality", gate)
+        assoc = TrackletAssociator(p.motion, p.association)
+        for i in range(12):
+            out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([0.9]))
+        assoc.select(out[0][0])
+        # The same tracklet, this frame on a blob that scores 0.02 (a racket's frame).
+        ident, _, merit = assoc.update(12 / FPS, np.array([[220.0, 300.0]]), np.array([0.02]))[0]
+        track = next(t for t in assoc.tracklets if t.ident == ident)
+        without = assoc.merit(track, 0.02)
+        with_bonus = assoc.merit(track, 0.9)
+        assert merit == pytest.approx(without)
+        if gate > 0:
+            assert with_bonus == pytest.approx(without + p.association.hysteresis)
+        else:
+            assert with_bonus == pytest.approx(without)
+
+
+def test_a_path_break_forgets_the_old_residual():
+    """A tracklet that jitters (clutter) and is then taken over by a smooth flight: after the
+    break (a step beyond ``association.jump_residual``) its residual starts afresh, unless
+    ``jump_resets_residual`` is off."""
+    for reset in (True, False):
+        p = TrackerParams().with_value("association.jump_resets_residual", reset)
+        assoc = TrackletAssociator(p.motion, p.association)
+        rng = np.random.default_rng(1)
+        for i in range(20):     # clutter jittering by ±12 px around (300, 300)
+            out = assoc.update(i / FPS, np.array([[300.0, 300.0] + rng.uniform(-12, 12, 2)]), np.array([0.2]))
+        ident = out[0][0]
+        jittery = next(t for t in assoc.tracklets if t.ident == ident).residual
+        assert jittery > 3.0
+        # The shuttle leaves from there: 40 px away, then 12 px a frame in a straight line.
+        for k in range(4):
+            out = assoc.update((20 + k) / FPS, np.array([[340.0 + 12 * k, 300.0]]), np.array([0.9]))
+        track = next(t for t in assoc.tracklets if t.ident == out[0][0])
+        assert track.ident == ident
+        if reset:
+            assert track.residual < 0.5 * jittery
+        else:
+            assert track.residual > 0.5 * jittery
+
+
 def test_shipped_classifier_loads_and_scores_in_unit_interval():
     clf = load_classifier(TrackerParams().classifier.model)
     assert clf.mean.shape == (len(FEATURE_NAMES),)
@@ -229,3 +275,17 @@ def test_a_moving_detection_is_led_forward_to_the_cork():
     # The bright centroid trails the cork; the led position is on it.
     assert np.median(errors[0.0]) >= 2.0
     assert np.median(errors[0.5]) <= 0.5 * np.median(errors[0.0])
+
+
+def test_a_cork_led_out_of_the_image_is_not_reported():
+    """Leaving the image, the skirt still shows at the border after the cork has gone: the
+    detection whose led position falls outside the frame is dropped, never reported outside."""
+    frames, corks = _shuttle_flight(n=86)      # x = 80 + 7 i: the cork leaves at i ≈ 80
+    runs = {}
+    for lead in (0.0, 0.5):
+        det = CameraDetector(_params(colour__head_lead=lead))
+        runs[lead] = [det.process(img, i / FPS, keep_mask=False).detection for i, img in enumerate(frames)]
+    for d in runs[0.5]:
+        assert d is None or (-0.5 <= d.x < 639.5 and -0.5 <= d.y < 359.5)
+    dropped = [i for i, (a, b) in enumerate(zip(runs[0.0], runs[0.5])) if a is not None and b is None]
+    assert dropped and all(corks[i][0] >= 630 for i in dropped)

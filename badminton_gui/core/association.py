@@ -186,7 +186,7 @@ class TrackletAssociator:
         out = []
         for j in range(n):
             tr = by_id.get(ids[j])
-            merit = self.merit(tr) if tr is not None else -1.0
+            merit = self.merit(tr, float(scores[j])) if tr is not None else -1.0
             if merit >= 0 and p.candidate_weight > 0:
                 # The running quality remembers ~5 frames: a followed tracklet that slid from
                 # the shuttle onto a player's shoe keeps its good mean for a while; this
@@ -278,6 +278,11 @@ class TrackletAssociator:
             # what the tracklet follows now, so the travel and pause rules start afresh.
             tr.start_x, tr.start_y, tr.travel = x, y, 0.0
             tr.recent.clear()
+            if self.params.jump_resets_residual:
+                # ... and so does its smoothness record: after a racket contact the shuttle may
+                # take over a clutter tracklet (the racket head's, a hand's), whose old
+                # residual would cost the new path its merit for ~10 frames.
+                tr.residual = 0.0
         tr.hits += 1
         tr.misses = 0
         tr.hit_now = True
@@ -288,8 +293,12 @@ class TrackletAssociator:
         else:
             tr.still_for += 1
 
-    def merit(self, tr: Tracklet) -> float:
-        """How shuttle-like a tracklet is; negative when it may not supply a detection."""
+    def merit(self, tr: Tracklet, quality: float | None = None) -> float:
+        """How shuttle-like a tracklet is; negative when it may not supply a detection.
+
+        ``quality``: this frame's candidate's own score; the followed tracklet keeps its
+        hysteresis only while it is at least ``hysteresis_min_quality``.
+        """
         p = self.params
         # A tracklet is confirmed after min_hits frames, or one frame earlier when every
         # candidate on it so far looked clearly like a shuttle (a flight's first frames
@@ -314,7 +323,11 @@ class TrackletAssociator:
         merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation
                  + p.quality_weight * tr.quality
                  - tr.residual / max(p.residual_scale, 1e-6))
-        if tr.ident == self.selected:
+        if tr.ident == self.selected and (quality is None or quality >= p.hysteresis_min_quality):
+            # Not when this frame's blob does not look like a shuttle at all: after a racket
+            # contact the followed tracklet goes on with the racket (or a hand), whose running
+            # quality still remembers the shuttle for ~5 frames, while the shuttle leaves on a
+            # tracklet of its own.
             merit += p.hysteresis
         return max(merit, 0.0)
 

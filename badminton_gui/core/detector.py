@@ -77,6 +77,9 @@ class CameraDetector:
         self._previous_positions = np.zeros((0, 2))
         self._small: np.ndarray | None = None   # the frame at the processing scale (buffer)
         self._gray: np.ndarray | None = None
+        self._mask_scale = 0.0   # mask px per full-resolution px (0: no frame yet)
+        self._last_mask: np.ndarray | None = None
+        self._large_boxes = np.zeros((0, 4), np.int64)   # full-res boxes of blobs too large (filters 1, 2)
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -120,6 +123,7 @@ class CameraDetector:
         mask = self._background.apply(gray)
         sx = w / mask.shape[1]
         sy = h / mask.shape[0]
+        self._mask_scale = mask.shape[1] / w
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
 
         # Filters 1 and 2 (contour length, short side of the tilted rectangle). OpenCV measures
@@ -139,6 +143,11 @@ class CameraDetector:
         short_ok = ((p.tilted_rect.min_short_side <= short_all)
                     & (short_all <= p.tilted_rect.max_short_side))
         passed = length_ok & short_ok
+        # Blobs too large for a shuttle (a player, a racket and what touches them): a shuttle
+        # merged into one cannot be told apart (``is_merged``).
+        self._last_mask = mask
+        self._large_boxes = boxes_all[(length_all > p.contour_length.max_length)
+                                      | (short_all > p.tilted_rect.max_short_side)]
         rejected = np.flatnonzero(~passed)
         if len(rejected):
             reasons = np.where(length_ok[rejected], REJECT_SHORT_SIDE, REJECT_LENGTH).tolist()
@@ -291,6 +300,29 @@ class CameraDetector:
             gray = cv2.resize(gray, size, interpolation=cv2.INTER_LINEAR)
         return gray
 
+    def is_blind(self, x: float, y: float) -> bool:
+        """True when a shuttle at full-resolution (x, y) cannot show in this camera's mask."""
+        scale = self._mask_scale
+        return scale > 0 and self._background.is_blind(x * scale, y * scale)
+
+    def is_merged(self, x: float, y: float) -> bool:
+        """True when full-resolution (x, y) is foreground of a blob too large for a shuttle.
+
+        A shuttle crossing a player, a racket or a lit line merges with it into one blob that
+        filters 1 and 2 reject: the detector cannot isolate it there (the mask, within a pixel
+        at the processing scale, inside the box of a blob rejected as too long or too wide).
+        """
+        mask, boxes, scale = self._last_mask, self._large_boxes, self._mask_scale
+        if mask is None or scale <= 0 or not len(boxes):
+            return False
+        inside = ((boxes[:, 0] <= x) & (x < boxes[:, 0] + boxes[:, 2])
+                  & (boxes[:, 1] <= y) & (y < boxes[:, 1] + boxes[:, 3]))
+        if not inside.any():
+            return False
+        mx, my = int(round(x * scale)), int(round(y * scale))
+        h, w = mask.shape[:2]
+        return bool((mask[max(my - 1, 0):min(my + 2, h), max(mx - 1, 0):min(mx + 2, w)] > 0).any())
+
     def tracklet_hits(self, candidate: Candidate) -> int:
         """Frames the candidate's tracklet has been seen (0 when it is on none)."""
         ident = self._tracklet_of.get(id(candidate))
@@ -316,7 +348,8 @@ class CameraDetector:
         (the shuttle's apparent size, which blur does not stretch). Call after ``commit`` (the
         tracklet's velocity then includes this frame); the associator keeps the measured
         position, only the reported one moves. Returns the result with the moved candidate in
-        place of the old one, and the moved candidate.
+        place of the old one, and the moved candidate; no candidate (None) when the cork is led
+        out of the image.
         """
         c = self.params.colour
         if (chosen is None or c.head_lead <= 0 or chosen.predicted
@@ -330,6 +363,11 @@ class CameraDetector:
             return result, chosen
         lead = c.head_lead * chosen.short_side / speed
         moved = dataclasses.replace(chosen, x=chosen.x + lead * velocity[0], y=chosen.y + lead * velocity[1])
+        w, h = result.image_size
+        if w > 0 and not (-0.5 <= moved.x < w - 0.5 and -0.5 <= moved.y < h - 0.5):
+            # The cork has left the image (only the skirt's end still shows at the border): no
+            # point inside the frame is the shuttle's, and none outside it can be reported.
+            return result, None
         ident = self._tracklet_of.get(id(chosen))
         if ident is not None:
             self._tracklet_of[id(moved)] = ident

@@ -23,6 +23,9 @@ import numpy as np
 # A shuttle is white: its colour channels are nearly equal. Skin, a red racket frame or a
 # yellow line are bright in their darkest channel too, but far more saturated.
 MAX_SATURATION = 0.3
+# ``white_near`` looks at single pixels, where skin blended with a shirt's edge comes close to
+# 0.3: the shuttle's cork is nearly grey-free.
+WHITE_SATURATION = 0.1
 
 
 def find_spot(frame_bgr: np.ndarray, u: float, v: float, radius: float, min_contrast: float,
@@ -84,3 +87,28 @@ def find_spot(frame_bgr: np.ndarray, u: float, v: float, radius: float, min_cont
     if best is None:
         return None
     return best[1], best[2], best[3], best[4]
+
+
+def white_near(frame_bgr: np.ndarray, u: float, v: float, radius: float, min_contrast: float) -> bool:
+    """True when a white pixel lies within ``radius`` px of (u, v): its darkest channel at least
+    ``min_contrast`` above the median of a window four times as wide, and unsaturated.
+
+    For a shuttle that merged with a larger blob (a player's arm, a racket) ``find_spot`` finds
+    no compact spot, but its white still shows at the flight's projection; a shuttle hidden
+    behind the player shows the player's shirt, skin or hair there instead.
+    """
+    h, w = frame_bgr.shape[:2]
+    ui, vi = int(round(u)), int(round(v))
+    if not (0 <= ui < w and 0 <= vi < h):
+        return False
+    r = max(int(math.ceil(radius)), 1)
+    big = 4 * r
+    x0, x1 = max(ui - big, 0), min(ui + big + 1, w)
+    y0, y1 = max(vi - big, 0), min(vi + big + 1, h)
+    white_around = frame_bgr[y0:y1, x0:x1].min(axis=2)
+    level = float(np.median(white_around)) + min_contrast
+    patch = frame_bgr[max(vi - r, 0):vi + r + 1, max(ui - r, 0):ui + r + 1].astype(np.float32)
+    darkest = patch.min(axis=2)
+    brightest = patch.max(axis=2)
+    white = (darkest >= level) & ((brightest - darkest) / np.maximum(brightest, 1.0) <= WHITE_SATURATION)
+    return bool(white.any())

@@ -225,10 +225,18 @@ class AssociationParams(ParamGroup):
                                  help="A step this far from the tracklet's prediction breaks its path: travel and "
                                       "pause allowance count again from there (a clutter hop cannot inherit a "
                                       "flight's travel; 0 = off)")
+    jump_resets_residual: bool = flag(True, label="... and its residual",
+                                      help="A path break also forgets the tracklet's prediction residual: a "
+                                           "shuttle leaving the racket on a clutter tracklet (a racket head, a "
+                                           "hand) is not held back for ~10 frames by that tracklet's old misses")
     hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
                               help="Merit bonus of the tracklet already followed")
+    hysteresis_min_quality: float = param(0.1, 0.0, 1.0, step=0.01, label="... while quality ≥",
+                                          help="The followed tracklet keeps its hysteresis only while this frame's "
+                                               "candidate on it scores at least this (after a hit it goes on with the "
+                                               "racket or a hand); 0 = always")
     max_measured: int = param(32, 1, 500, step=1, label="Blobs measured",
                               help="At most this many blobs per frame get the full-resolution measurement: "
                                    "those near a live tracklet first, then the strongest differences")
@@ -286,6 +294,13 @@ class StereoParams(ParamGroup):
                                     "there for a small white spot (a shuttle merged with a player or a line)")
     guided_min_contrast: float = param(25.0, 1.0, 255.0, step=1.0, unit="grey levels", label="Spot contrast ≥",
                                        help="The spot's whiteness (min of B, G, R) above its window's median")
+    guided_coast: bool = flag(True, label="... and coast on it where blind",
+                              help="A camera coasting through a blind spot (a light, a white line) reports "
+                                   "the 3D flight's projection instead of a straight image path; with no "
+                                   "detection, the projection is reported when it lies in a blind spot")
+    guided_merged: bool = flag(True, label="... and where merged",
+                               help="With no detection, the 3D flight's projection is also reported where it "
+                                    "falls on a blob too large for a shuttle (merged with a player, a racket)")
     guided_override: bool = flag(False, label="... also against a detection",
                                  help="Also replace a detection that is off the flight's projection")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius

@@ -30,7 +30,7 @@ import cv2
 import numpy as np
 
 from .detector import CameraDetector
-from .guided import find_spot
+from .guided import find_spot, white_near
 from .params import TrackerParams
 from .rig import StereoRig
 from .trajectory import Trajectory
@@ -149,7 +149,8 @@ class StereoTracker:
         sp = self.params.stereo
         # Without override the guided look only serves a camera with no detection: when both
         # have one, skip predicting the flight (an RK4 propagation per frame on the hot path).
-        if sp.guided_search and (sp.guided_override or det_left is None or det_right is None):
+        unseen = [det is None or det.predicted for det in (det_left, det_right)]
+        if sp.guided_search and (sp.guided_override or any(unseen)):
             guide = self._trajectory.guide(timestamp)
             if guide is not None:
                 found_left = self._guided(0, left_bgr, det_left, guide)
@@ -162,6 +163,9 @@ class StereoTracker:
                         det_right = found_right
                         res_right = dataclasses.replace(res_right, candidates=res_right.candidates + (found_right,))
                     point_left, epi = self._pair_point(det_left, det_right)
+                if sp.guided_coast:
+                    res_left, det_left = self._coast_on_flight(0, left_bgr, res_left, det_left, guide)
+                    res_right, det_right = self._coast_on_flight(1, right_bgr, res_right, det_right, guide)
         # The sources hand out a new array per frame: keeping the reference costs no copy.
         self._previous = (left_bgr, right_bgr)
         # The 2D readout is the cork, not the trailing bright centroid. The 3D point is still
@@ -290,6 +294,45 @@ class StereoTracker:
         x, y, contrast, area = spot
         return Candidate(x=x, y=y, length=float("nan"), short_side=float("nan"), whiteness=contrast,
                          area=area, motion=math.hypot(x - u, y - v), score=0.0)
+
+    def _coast_on_flight(self, camera: int, frame: np.ndarray, result: CameraResult,
+                         detection: Candidate | None, guide: tuple[np.ndarray, np.ndarray]
+                         ) -> tuple[CameraResult, Candidate | None]:
+        """Where the 3D flight projects, for a camera that cannot see the shuttle there.
+
+        A camera's own coasting (``motion.coast_blind``) carries its tracklet on a straight image
+        path at constant speed; the 3D flight (drag and gravity, fed by both cameras) knows the
+        curve, so a coasting prediction is moved to the flight's projection. A camera with no
+        detection at all whose flight projection lies in its blind spot (a light, a white line:
+        the mask cannot show the shuttle there) reports that projection too — the followed
+        tracklet may have been taken by clutter, or the blind stretch outlasted ``coast_blind``
+        — and so does one whose projection falls on a blob too large for a shuttle where a white
+        pixel shows (``stereo.guided_merged``: the shuttle crossing a player's arm or a racket
+        merges with it; one hidden behind the player shows no white). Both are flagged ``predicted`` (never triangulated); a projection outside the
+        image, or on plain background with no detection, gives nothing (nothing is invented
+        where the detector could have seen the shuttle).
+        """
+        if detection is not None and not detection.predicted:
+            return result, detection
+        position = guide[0][None]
+        if float(self.rig.depth(camera, position)[0]) <= 0.1:
+            return result, detection
+        u, v = (float(c) for c in self.rig.project(camera, position)[0])
+        w, h = result.image_size
+        if not (0 <= u < w and 0 <= v < h):
+            return result, detection
+        detector = self.left if camera == 0 else self.right
+        if detection is None:
+            sp = self.params.stereo
+            merged = (sp.guided_merged and detector.is_merged(u, v)
+                      and white_near(frame, u, v, 2.0 * w / 1280.0, sp.guided_min_contrast))
+            if not (merged or detector.is_blind(u, v)):
+                return result, None
+            moved = Candidate(u, v, math.nan, math.nan, math.nan, math.nan, 0.0, 0.0, None, predicted=True)
+            return dataclasses.replace(result, candidates=result.candidates + (moved,)), moved
+        moved = dataclasses.replace(detection, x=u, y=v)
+        candidates = tuple(moved if c is detection else c for c in result.candidates)
+        return dataclasses.replace(result, candidates=candidates), moved
 
     def _pair_point(self, det_left: Candidate | None, det_right: Candidate | None
                     ) -> tuple[np.ndarray | None, float | None]:

@@ -9,6 +9,7 @@ seeds for the figures in the closing notes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -43,8 +44,14 @@ def _count(codes: np.ndarray) -> Outcomes:
 
 def evaluate_demo(seed: int = 0, frames: int = 1000, size: tuple[int, int] = (1280, 720),
                   rig: str = "binocular", params: TrackerParams | None = None,
-                  warmup: int = 0) -> DemoScore:
-    """Track ``frames`` demo frames and score them against the scene's truth."""
+                  warmup: int = 0,
+                  on_frame: Callable[[object, object, tuple[str, str]], None] | None = None
+                  ) -> DemoScore:
+    """Track ``frames`` demo frames and score them against the scene's truth.
+
+    ``on_frame(result, truth, (code_left, code_right))`` is called for every scored frame
+    (the per-frame error listing of ``benchmarks/demo_accuracy.py --errors``).
+    """
     import time
 
     scene = DemoScene(seed=seed, size=size, rig=rig, n_frames=frames + warmup)
@@ -74,6 +81,8 @@ def evaluate_demo(seed: int = 0, frames: int = 1000, size: tuple[int, int] = (12
                                            np.array([bool(vis)]),
                                            np.array([uv if (vis and uv) else [np.nan, np.nan]]),
                                            tol)[0])
+            if on_frame is not None:
+                on_frame(result, truth, (codes[0][-1], codes[1][-1]))
             if result.point is not None and truth.position is not None:
                 errors.append(float(np.linalg.norm(np.subtract(result.point, truth.position))))
                 ranges.append(float(np.linalg.norm(np.subtract(truth.position, centre_left))))
