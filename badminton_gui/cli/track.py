@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from ..core.rig import StereoRig
-from ..core.tracker import StereoTracker
+from ..core.tracker import StereoTracker, configure_opencv_threads
 from ..io.labels import TRACK_COLUMNS, read_timestamps, track_row
 from ..io.prefetch import PrefetchingReader
 from ..io.video import VideoPair
@@ -58,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         from ..io.robot_link import RobotLink
         link = RobotLink(args.robot, args.baud)
 
+    configure_opencv_threads()
     tracker = StereoTracker(rig, params)
     total = source.frame_count if lt is None else min(len(lt), source.frame_count or len(lt))
     if args.max_frames:

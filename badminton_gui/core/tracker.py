@@ -412,5 +412,11 @@ class StereoTracker:
 
 
 def configure_opencv_threads() -> None:
-    """One OpenCV thread per camera worker: a pool on top of OpenCV's own threads is slower."""
+    """One OpenCV thread: the tracker's two camera threads already fill two cores.
+
+    OpenCV's own pool on top of them costs CPU and time: at 2048 px on 2 cores
+    (``benchmarks/speed.py --process-bound``, two runs) 51–63 → 60–74 pairs/s and 26–29 → 20–23 ms
+    of CPU a pair. A process-wide setting, so it is the entry points (``badminton-track track``,
+    the GUI) that call it, not the tracker.
+    """
     cv2.setNumThreads(1)

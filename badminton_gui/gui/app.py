@@ -44,6 +44,8 @@ def main(argv: list[str] | None = None) -> int:
     early_interrupt: list[bool] = []
     signal.signal(signal.SIGINT, lambda *_: early_interrupt.append(True))
     sys.setswitchinterval(GIL_SWITCH_INTERVAL)
+    from ..core.tracker import configure_opencv_threads
+    configure_opencv_threads()
     # Scanning for cameras makes OpenCV warn once per absent device; the dialog says it better.
     os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
     if args.source in ("video", "cameras") and not (args.left and args.right):
