@@ -17,9 +17,16 @@ Then the file processing figures (`track` on a NYCU rally, decoding included: pa
 share of time spent decoding vs tracking), resident memory after 1000 and after ``--long`` pairs
 (current RSS, and the peak since the long run began: the kernel's peak is reset first, so the
 frames held in memory by the timing runs do not hide growth), and
-with ``--profile`` a cProfile summary of where the tracker's time goes. ``--cv-threads 1`` runs
-the tracker with one OpenCV thread (the plain chain keeps OpenCV's default): the two camera
-threads already use both cores, and OpenCV's own pool on top of them costs CPU.
+with ``--profile`` a cProfile summary of where the tracker's time goes. The tracker runs with one
+OpenCV thread, as ``track`` and the GUI run it (``--cv-threads 0``: OpenCV's own pool; the plain
+chain always keeps OpenCV's default): the two camera threads already use both cores, and OpenCV's
+pool on top of them costs CPU.
+
+``--process-bound`` measures instead what the GIL costs at 2048 px: each camera's
+``CameraDetector`` in its own process (one OpenCV thread each, its own frames in memory, both
+started together) against ``StereoTracker`` with its two camera threads on the same frames, and
+``StereoTracker`` one-threaded. The process figure is a bound (detector only: no stereo choice,
+triangulation or trajectory, and no frame crossing a process boundary), for planning.
 
 First of all it prints how fast the demo court renders at 1280×720 (the GUI's demo must render
 faster than the cameras' rate it imitates); that part needs no data.
@@ -281,19 +288,66 @@ def demo_render_rate(n: int = 300, size: tuple[int, int] = (1280, 720)) -> tuple
         scene.close()
 
 
+def _detector_process(camera: int, n: int, preset: str | None, barrier, out) -> None:
+    """One camera's detector alone in this process, over its own frames: (camera, frames/s, CPU ms)."""
+    from badminton_gui.core.detector import CameraDetector
+    cv2.setNumThreads(1)
+    frames = [(pair[camera], pair[2]) for pair in load_pairs(n, None)]
+    detector = CameraDetector(load_preset(preset))
+    for frame, t in frames[:20]:                     # warm the background model up
+        detector.process(frame, t, keep_mask=False)
+    barrier.wait()
+    cpu, wall = time.thread_time(), time.perf_counter()
+    for frame, t in frames:
+        detector.process(frame, t + 100.0, keep_mask=False)   # a later clock: no time reversal
+    wall = time.perf_counter() - wall
+    out.put((camera, len(frames) / wall, 1000 * (time.thread_time() - cpu) / len(frames)))
+
+
+def process_bound(full_rig: StereoRig, preset: str | None, n: int) -> None:
+    import multiprocessing as mp
+    ctx = mp.get_context("fork")
+    barrier, out = ctx.Barrier(2), ctx.Queue()
+    procs = [ctx.Process(target=_detector_process, args=(c, n, preset, barrier, out)) for c in (0, 1)]
+    for proc in procs:
+        proc.start()
+    per_camera = sorted(out.get() for _ in procs)
+    for proc in procs:
+        proc.join()
+    print("two processes, detector only: " + "; ".join(
+        f"camera {c + 1} {rate:.1f} frames/s ({cpu:.2f} ms CPU a frame)" for c, rate, cpu in per_camera)
+        + f" -> at most {min(r for _, r, _ in per_camera):.1f} pairs/s")
+    pairs = load_pairs(n, None)
+    params = load_preset(preset)
+    for threads in (2, 1):
+        with opencv_threads(threads):
+            for parallel in (True, False):
+                tracker = StereoTracker(full_rig, params, parallel=parallel)
+                cpu, wall = time.process_time(), time.perf_counter()
+                for lf, rf, t in pairs:
+                    tracker.process(lf, rf, t, keep_masks=False)
+                wall = time.perf_counter() - wall
+                tracker.close()
+                print(f"StereoTracker, {'two camera threads' if parallel else 'one thread':>18}, "
+                      f"OpenCV threads {threads}: {len(pairs) / wall:6.1f} pairs/s, "
+                      f"{1000 * (time.process_time() - cpu) / len(pairs):5.2f} ms CPU a pair")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pairs", type=int, default=300, help="frame pairs held in memory per resolution")
     ap.add_argument("--long", type=int, default=10000, help="pairs for the memory run (0: skip)")
     ap.add_argument("--preset", default=None)
     ap.add_argument("--profile", action="store_true")
-    ap.add_argument("--cv-threads", type=int, default=None,
-                    help="OpenCV's own thread count while the tracker runs (default: OpenCV's "
-                         "choice; 1 is what core.tracker.configure_opencv_threads sets). The "
-                         "plain chain always runs with OpenCV's default")
+    ap.add_argument("--cv-threads", type=int, default=1,
+                    help="OpenCV's own thread count while the tracker runs (default 1: what "
+                         "`track` and the GUI set, core.tracker.configure_opencv_threads; 0: "
+                         "OpenCV's choice). The plain chain always runs with OpenCV's default")
     ap.add_argument("--f1-rallies", nargs="*", default=list(F1_RALLIES),
                     help="NYCU rallies scored at each resolution (none: skip the F1 column)")
     ap.add_argument("--f1-pairs", type=int, default=100000, help="at most this many pairs per rally for F1")
+    ap.add_argument("--process-bound", action="store_true",
+                    help="only: the detectors in two processes against the tracker's threads (2048 px)")
     args = ap.parse_args()
     render, demo_fps = demo_render_rate()
     print(f"demo court 1280x720: renders {render:.1f} pairs/s (it plays at {demo_fps:.0f} fps: "
@@ -304,7 +358,10 @@ def main() -> None:
     full_rig = rig_from_nycu(DATA / RALLY / "CameraReader_1.cfg", DATA / RALLY / "CameraReader_2.cfg")
     print(f"cv2 {cv2.__version__}, {cv2.getNumberOfCPUs()} CPUs, preset {args.preset or 'default'}, "
           f"OpenCV threads in the tracker: {args.cv_threads or cv2.getNumThreads()}")
-    tracker_threads = opencv_threads(args.cv_threads)
+    if args.process_bound:
+        process_bound(full_rig, args.preset, args.pairs)
+        return
+    tracker_threads = opencv_threads(args.cv_threads or None)
     sizes = (None, (1280, 720), (640, 480))
     f1 = {}
     if args.f1_rallies:
