@@ -48,6 +48,9 @@ EPIPOLAR_TYPICAL_MIN = 0.5
 # (shorter steps are mostly the points' noise): see _head_variance.
 HEAD_CHECK_DT = 0.02
 HEAD_CHECK_STEPS = 4.0
+# px at 1280 px width: how near the flight's projection a white pixel must show for a shuttle
+# merged with a larger blob (wider, a shoulder's edge next to a hidden cork passed on the demo).
+MERGED_WHITE_RADIUS = 2.0
 
 
 class StereoTracker:
@@ -308,9 +311,10 @@ class StereoTracker:
         tracklet may have been taken by clutter, or the blind stretch outlasted ``coast_blind``
         — and so does one whose projection falls on a blob too large for a shuttle where a white
         pixel shows (``stereo.guided_merged``: the shuttle crossing a player's arm or a racket
-        merges with it; one hidden behind the player shows no white). Both are flagged ``predicted`` (never triangulated); a projection outside the
-        image, or on plain background with no detection, gives nothing (nothing is invented
-        where the detector could have seen the shuttle).
+        merges with it; one hidden behind the player shows no white). Both are flagged
+        ``predicted`` (never triangulated); a projection outside the image, or on plain
+        background with no detection, gives nothing (nothing is invented where the detector
+        could have seen the shuttle).
         """
         if detection is not None and not detection.predicted:
             return result, detection
@@ -325,7 +329,7 @@ class StereoTracker:
         if detection is None:
             sp = self.params.stereo
             merged = (sp.guided_merged and detector.is_merged(u, v)
-                      and white_near(frame, u, v, 2.0 * w / 1280.0, sp.guided_min_contrast))
+                      and white_near(frame, u, v, MERGED_WHITE_RADIUS * w / 1280.0, sp.guided_min_contrast))
             if not (merged or detector.is_blind(u, v)):
                 return result, None
             moved = Candidate(u, v, math.nan, math.nan, math.nan, math.nan, 0.0, 0.0, None, predicted=True)
