@@ -32,8 +32,13 @@ def _two_tracks(candidate_weight: float) -> list[tuple[int, float, float]]:
     return out
 
 
-def test_candidate_weight_is_off_by_default():
-    assert TrackerParams().association.candidate_weight == 0.0
+def test_candidate_weight_in_the_presets():
+    """On (2) by default: measured on the tuned-on rallies and the demo court. The coarse
+    preset keeps it off: its classifier's scores were not measured with it."""
+    assert TrackerParams().association.candidate_weight == 2.0
+    assert load_preset("default").association.candidate_weight == 2.0
+    assert load_preset("coarse").association.candidate_weight == 0.0
+    assert load_preset("broadcast").association.candidate_weight == 2.0
 
 
 def test_candidate_weight_adds_this_frames_quality_to_the_merit():

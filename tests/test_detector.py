@@ -112,7 +112,9 @@ def test_followed_tracklet_loses_its_hysteresis_on_a_blob_that_does_not_look_lik
     quality still remembers the shuttle: its hysteresis holds only while this frame's candidate
     scores at least ``association.hysteresis_min_quality`` (0 = always, the old behaviour)."""
     for gate in (0.1, 0.0):
-        p = TrackerParams().with_value("association.hysteresis_min_quality", gate)
+        # (this frame's own quality term off: the merit compared is the tracklet's alone)
+        p = (TrackerParams().with_value("association.hysteresis_min_quality", gate)
+             .with_value("association.candidate_weight", 0.0))
         assoc = TrackletAssociator(p.motion, p.association)
         for i in range(12):
             out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([0.9]))

@@ -203,9 +203,10 @@ class AssociationParams(ParamGroup):
                                      help="Running mean of the candidates' quality a tracklet needs to be the shuttle")
     quality_weight: float = param(2.0, 0.0, 10.0, step=0.1, label="Quality weight",
                                   help="Weight of the tracklet's quality in its merit (history counts 1)")
-    candidate_weight: float = param(0.0, 0.0, 10.0, step=0.1, label="This frame's quality weight",
+    candidate_weight: float = param(2.0, 0.0, 10.0, step=0.1, label="This frame's quality weight",
                                     help="Weight of the candidate's own quality this frame in its merit, on top "
-                                         "of its tracklet's running quality (0 = off)")
+                                         "of its tracklet's running quality (0 = off): a tracklet that slid onto "
+                                         "a racket or a hand loses the choice the frame it stops looking like a shuttle")
     rebirth_radius: float = param(60.0, 0.0, 2000.0, step=1.0, unit="px", label="Hit continuity",
                                   help="When the followed tracklet misses (a racket hit), a new blob this close "
                                        "to its last position inherits its history (0 = off)")
