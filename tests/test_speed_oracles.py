@@ -62,3 +62,21 @@ def test_match_costs_are_the_per_tracklet_formulas():
     assert np.array_equal(got_d, d) and np.array_equal(got_gates, gates)
     assert np.array_equal(got_cost, cost)
     assert not math.isnan(float(got_cost.sum()))
+
+
+def test_make_candidate_builds_the_same_candidate():
+    import dataclasses
+
+    from badminton_gui.core.types import CANDIDATE_FIELDS, Candidate, make_candidate
+
+    # A field added to Candidate must be added to the fast constructor too.
+    assert CANDIDATE_FIELDS == tuple(f.name for f in dataclasses.fields(Candidate))
+    for args, kwargs in (((1.5, 2.0, 30.0, 4.0, math.nan, 50.0, math.nan, 0.0, "length"), {}),
+                         ((1.5, 2.0, 30.0, 4.0, 200.0, 50.0, 3.0, 0.7), {}),
+                         ((1.5, 2.0, math.nan, math.nan, math.nan, math.nan, 0.0, 1.2, None),
+                          {"predicted": True})):
+        fast, plain = make_candidate(*args, **kwargs), Candidate(*args, **kwargs)
+        assert type(fast) is Candidate and repr(fast) == repr(plain)
+        assert dataclasses.replace(fast, x=3.0) == dataclasses.replace(plain, x=3.0) or math.isnan(plain.whiteness)
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            fast.x = 0.0

@@ -47,7 +47,7 @@ from .background import BackgroundModel
 from .classifier import load_classifier
 from .params import TrackerParams
 from .types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SIDE,
-                    REJECT_WHITENESS, CameraResult, Candidate)
+                    REJECT_WHITENESS, CameraResult, Candidate, make_candidate)
 
 # At most this many blobs per frame get the (more expensive) full-resolution colour check;
 # beyond it the largest blobs are dropped first (players, not shuttles).
@@ -155,8 +155,8 @@ class CameraDetector:
                     ((by[rejected] + bh[rejected] / 2) * sy).tolist(),
                     length_all[rejected].tolist(), short_all[rejected].tolist(),
                     area_all[rejected].tolist(), reasons):
-                candidates.append(Candidate(cx, cy, length, short_side, math.nan, area,
-                                            math.nan, 0.0, reason))
+                candidates.append(make_candidate(cx, cy, length, short_side, math.nan, area,
+                                                 math.nan, 0.0, reason))
         kept = np.flatnonzero(passed)
         geometric: list[tuple[int, float, float, float, tuple[int, int, int, int]]] = [
             (k, length, short_side, area, tuple(box)) for k, (length, short_side, area, box) in enumerate(zip(
@@ -195,9 +195,9 @@ class CameraDetector:
             order = np.lexsort((-strength, ~near)).tolist()
             for i in order[limit:]:
                 _, length, short_side, area, box = geometric[i]
-                candidates.append(Candidate(box[0] + box[2] / 2, box[1] + box[3] / 2, length,
-                                            short_side, math.nan, area, math.nan, 0.0,
-                                            REJECT_WHITENESS))
+                candidates.append(make_candidate(box[0] + box[2] / 2, box[1] + box[3] / 2, length,
+                                                 short_side, math.nan, area, math.nan, 0.0,
+                                                 REJECT_WHITENESS))
             geometric = [geometric[i] for i in order[:limit]]
 
         # Filter 3 and the appearance features of all the frame's blobs at once; the
@@ -254,7 +254,7 @@ class CameraDetector:
                     reason = REJECT_MOTION
                 else:
                     score = merit
-            c = Candidate(x, y, length, short_side, whiteness, area, motion, score, reason)
+            c = make_candidate(x, y, length, short_side, whiteness, area, motion, score, reason)
             if ident is not None:
                 self._tracklet_of[id(c)] = ident
             candidates.append(c)
