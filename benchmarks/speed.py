@@ -26,7 +26,10 @@ pool on top of them costs CPU.
 ``CameraDetector`` in its own process (one OpenCV thread each, its own frames in memory, both
 started together) against ``StereoTracker`` with its two camera threads on the same frames, and
 ``StereoTracker`` one-threaded. The process figure is a bound (detector only: no stereo choice,
-triangulation or trajectory, and no frame crossing a process boundary), for planning.
+triangulation or trajectory, and no frame crossing a process boundary), for planning. Then,
+alternating, the tracker's two threads against the two detector processes fed the way a tracker
+would have to feed them (each frame copied into the process's shared memory, the
+``CameraResult`` pickled back): pairs/s, p99, and the CPU a pair costs each way.
 
 First of all it prints how fast the demo court renders at 1280×720 (the GUI's demo must render
 faster than the cameras' rate it imitates); that part needs no data.
@@ -304,6 +307,88 @@ def _detector_process(camera: int, n: int, preset: str | None, barrier, out) -> 
     out.put((camera, len(frames) / wall, 1000 * (time.thread_time() - cpu) / len(frames)))
 
 
+def _handover_worker(conn, shm_name: str, shape: tuple[int, ...], preset: str | None) -> None:
+    """One camera's detector in this process, reading each frame from shared memory."""
+    import pickle
+    from multiprocessing import shared_memory
+
+    from badminton_gui.core.detector import CameraDetector
+    cv2.setNumThreads(1)
+    shm = shared_memory.SharedMemory(name=shm_name)
+    frame = np.ndarray(shape, np.uint8, buffer=shm.buf)
+    detector = CameraDetector(load_preset(preset))
+    cpu = 0.0
+    try:
+        while True:
+            t = conn.recv()
+            if t is None:
+                break
+            start = time.thread_time()
+            result = detector.process(frame, t, keep_mask=False)
+            conn.send_bytes(pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+            cpu += time.thread_time() - start
+        conn.send(cpu)
+    finally:
+        del frame
+        shm.close()
+
+
+def processes_with_handover(pairs, preset: str | None) -> tuple[float, float, float, float, list[float]]:
+    """Each camera's detector in its own process, fed as a tracker would have to feed it.
+
+    The parent copies each frame into that camera's shared memory, sends the timestamp, and
+    unpickles the ``CameraResult`` that comes back (no stereo choice: a bound on what a
+    process per camera could give when the frames arrive in the parent's memory).
+    Returns (pairs/s, p99 latency ms, parent CPU ms a pair, of it copying, workers' CPU ms a frame).
+    """
+    import multiprocessing as mp
+    import pickle
+    from multiprocessing import shared_memory
+
+    ctx = mp.get_context("fork")
+    shape = pairs[0][0].shape
+    shms = [shared_memory.SharedMemory(create=True, size=int(np.prod(shape))) for _ in range(2)]
+    views = [np.ndarray(shape, np.uint8, buffer=shm.buf) for shm in shms]
+    links, procs = [], []
+    try:
+        for shm in shms:
+            ours, theirs = ctx.Pipe()
+            proc = ctx.Process(target=_handover_worker, args=(theirs, shm.name, shape, preset), daemon=True)
+            proc.start()
+            links.append(ours)
+            procs.append(proc)
+        for view in views:
+            view[:] = 0                                  # pages touched before timing
+        latency, copying = [], 0.0
+        cpu, wall = time.process_time(), time.perf_counter()
+        for left, right, t in pairs:
+            t0 = time.perf_counter()
+            c0 = time.thread_time()
+            for view, link, frame in ((views[0], links[0], left), (views[1], links[1], right)):
+                np.copyto(view, frame)
+                link.send(t)
+            copying += time.thread_time() - c0
+            for link in links:
+                pickle.loads(link.recv_bytes())
+            latency.append(time.perf_counter() - t0)
+        wall = time.perf_counter() - wall
+        parent = 1000 * (time.process_time() - cpu) / len(pairs)
+        for link in links:
+            link.send(None)
+        workers = [1000 * link.recv() / len(pairs) for link in links]
+    finally:
+        for proc in procs:
+            proc.join(timeout=10)
+            if proc.is_alive():
+                proc.terminate()
+        del views
+        for shm in shms:
+            shm.close()
+            shm.unlink()
+    return (len(pairs) / wall, float(np.percentile(np.asarray(latency) * 1000, 99)), parent,
+            1000 * copying / len(pairs), workers)
+
+
 def process_bound(full_rig: StereoRig, preset: str | None, n: int) -> None:
     import multiprocessing as mp
     ctx = mp.get_context("fork")
@@ -319,6 +404,29 @@ def process_bound(full_rig: StereoRig, preset: str | None, n: int) -> None:
         + f" -> at most {min(r for _, r, _ in per_camera):.1f} pairs/s")
     pairs = load_pairs(n, None)
     params = load_preset(preset)
+    # Threads and handed-over processes alternate (the machine's load drifts between runs).
+    for round_ in range(2):
+        for mode in (("threads", "processes") if round_ == 0 else ("processes", "threads")):
+            if mode == "threads":
+                with opencv_threads(1):
+                    tracker = StereoTracker(full_rig, params)
+                    cpu, wall = time.process_time(), time.perf_counter()
+                    latency = []
+                    for lf, rf, t in pairs:
+                        t0 = time.perf_counter()
+                        tracker.process(lf, rf, t, keep_masks=False)
+                        latency.append(time.perf_counter() - t0)
+                    wall = time.perf_counter() - wall
+                    tracker.close()
+                print(f"round {round_ + 1}, StereoTracker, two camera threads: {len(pairs) / wall:6.1f} pairs/s, "
+                      f"p99 {np.percentile(np.asarray(latency) * 1000, 99):5.1f} ms, "
+                      f"{1000 * (time.process_time() - cpu) / len(pairs):5.2f} ms CPU a pair")
+            else:
+                rate, p99, parent, copying, workers = processes_with_handover(pairs, preset)
+                print(f"round {round_ + 1}, two detector processes, frames handed over: {rate:6.1f} pairs/s, "
+                      f"p99 {p99:5.1f} ms, parent {parent:5.2f} ms CPU a pair (copying the frames "
+                      f"{copying:4.2f}), each worker " + " / ".join(f"{w:4.2f}" for w in workers)
+                      + f" ms CPU a frame: {parent + sum(workers):5.2f} ms CPU a pair in all")
     for threads in (2, 1):
         with opencv_threads(threads):
             for parallel in (True, False):

@@ -107,6 +107,22 @@ class TrackletAssociator:
                 for tr in self.tracklets if tr.hits >= 2]
         return np.asarray(rows, dtype=float).reshape(-1, 3)
 
+    def _match_costs(self, t: float, positions: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(tracklets × candidates distances to the predictions, gates, matching costs)."""
+        # Per tracklet: predicted x, y, gate and hits, in one pass (hits are small integers:
+        # exact as floats).
+        rows = np.array([(*tr.predict(t), self.gate(tr, max(t - tr.t, 1e-3)), tr.hits)
+                         for tr in self.tracklets])
+        gates = rows[:, 2]
+        d = np.hypot(rows[:, None, 0] - positions[None, :, 0],
+                     rows[:, None, 1] - positions[None, :, 1])
+        cost = d / gates[:, None]
+        # Established tracklets claim their candidates first (greedy by normalised cost,
+        # with a bonus for history), so a new blob cannot steal a long track's point.
+        cost = cost - 0.5 * np.minimum(rows[:, 3], 20)[:, None] / 20
+        return d, gates, cost
+
     def update(self, t: float, positions: np.ndarray, scores: np.ndarray,
                blind: Callable[[float, float], bool] | None = None
                ) -> list[tuple[int, float, float]]:
@@ -125,14 +141,7 @@ class TrackletAssociator:
         assigned_track = [-1] * n
         motion = [math.nan] * n
         if self.tracklets and n:
-            preds = np.array([tr.predict(t) for tr in self.tracklets])
-            gates = np.array([self.gate(tr, max(t - tr.t, 1e-3)) for tr in self.tracklets])
-            d = np.hypot(preds[:, None, 0] - positions[None, :, 0],
-                         preds[:, None, 1] - positions[None, :, 1])
-            cost = d / gates[:, None]
-            # Established tracklets claim their candidates first (greedy by normalised cost,
-            # with a bonus for history), so a new blob cannot steal a long track's point.
-            cost = cost - 0.5 * np.minimum(np.array([tr.hits for tr in self.tracklets]), 20)[:, None] / 20
+            d, gates, cost = self._match_costs(t, positions)
             order = np.argsort(cost, axis=None)
             # Only pairs inside the tracklet's gate can be taken: drop the others before the
             # Python loop (it used to visit all tracklets × candidates, ~800 pairs a frame, to

@@ -47,7 +47,7 @@ from .background import BackgroundModel
 from .classifier import load_classifier
 from .params import TrackerParams
 from .types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SIDE,
-                    REJECT_WHITENESS, CameraResult, Candidate)
+                    REJECT_WHITENESS, CameraResult, Candidate, make_candidate)
 
 # At most this many blobs per frame get the (more expensive) full-resolution colour check;
 # beyond it the largest blobs are dropped first (players, not shuttles).
@@ -136,8 +136,7 @@ class CameraDetector:
         area_all = np.array([cv2.contourArea(c) for c in contours], dtype=float) * sx * sy
         rects = np.array([cv2.boundingRect(c) for c in contours], dtype=float).reshape(-1, 4)
         bx, by, bw, bh = rects[:, 0], rects[:, 1], rects[:, 2], rects[:, 3]
-        boxes_all = np.stack([np.floor(bx * sx), np.floor(by * sy), np.ceil(bw * sx),
-                              np.ceil(bh * sy)], axis=1).astype(np.int64)
+        boxes_all = _scaled_boxes(rects, sx, sy)
         length_ok = ((p.contour_length.min_length <= length_all)
                      & (length_all <= p.contour_length.max_length))
         short_ok = ((p.tilted_rect.min_short_side <= short_all)
@@ -156,8 +155,8 @@ class CameraDetector:
                     ((by[rejected] + bh[rejected] / 2) * sy).tolist(),
                     length_all[rejected].tolist(), short_all[rejected].tolist(),
                     area_all[rejected].tolist(), reasons):
-                candidates.append(Candidate(cx, cy, length, short_side, math.nan, area,
-                                            math.nan, 0.0, reason))
+                candidates.append(make_candidate(cx, cy, length, short_side, math.nan, area,
+                                                 math.nan, 0.0, reason))
         kept = np.flatnonzero(passed)
         geometric: list[tuple[int, float, float, float, tuple[int, int, int, int]]] = [
             (k, length, short_side, area, tuple(box)) for k, (length, short_side, area, box) in enumerate(zip(
@@ -196,9 +195,9 @@ class CameraDetector:
             order = np.lexsort((-strength, ~near)).tolist()
             for i in order[limit:]:
                 _, length, short_side, area, box = geometric[i]
-                candidates.append(Candidate(box[0] + box[2] / 2, box[1] + box[3] / 2, length,
-                                            short_side, math.nan, area, math.nan, 0.0,
-                                            REJECT_WHITENESS))
+                candidates.append(make_candidate(box[0] + box[2] / 2, box[1] + box[3] / 2, length,
+                                                 short_side, math.nan, area, math.nan, 0.0,
+                                                 REJECT_WHITENESS))
             geometric = [geometric[i] for i in order[:limit]]
 
         # Filter 3 and the appearance features of all the frame's blobs at once; the
@@ -255,7 +254,7 @@ class CameraDetector:
                     reason = REJECT_MOTION
                 else:
                     score = merit
-            c = Candidate(x, y, length, short_side, whiteness, area, motion, score, reason)
+            c = make_candidate(x, y, length, short_side, whiteness, area, motion, score, reason)
             if ident is not None:
                 self._tracklet_of[id(c)] = ident
             candidates.append(c)
@@ -521,9 +520,9 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
 
     # Row bookkeeping: each window owns its rows and the blank row after it.
     seg_rows = height + 1
-    row_width = np.repeat(np.stack([width, np.zeros_like(width)], axis=1).ravel(),
-                          np.stack([height, np.ones_like(height)], axis=1).ravel())
-    valid = np.arange(cols) < row_width[:, None]
+    row_width = np.repeat(width, seg_rows)
+    row_width[start + height] = 0   # the blank rows
+    padding = np.arange(cols) >= row_width[:, None]
     local_row = np.arange(rows) - np.repeat(start, seg_rows)
 
     def window_sum(per_row: np.ndarray) -> np.ndarray:
@@ -576,7 +575,7 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
 
     background_row = np.repeat(background, seg_rows)
     excess = gray - background_row[:, None]
-    excess[~valid] = -np.inf
+    np.copyto(excess, -np.inf, where=padding)
     peak = window_max(excess)
     half_peak = np.float32(0.5) * peak
     half_row = np.repeat(half_peak, seg_rows)
@@ -666,6 +665,18 @@ def _window_maxima(images: tuple[np.ndarray, ...], x0: np.ndarray, y0: np.ndarra
             values = np.where(counts_where.ravel()[flat] != 0, values, values.dtype.type(0))
         maxima.append(np.maximum.reduceat(values, starts))
     return maxima
+
+
+def _scaled_boxes(rects: np.ndarray, sx: float, sy: float) -> np.ndarray:
+    """(N, 4) float boxes (x, y, w, h) at the mask scale → full-resolution int64 boxes.
+
+    Origin rounded down, size up: ``floor(x·sx), floor(y·sy), ceil(w·sx), ceil(h·sy)``, in
+    four operations on the whole array (it was four per column and a stack).
+    """
+    scaled = rects * np.array([sx, sy, sx, sy])
+    np.floor(scaled[:, :2], out=scaled[:, :2])
+    np.ceil(scaled[:, 2:], out=scaled[:, 2:])
+    return scaled.astype(np.int64)
 
 
 def _ragged_arange(lengths: np.ndarray) -> np.ndarray:

@@ -61,6 +61,42 @@ class Candidate:
     predicted: bool = False
 
 
+def _candidate_maker():
+    """A constructor of :class:`Candidate` for the detector's hot loops, ~2× cheaper.
+
+    A frozen dataclass's ``__init__`` sets each field through ``object.__setattr__``; writing
+    the slots directly gives the same object for half the cost (the detector makes a Candidate
+    for every contour of every frame, ~110 a frame at 2048 px, with the GIL held).
+    ``tests/test_speed_oracles.py`` checks it against ``Candidate(...)`` and its field list.
+    """
+    new = object.__new__
+    (set_x, set_y, set_length, set_short_side, set_whiteness, set_area, set_motion, set_score,
+     set_rejected_by, set_predicted) = (getattr(Candidate, f).__set__ for f in CANDIDATE_FIELDS)
+
+    def make_candidate(x: float, y: float, length: float, short_side: float, whiteness: float,
+                       area: float, motion: float, score: float, rejected_by: str | None = None,
+                       predicted: bool = False) -> Candidate:
+        c = new(Candidate)
+        set_x(c, x)
+        set_y(c, y)
+        set_length(c, length)
+        set_short_side(c, short_side)
+        set_whiteness(c, whiteness)
+        set_area(c, area)
+        set_motion(c, motion)
+        set_score(c, score)
+        set_rejected_by(c, rejected_by)
+        set_predicted(c, predicted)
+        return c
+
+    return make_candidate
+
+
+CANDIDATE_FIELDS = ("x", "y", "length", "short_side", "whiteness", "area", "motion", "score",
+                    "rejected_by", "predicted")
+make_candidate = _candidate_maker()
+
+
 @dataclass(frozen=True, slots=True)
 class CameraResult:
     """What one camera's detector concluded for one frame."""

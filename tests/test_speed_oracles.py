@@ -1,0 +1,82 @@
+"""Small hot-path rewrites (issue #7) give exactly what the plain code they replaced gave.
+
+Why this file exists: each function below was rewritten to make fewer numpy calls per frame
+(they run with the GIL held, so the two camera threads queue on them). The plain formulas are
+kept here as the reference, and the fast ones must match them bit for bit: track outputs are
+compared byte for byte before and after such a change.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from badminton_gui.core import detector as detector_module
+from badminton_gui.core.association import Tracklet, TrackletAssociator
+from badminton_gui.core.background import median_float32
+from badminton_gui.core.params import TrackerParams
+
+
+@pytest.mark.parametrize("size", [1, 2, 3, 51, 52, 3071, 3072])
+def test_median_float32_is_numpys_median(size):
+    rng = np.random.default_rng(size)
+    for trial in range(20):
+        values = (rng.random(size) * rng.choice([0.5, 2.0, 300.0])).astype(np.float32)
+        if trial % 3 == 0:
+            values = np.round(values, 1)          # ties
+        expected = float(np.median(values))
+        got = median_float32(values.copy())
+        assert got == expected and type(got) is float
+
+
+def test_scaled_boxes_are_the_per_column_floor_and_ceil():
+    rng = np.random.default_rng(3)
+    rects = rng.integers(0, 500, (40, 4)).astype(float)
+    for sx, sy in ((2.0, 2.0), (4.0, 4.0), (2048 / 1023, 1536 / 767), (1.0, 1.0)):
+        bx, by, bw, bh = rects[:, 0], rects[:, 1], rects[:, 2], rects[:, 3]
+        expected = np.stack([np.floor(bx * sx), np.floor(by * sy), np.ceil(bw * sx),
+                             np.ceil(bh * sy)], axis=1).astype(np.int64)
+        got = detector_module._scaled_boxes(rects, sx, sy)
+        assert got.dtype == np.int64 and np.array_equal(got, expected)
+    assert detector_module._scaled_boxes(np.zeros((0, 4)), 2.0, 2.0).shape == (0, 4)
+
+
+def test_match_costs_are_the_per_tracklet_formulas():
+    p = TrackerParams()
+    assoc = TrackletAssociator(p.motion, p.association)
+    rng = np.random.default_rng(7)
+    for k in range(30):
+        tr = Tracklet(k, *rng.random(2) * 2000, rng.random() * 0.05, 0.0, 0.0,
+                      vx=rng.normal(0, 3000), vy=rng.normal(0, 3000), hits=int(rng.integers(1, 40)),
+                      misses=int(rng.integers(0, 4)), velocity_known=bool(k % 3))
+        assoc.tracklets.append(tr)
+    t = 0.05
+    positions = rng.random((12, 2)) * 2000
+    # The plain code: one comprehension per quantity.
+    preds = np.array([tr.predict(t) for tr in assoc.tracklets])
+    gates = np.array([assoc.gate(tr, max(t - tr.t, 1e-3)) for tr in assoc.tracklets])
+    d = np.hypot(preds[:, None, 0] - positions[None, :, 0], preds[:, None, 1] - positions[None, :, 1])
+    cost = d / gates[:, None]
+    cost = cost - 0.5 * np.minimum(np.array([tr.hits for tr in assoc.tracklets]), 20)[:, None] / 20
+    got_d, got_gates, got_cost = assoc._match_costs(t, positions)
+    assert np.array_equal(got_d, d) and np.array_equal(got_gates, gates)
+    assert np.array_equal(got_cost, cost)
+    assert not math.isnan(float(got_cost.sum()))
+
+
+def test_make_candidate_builds_the_same_candidate():
+    import dataclasses
+
+    from badminton_gui.core.types import CANDIDATE_FIELDS, Candidate, make_candidate
+
+    # A field added to Candidate must be added to the fast constructor too.
+    assert CANDIDATE_FIELDS == tuple(f.name for f in dataclasses.fields(Candidate))
+    for args, kwargs in (((1.5, 2.0, 30.0, 4.0, math.nan, 50.0, math.nan, 0.0, "length"), {}),
+                         ((1.5, 2.0, 30.0, 4.0, 200.0, 50.0, 3.0, 0.7), {}),
+                         ((1.5, 2.0, math.nan, math.nan, math.nan, math.nan, 0.0, 1.2, None),
+                          {"predicted": True})):
+        fast, plain = make_candidate(*args, **kwargs), Candidate(*args, **kwargs)
+        assert type(fast) is Candidate and repr(fast) == repr(plain)
+        assert dataclasses.replace(fast, x=3.0) == dataclasses.replace(plain, x=3.0) or math.isnan(plain.whiteness)
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            fast.x = 0.0
