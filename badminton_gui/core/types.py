@@ -59,6 +59,9 @@ class Candidate:
     # True when no blob was seen: the followed track's prediction, carried through a spot
     # where the detector is blind (a light, a white line); never triangulated.
     predicted: bool = False
+    # Ident of the tracklet (core/association.py) the candidate lies on, -1 when on none: stable
+    # from frame to frame, so a later stage (core/lookahead.py) can follow a tracklet's future.
+    tracklet: int = -1
 
 
 @dataclass(frozen=True, slots=True)
