@@ -16,7 +16,6 @@ would write, for many K and settings in seconds. Two reports:
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import pickle
 import sys
 from collections import Counter
