@@ -88,11 +88,17 @@ def read_detect(path: Path) -> dict:
     return read_point_labels(path).as_dict()
 
 
-def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path, preset: str | None = None):
+def _lookahead_args(lookahead: int | None) -> list[str]:
+    return [] if lookahead is None else ["--lookahead", str(lookahead)]
+
+
+def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path, preset: str | None = None,
+                lookahead: int | None = None):
     """Jobs for one stereo clip: `track` first, then `detect` per camera."""
     out_track = tmp / f"{clip.name}_track.csv"
     extra = ["--max-frames", str(max_frames)] if max_frames else []
     preset_args = ["--preset", preset] if preset else []
+    preset_args += _lookahead_args(lookahead)
 
     def track():
         rate, _ = run_cli(["track", "--left", str(clip.left), "--right", str(clip.right),
@@ -111,7 +117,7 @@ def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path, preset:
         def job():
             out = tmp / f"{clip.name}_{camera}_detect.csv"
             if max_frames:
-                rate = detect_in_process(video, out, max_frames, preset)
+                rate = detect_in_process(video, out, max_frames, preset, lookahead)
             else:
                 rate, _ = run_cli(["detect", str(video), "-o", str(out)] + preset_args)
                 rate = rate if rate == rate else _rate_from_elapsed(video)
@@ -127,23 +133,33 @@ def _rate_from_elapsed(video: Path) -> float:
     return float("nan")
 
 
-def detect_in_process(video: Path, out: Path, max_frames: int, preset: str | None) -> float:
+def detect_in_process(video: Path, out: Path, max_frames: int, preset: str | None,
+                      lookahead: int | None = None) -> float:
     """`detect` limited to the first frames (the CLI has no --max-frames)."""
     import cv2
 
+    from badminton_gui.cli.common import FILE_LOOKAHEAD
     from badminton_gui.core.detector import CameraDetector
+    from badminton_gui.core.lookahead import CameraLookahead
     from badminton_gui.io.labels import write_point_labels
     from badminton_gui.io.presets import load_preset
     from badminton_gui.io.video import VideoFile
     v = VideoFile(video)
-    det = CameraDetector(load_preset(preset))
+    params = load_preset(preset).with_value(
+        "lookahead.frames", FILE_LOOKAHEAD if lookahead is None else lookahead)
+    det = CameraDetector(params)
+    la = CameraLookahead(params)
     frames, vis, xy = [], [], []
     start = time.perf_counter()
+    decided = []
     for i in range(max_frames):
         frame = v.read()
         if frame is None:
             break
-        d = det.process(frame, i / v.fps, keep_mask=False).detection
+        decided += la.push(det.process(frame, i / v.fps, keep_mask=False), i / v.fps)
+    decided += la.flush()
+    for i, res in enumerate(decided):
+        d = res.detection
         frames.append(i)
         vis.append(d is not None)
         xy.append((d.x, d.y) if d else (0.0, 0.0))
@@ -177,13 +193,14 @@ def three_d_errors(rows, clip, rig_path: Path) -> np.ndarray | None:
     return np.linalg.norm(np.array(ours) - truth, axis=1)
 
 
-def broadcast_job(clip, tmp: Path, max_frames: int | None):
+def broadcast_job(clip, tmp: Path, max_frames: int | None, lookahead: int | None = None):
     def job():
         out = tmp / f"{clip.name}_detect.csv"
         if max_frames:
-            rate = detect_in_process(clip.video, out, max_frames, "broadcast")
+            rate = detect_in_process(clip.video, out, max_frames, "broadcast", lookahead)
         else:
-            rate, _ = run_cli(["detect", str(clip.video), "-o", str(out), "--preset", "broadcast"])
+            rate, _ = run_cli(["detect", str(clip.video), "-o", str(out), "--preset", "broadcast"]
+                              + _lookahead_args(lookahead))
         return [Row(clip.name, "-", "detect", clip.held_out, "broadcast",
                     score(read_detect(out), clip.labels, 1280, max_frames), rate, "frames/s")], None
     return job
@@ -208,8 +225,12 @@ def main() -> int:
     ap.add_argument("--only", default=None, help="regex on clip names")
     ap.add_argument("--track-only", action="store_true",
                     help="stereo clips: `track` only (no one-camera `detect` rows, half the time)")
+    ap.add_argument("--detect-only", action="store_true",
+                    help="stereo clips: the one-camera `detect` rows only (no `track`)")
     ap.add_argument("--preset", default=None,
                     help="preset name or .json for the stereo clips (default: the default preset)")
+    ap.add_argument("--lookahead", type=int, default=None, metavar="N",
+                    help="frames of look-ahead for every CLI run (default: the CLI's own default; 0 = live readout)")
     ap.add_argument("--keep", default=None, metavar="DIR",
                     help="write the CLI outputs (track/detect CSVs, rig) here and keep them for diagnosis")
     args = ap.parse_args()
@@ -237,9 +258,9 @@ def main() -> int:
         run_cli(["import-calib", "--nycu", str(cfg1), str(cfg2), "-o", str(rig_path)])
         jobs = []
         for c in stereo:
-            clip_jobs = stereo_jobs(c, tmp, max_frames, rig_path, args.preset)
-            jobs += clip_jobs[:1] if args.track_only else clip_jobs
-        jobs += [broadcast_job(c, tmp, max_frames) for c in broadcast]
+            clip_jobs = stereo_jobs(c, tmp, max_frames, rig_path, args.preset, args.lookahead)
+            jobs += clip_jobs[:1] if args.track_only else clip_jobs[1:] if args.detect_only else clip_jobs
+        jobs += [broadcast_job(c, tmp, max_frames, args.lookahead) for c in broadcast]
         start = time.perf_counter()
         with ThreadPoolExecutor(args.jobs) as pool:
             results = list(pool.map(lambda j: j(), jobs))

@@ -1,12 +1,15 @@
 """Tracker against the demo court's ground truth: 2D accuracy per camera and 3D error.
 
-    .venv/bin/python benchmarks/demo_accuracy.py [--frames 1000] [--seeds 0 1 2] [--size 1280x720] [--rig binocular] [--errors]
+    .venv/bin/python benchmarks/demo_accuracy.py [--frames 1000] [--seeds 0 1 2] [--size 1280x720] [--rig binocular] [--errors] [--lookahead N]
 
 Prints one line per seed and the totals: the figures of the tracking-engine issue
 (2D accuracy ≥ 99 % per camera at GUIDE §6's tolerance; 3D RMS ≤ 1 cm within 6 m of the rig).
 ``--errors`` also lists every FP1 / FP2 / FN frame: the truth and the reported point, their
 distance, the shot and how far into it, and the candidates near the truth with the filter that
 rejected each (``-`` for the reported one) — where to look first when tuning.
+``--lookahead N`` also scores, from the same tracking run, the readout re-decided N frames later
+(core/lookahead.py: what `track --lookahead N` writes; latency N / fps online) and prints it
+beside the online figure; ``--errors`` then lists the look-ahead readout's errors.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from badminton_gui.io.demo_eval import evaluate_demo  # noqa: E402
+from badminton_gui.io.demo_eval import evaluate_demo_lookaheads  # noqa: E402
 
 
 def main() -> None:
@@ -31,7 +34,13 @@ def main() -> None:
     ap.add_argument("--rig", default="binocular", choices=("binocular", "ends"))
     ap.add_argument("--range", type=float, default=6.0, help="3D error within this distance of the left camera")
     ap.add_argument("--errors", action="store_true", help="list every FP1 / FP2 / FN frame with its candidates")
+    ap.add_argument("--lookahead", type=int, nargs="+", default=[], metavar="N",
+                    help="also score the readout re-decided N frames later (core/lookahead.py); several N "
+                         "are scored from the same tracking run")
     args = ap.parse_args()
+    ks = tuple(args.lookahead) + (0,)
+    la_l, la_r = {}, {}
+    la_errs, la_rngs = {k: [] for k in args.lookahead}, {k: [] for k in args.lookahead}
     size = tuple(int(v) for v in args.size.split("x"))
     total_l = total_r = None
     errs, rngs = [], []
@@ -44,7 +53,8 @@ def main() -> None:
         if args.errors:
             def on_frame(result, truth, codes, seed=seed, listing=listing):
                 listing.extend(_error_lines(seed, result, truth, codes))
-        s = evaluate_demo(seed, args.frames, size, args.rig, on_frame=on_frame)
+        scores = evaluate_demo_lookaheads(seed, args.frames, size, args.rig, on_frame=on_frame, lookaheads=ks)
+        s = scores[0]
         if listing:
             print("\n".join(listing))
         total_l = s.left if total_l is None else total_l + s.left
@@ -55,11 +65,26 @@ def main() -> None:
               f"{len(s.errors_3d):>6} {100 * s.rms_3d(args.range):8.2f}cm {100 * s.median_3d():7.2f}cm "
               f"{s.pairs_per_s:8.1f}")
         print(f"     left  {s.left.summary()}\n     right {s.right.summary()}")
+        for k in args.lookahead:
+            la = scores[k]
+            la_l[k] = la.left if k not in la_l else la_l[k] + la.left
+            la_r[k] = la.right if k not in la_r else la_r[k] + la.right
+            la_errs[k].append(la.errors_3d)
+            la_rngs[k].append(la.ranges)
+            print(f"     look-ahead {k}: accuracy L {la.left.accuracy:.4f} R {la.right.accuracy:.4f}, "
+                  f"F1 L {la.left.f1:.4f} R {la.right.f1:.4f}, 3D RMS≤{args.range}m {100 * la.rms_3d(args.range):.2f}cm")
+            print(f"     left  {la.left.summary()}\n     right {la.right.summary()}")
     e, r = np.concatenate(errs), np.concatenate(rngs)
     near = e[r <= args.range]
     print(f"total: accuracy left {total_l.accuracy:.4f} right {total_r.accuracy:.4f}; "
           f"3D RMS within {args.range} m: {100 * np.sqrt(np.mean(near ** 2)):.2f} cm over {len(near)} points; "
           f"all ranges: median {100 * np.median(e):.2f} cm, p95 {100 * np.percentile(e, 95):.2f} cm")
+    for k in args.lookahead:
+        e2, r2 = np.concatenate(la_errs[k]), np.concatenate(la_rngs[k])
+        near2 = e2[r2 <= args.range]
+        print(f"total with look-ahead {k} frames: accuracy left {la_l[k].accuracy:.4f} right "
+              f"{la_r[k].accuracy:.4f}; 3D RMS within {args.range} m: {100 * np.sqrt(np.mean(near2 ** 2)):.2f} cm "
+              f"over {len(near2)} points")
     # The RMS is ruled by a few gross errors (a wrong object in both cameras, a blob merged
     # with a line or a player): show the body of the distribution and how many are gross.
     if len(near):

@@ -77,10 +77,26 @@ def add_preset_argument(parser) -> None:
                         help="parameter preset name (see `badminton-track presets`) or a .json file")
 
 
+# Frames of look-ahead of the file commands (`detect`, `track`): a file has its future, so the
+# readout is re-decided 4 frames later (core/lookahead.py). Chosen on the tuned-on clips
+# (benchmarks/lookahead_study.py): 4 frames beat 8 and 15, whose earlier back-fills and later
+# handovers take more wrong candidates than right ones.
+FILE_LOOKAHEAD = 4
+
+
+def add_lookahead_argument(parser) -> None:
+    parser.add_argument("--lookahead", type=int, default=FILE_LOOKAHEAD, metavar="N",
+                        help="re-decide each frame's detection once the next N frames are known "
+                             f"(default {FILE_LOOKAHEAD}; 0 = the live, frame-by-frame readout)")
+
+
 def params_from_args(args):
-    """The TrackerParams chosen by --preset (default preset otherwise)."""
+    """The TrackerParams chosen by --preset (default preset otherwise) and --lookahead."""
     from ..io.presets import load_preset
     try:
-        return load_preset(getattr(args, "preset", None))
+        params = load_preset(getattr(args, "preset", None))
+        if getattr(args, "lookahead", None) is not None:
+            params = params.with_value("lookahead.frames", args.lookahead)
+        return params
     except INPUT_ERRORS as exc:
         raise UserError(str(exc)) from None

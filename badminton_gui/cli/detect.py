@@ -7,10 +7,12 @@ import time
 from pathlib import Path
 
 from ..core.detector import CameraDetector
+from ..core.lookahead import CameraLookahead
 from ..io.labels import write_point_labels
 from ..io.prefetch import PrefetchingReader
 from ..io.video import VideoFile
-from .common import INPUT_ERRORS, Progress, UserError, add_preset_argument, params_from_args
+from .common import (INPUT_ERRORS, Progress, UserError, add_lookahead_argument, add_preset_argument,
+                     params_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,6 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("video", help="input video file")
     p.add_argument("-o", "--output", required=True, help="output CSV (TrackNet label format)")
     add_preset_argument(p)
+    add_lookahead_argument(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=run)
 
@@ -31,7 +34,16 @@ def run(args: argparse.Namespace) -> int:
     except INPUT_ERRORS as exc:
         raise UserError(str(exc)) from None
     detector = CameraDetector(params)
+    lookahead = CameraLookahead(params)
     frames, visible, xy = [], [], []
+
+    def emit(results) -> None:
+        for res in results:
+            d = res.detection
+            frames.append(len(frames))
+            visible.append(d is not None)
+            xy.append((d.x, d.y) if d else (0.0, 0.0))
+
     progress = Progress(video.frame_count or None, "detect", force=False)
     start = time.perf_counter()
     i = 0
@@ -41,13 +53,11 @@ def run(args: argparse.Namespace) -> int:
             if frame is None:
                 break
             res = detector.process(frame, i / video.fps, keep_mask=False)
-            d = res.detection
-            frames.append(i)
-            visible.append(d is not None)
-            xy.append((d.x, d.y) if d else (0.0, 0.0))
+            emit(lookahead.push(res, i / video.fps))
             i += 1
             if not args.quiet:
                 progress.update(i)
+        emit(lookahead.flush())
     finally:
         video.close()
         if not args.quiet:

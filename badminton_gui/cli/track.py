@@ -7,12 +7,14 @@ import csv
 import time
 from pathlib import Path
 
+from ..core.lookahead import StereoLookahead
 from ..core.rig import StereoRig
 from ..core.tracker import StereoTracker, configure_opencv_threads
 from ..io.labels import TRACK_COLUMNS, read_timestamps, track_row
 from ..io.prefetch import PrefetchingReader
 from ..io.video import VideoPair
-from .common import INPUT_ERRORS, Progress, UserError, add_preset_argument, params_from_args
+from .common import (INPUT_ERRORS, Progress, UserError, add_lookahead_argument, add_preset_argument,
+                     params_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -28,6 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--left-times", help="CSV with Frame,Timestamp for the left video")
     p.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
     add_preset_argument(p)
+    add_lookahead_argument(p)
     p.add_argument("--robot", metavar="PORT", help="also stream results to the robot on this "
                    "serial port / Bluetooth port / pyserial URL")
     p.add_argument("--baud", type=int, default=115200, help="robot link baud rate")
@@ -60,6 +63,8 @@ def run(args: argparse.Namespace) -> int:
 
     configure_opencv_threads()
     tracker = StereoTracker(rig, params)
+    # The CSV gets the re-decided readout; the robot keeps the live one (no latency).
+    lookahead = StereoLookahead(rig, params, tracker.epipolar_tolerance)
     total = source.frame_count if lt is None else min(len(lt), source.frame_count or len(lt))
     if args.max_frames:
         total = min(total, args.max_frames) if total else args.max_frames
@@ -78,13 +83,17 @@ def run(args: argparse.Namespace) -> int:
                     break
                 result = tracker.process(frame.left, frame.right, frame.t_left, frame.index,
                                          frame.index_right, keep_masks=False)
-                writer.writerow(track_row(result))
+                for decided in lookahead.push(result):
+                    writer.writerow(track_row(decided))
+                    hits3d += decided.point is not None
                 if link is not None:
                     link.send_result(result)
                 n += 1
-                hits3d += result.point is not None
                 if not args.quiet:
                     progress.update(n)
+            for decided in lookahead.flush():
+                writer.writerow(track_row(decided))
+                hits3d += decided.point is not None
     except OSError as exc:
         raise UserError(f"cannot write {args.output}: {exc.strerror or exc}") from None
     finally:

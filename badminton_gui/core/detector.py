@@ -254,7 +254,8 @@ class CameraDetector:
                     reason = REJECT_MOTION
                 else:
                     score = merit
-            c = make_candidate(x, y, length, short_side, whiteness, area, motion, score, reason)
+            c = make_candidate(x, y, length, short_side, whiteness, area, motion, score, reason,
+                               tracklet=-1 if ident is None else ident)
             if ident is not None:
                 self._tracklet_of[id(c)] = ident
             candidates.append(c)
@@ -265,7 +266,7 @@ class CameraDetector:
             tr, merit = coast
             px, py = tr.predict(t)
             c = Candidate(px, py, math.nan, math.nan, math.nan, math.nan, 0.0, merit, None,
-                          predicted=True)
+                          predicted=True, tracklet=tr.ident)
             self._tracklet_of[id(c)] = tr.ident
             candidates.append(c)
         return CameraResult(detection=None, candidates=tuple(candidates),

@@ -44,6 +44,9 @@ class ParamGroup:
     """Base of every parameter group; validates ranges on construction."""
 
     TITLE: ClassVar[str] = ""
+    # False for a group only the file commands read (the live tuning dialog leaves it out: a
+    # slider that changes nothing on screen would mislead the operator).
+    LIVE: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -352,6 +355,38 @@ class TrajectoryParams(ParamGroup):
 
 
 @dataclass(frozen=True, slots=True)
+class LookaheadParams(ParamGroup):
+    """The readout held back K frames and re-decided from the tracklets' futures (core/lookahead.py).
+
+    Read by the file commands (`detect`, `track --lookahead N`) and the benchmarks; the GUI's
+    live readout and the robot stream stay frame by frame whatever is set here.
+    """
+
+    TITLE: ClassVar[str] = "Look-ahead"
+    LIVE: ClassVar[bool] = False
+    frames: int = param(0, 0, 120, step=1, unit="frames", label="Look-ahead",
+                        help="The 2D readout is delayed by this many frames and re-decided once they are "
+                             "known (0 = off: the live readout; latency = frames / fps)")
+    min_support: int = param(2, 1, 120, step=1, unit="frames", label="Followed at least",
+                             help="A tracklet's earlier candidates are taken only when the readout follows it "
+                                  "this many frames of the look-ahead")
+    backfill: bool = flag(True, label="Back-fill",
+                          help="A frame with no detection takes the candidate of the tracklet the readout "
+                               "follows next (a flight's unconfirmed first frames)")
+    switch: bool = flag(True, label="Switch earlier",
+                        help="A frame whose tracklet the readout leaves for good takes the candidate of the "
+                             "tracklet it hands over to (the racket kept after a hit)")
+    max_switch_delay: int = param(120, 1, 120, step=1, unit="frames", label="Switch within",
+                                  help="The handover must come at most this many frames later")
+    switch_needs_alive: bool = flag(True, label="... from a tracklet still seen",
+                                    help="Switch only when the tracklet left is still seen at the handover (a "
+                                         "racket, a hand), not when it was lost")
+    min_speed: float = param(400.0, 0.0, 20000.0, step=50.0, unit="px/s", label="Taken from image speed",
+                             help="A candidate is taken only when its tracklet moves at least this fast from it "
+                                  "(a shuttle held still before the serve is not yet in play)")
+
+
+@dataclass(frozen=True, slots=True)
 class TrackerParams:
     """Every parameter of the pipeline, one group per box of the tuning dialog."""
 
@@ -365,6 +400,7 @@ class TrackerParams:
     classifier: ClassifierParams = field(default_factory=ClassifierParams)
     stereo: StereoParams = field(default_factory=StereoParams)
     trajectory: TrajectoryParams = field(default_factory=TrajectoryParams)
+    lookahead: LookaheadParams = field(default_factory=LookaheadParams)
 
     # ---- generic access, used by presets, the tuning dialog and the CLI -------------------
     def groups(self) -> Iterator[tuple[str, ParamGroup]]:

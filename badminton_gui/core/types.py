@@ -59,6 +59,9 @@ class Candidate:
     # True when no blob was seen: the followed track's prediction, carried through a spot
     # where the detector is blind (a light, a white line); never triangulated.
     predicted: bool = False
+    # Ident of the tracklet (core/association.py) the candidate lies on, -1 when on none: stable
+    # from frame to frame, so a later stage (core/lookahead.py) can follow a tracklet's future.
+    tracklet: int = -1
 
 
 def _candidate_maker():
@@ -71,11 +74,11 @@ def _candidate_maker():
     """
     new = object.__new__
     (set_x, set_y, set_length, set_short_side, set_whiteness, set_area, set_motion, set_score,
-     set_rejected_by, set_predicted) = (getattr(Candidate, f).__set__ for f in CANDIDATE_FIELDS)
+     set_rejected_by, set_predicted, set_tracklet) = (getattr(Candidate, f).__set__ for f in CANDIDATE_FIELDS)
 
     def make_candidate(x: float, y: float, length: float, short_side: float, whiteness: float,
                        area: float, motion: float, score: float, rejected_by: str | None = None,
-                       predicted: bool = False) -> Candidate:
+                       predicted: bool = False, tracklet: int = -1) -> Candidate:
         c = new(Candidate)
         set_x(c, x)
         set_y(c, y)
@@ -87,13 +90,14 @@ def _candidate_maker():
         set_score(c, score)
         set_rejected_by(c, rejected_by)
         set_predicted(c, predicted)
+        set_tracklet(c, tracklet)
         return c
 
     return make_candidate
 
 
 CANDIDATE_FIELDS = ("x", "y", "length", "short_side", "whiteness", "area", "motion", "score",
-                    "rejected_by", "predicted")
+                    "rejected_by", "predicted", "tracklet")
 make_candidate = _candidate_maker()
 
 

@@ -137,6 +137,8 @@ class TuningDialog(QDialog):
         self.group_list = QListWidget()
         self.pages = QStackedWidget()
         for group_name, group in params.groups():
+            if not type(group).LIVE:
+                continue
             self.group_list.addItem(type(group).TITLE or group_name)
             self.pages.addWidget(self._group_page(group_name, group))
         self.group_list.currentRowChanged.connect(self.pages.setCurrentIndex)

@@ -14,6 +14,7 @@ from typing import Callable
 import numpy as np
 
 from ..core.evaluation import Outcomes, classify, tolerance_px
+from ..core.lookahead import StereoLookahead
 from ..core.params import TrackerParams
 from ..core.tracker import StereoTracker
 from .demo_scene import DemoScene
@@ -45,22 +46,59 @@ def _count(codes: np.ndarray) -> Outcomes:
 def evaluate_demo(seed: int = 0, frames: int = 1000, size: tuple[int, int] = (1280, 720),
                   rig: str = "binocular", params: TrackerParams | None = None,
                   warmup: int = 0,
-                  on_frame: Callable[[object, object, tuple[str, str]], None] | None = None
-                  ) -> DemoScore:
+                  on_frame: Callable[[object, object, tuple[str, str]], None] | None = None,
+                  lookahead: int | None = None) -> DemoScore:
     """Track ``frames`` demo frames and score them against the scene's truth.
 
     ``on_frame(result, truth, (code_left, code_right))`` is called for every scored frame
-    (the per-frame error listing of ``benchmarks/demo_accuracy.py --errors``).
+    (the per-frame error listing of ``benchmarks/demo_accuracy.py --errors``). ``lookahead``:
+    frames of look-ahead of the scored readout (core/lookahead.py; None: ``params``' own).
+    """
+    ks = (None,) if lookahead is None else (lookahead,)
+    return evaluate_demo_lookaheads(seed, frames, size, rig, params, warmup, on_frame, ks)[ks[0]]
+
+
+def evaluate_demo_lookaheads(seed: int = 0, frames: int = 1000, size: tuple[int, int] = (1280, 720),
+                             rig: str = "binocular", params: TrackerParams | None = None,
+                             warmup: int = 0,
+                             on_frame: Callable[[object, object, tuple[str, str]], None] | None = None,
+                             lookaheads: tuple[int | None, ...] = (0,)) -> dict:
+    """One tracking run scored with several look-aheads: {K: DemoScore} (the readout is only
+    post-processed, so each K gives what a run with that K would). ``on_frame`` sees the first K's
+    readout.
     """
     import time
 
+    params = params or TrackerParams()
     scene = DemoScene(seed=seed, size=size, rig=rig, n_frames=frames + warmup)
     tracker = StereoTracker(scene.rig, params)
+    delays = {k: StereoLookahead(scene.rig, params if k is None else params.with_value("lookahead.frames", k),
+                                 tracker.epipolar_tolerance) for k in lookaheads}
     tol = tolerance_px(size[0])
-    codes = {0: [], 1: []}
-    errors, ranges = [], []
+    codes = {k: {0: [], 1: []} for k in lookaheads}
+    errors = {k: [] for k in lookaheads}
+    ranges = {k: [] for k in lookaheads}
     centre_left = scene.rig.camera_centres()[0]
     elapsed = 0.0
+
+    def score(k, result) -> None:
+        if result.index < warmup:
+            return
+        truth = scene.truth(result.index)
+        for cam, res, vis, uv in ((0, result.left, truth.visible_left, truth.uv_left),
+                                  (1, result.right, truth.visible_right, truth.uv_right)):
+            d = res.detection
+            codes[k][cam].append(classify(np.array([d is not None]),
+                                          np.array([[d.x, d.y] if d else [np.nan, np.nan]]),
+                                          np.array([bool(vis)]),
+                                          np.array([uv if (vis and uv) else [np.nan, np.nan]]),
+                                          tol)[0])
+        if on_frame is not None and k == lookaheads[0]:
+            on_frame(result, truth, (codes[k][0][-1], codes[k][1][-1]))
+        if result.point is not None and truth.position is not None:
+            errors[k].append(float(np.linalg.norm(np.subtract(result.point, truth.position))))
+            ranges[k].append(float(np.linalg.norm(np.subtract(truth.position, centre_left))))
+
     try:
         while True:
             frame = scene.read()
@@ -70,25 +108,18 @@ def evaluate_demo(seed: int = 0, frames: int = 1000, size: tuple[int, int] = (12
             result = tracker.process(frame.left, frame.right, frame.t_left, frame.index,
                                      frame.index_right, keep_masks=False)
             elapsed += time.perf_counter() - start
-            if frame.index < warmup:
-                continue
-            truth = scene.truth(frame.index)
-            for cam, res, vis, uv in ((0, result.left, truth.visible_left, truth.uv_left),
-                                      (1, result.right, truth.visible_right, truth.uv_right)):
-                d = res.detection
-                codes[cam].append(classify(np.array([d is not None]),
-                                           np.array([[d.x, d.y] if d else [np.nan, np.nan]]),
-                                           np.array([bool(vis)]),
-                                           np.array([uv if (vis and uv) else [np.nan, np.nan]]),
-                                           tol)[0])
-            if on_frame is not None:
-                on_frame(result, truth, (codes[0][-1], codes[1][-1]))
-            if result.point is not None and truth.position is not None:
-                errors.append(float(np.linalg.norm(np.subtract(result.point, truth.position))))
-                ranges.append(float(np.linalg.norm(np.subtract(truth.position, centre_left))))
+            for k, delay in delays.items():
+                for decided in delay.push(result):
+                    score(k, decided)
+        for k, delay in delays.items():
+            for decided in delay.flush():
+                score(k, decided)
     finally:
         tracker.close()
         scene.close()
-    n = len(codes[0])
-    return DemoScore(_count(np.array(codes[0])), _count(np.array(codes[1])),
-                     np.asarray(errors), np.asarray(ranges), n / max(elapsed, 1e-9))
+    out = {}
+    for k in lookaheads:
+        n = len(codes[k][0])
+        out[k] = DemoScore(_count(np.array(codes[k][0])), _count(np.array(codes[k][1])),
+                           np.asarray(errors[k]), np.asarray(ranges[k]), n / max(elapsed, 1e-9))
+    return out

@@ -1,0 +1,229 @@
+"""The look-ahead readout (core/lookahead.py) on synthetic candidate streams, and `--lookahead` in the CLI."""
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from badminton_gui.cli import main
+from badminton_gui.core.lookahead import CameraLookahead, StereoLookahead
+from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.types import REJECT_MOTION, REJECT_SCORE, CameraResult, Candidate, TrackResult
+
+from .test_cli import make_rig_for, moving_dot_frames, write_video
+
+FPS = 100.0
+
+
+def cand(x, y, tracklet, rejected=REJECT_MOTION, short_side=0.0):
+    return Candidate(x, y, 20.0, short_side, 200.0, 30.0, 0.0, 0.5, rejected, tracklet=tracklet)
+
+
+def frame(cands, chosen_tracklet=None):
+    """A CameraResult whose detection is the candidate on ``chosen_tracklet`` (None: no detection)."""
+    out, det = [], None
+    for c in cands:
+        if c.tracklet == chosen_tracklet:
+            c = Candidate(c.x, c.y, c.length, c.short_side, c.whiteness, c.area, c.motion, c.score,
+                          None, tracklet=c.tracklet)
+            det = c
+        out.append(c)
+    return CameraResult(detection=det, candidates=tuple(out), image_size=(1280, 720))
+
+
+def params(k, **lookahead):
+    p = TrackerParams().with_value("lookahead.frames", k).with_value("colour.head_lead", 0.0)
+    for name, value in lookahead.items():
+        p = p.with_value(f"lookahead.{name}", value)
+    return p
+
+
+def run(stream, p):
+    la = CameraLookahead(p)
+    out = []
+    for i, res in enumerate(stream):
+        out += la.push(res, i / FPS)
+        # Held back K frames: nothing comes out until the window is full.
+        assert len(out) == max(0, i + 1 - p.lookahead.frames)
+    return out + la.flush(), la
+
+
+def serve_stream():
+    """A shuttle on tracklet 7 from frame 2, moving 10 px a frame; confirmed online from frame 5."""
+    stream = []
+    for i in range(12):
+        cands = [cand(900.0, 600.0, 1)]                         # a static light, never followed
+        if i >= 2:
+            cands.append(cand(100.0 + 10 * (i - 2), 300.0, 7))
+        stream.append(frame(cands, 7 if i >= 5 else None))
+    return stream
+
+
+def test_backfill_takes_the_unconfirmed_first_frames_of_the_followed_tracklet():
+    stream = serve_stream()
+    online, _ = run(stream, params(0))
+    assert [r.detection is not None for r in online] == [False] * 5 + [True] * 7
+    out, la = run(stream, params(4))
+    assert len(out) == len(stream)
+    # Frames 2–4 had the shuttle on tracklet 7 before it was confirmed: back-filled.
+    assert [r.detection is not None for r in out] == [False, False] + [True] * 10
+    for i in (2, 3, 4):
+        d = out[i].detection
+        assert (d.x, d.y, d.tracklet) == (100.0 + 10 * (i - 2), 300.0, 7)
+        assert d.rejected_by is None
+        assert sum(c.rejected_by is None for c in out[i].candidates) == 1
+    assert la.changes["backfill"] == 3
+    # Frames 0-1 have no candidate on tracklet 7: nothing to take.
+    assert out[0].detection is None and out[1].detection is None
+
+
+def test_backfill_reaches_only_k_frames_back():
+    out, _ = run(serve_stream(), params(2))
+    # Frame 4 sees tracklet 7 followed in both of its 2 future frames; frame 3 in only one of
+    # them (fewer than min_support = 2): not back-filled.
+    assert [r.detection is not None for r in out] == [False] * 4 + [True] * 8
+    out, _ = run(serve_stream(), params(2, min_support=1))
+    assert [r.detection is not None for r in out] == [False] * 3 + [True] * 9
+
+
+def test_no_backfill_of_a_shuttle_held_still_before_the_serve():
+    stream = []
+    for i in range(12):
+        x = 100.0 if i < 5 else 100.0 + 10 * (i - 4)           # held still in frames 0-4
+        stream.append(frame([cand(x, 300.0, 7)], 7 if i >= 7 else None))
+    out, _ = run(stream, params(8))
+    # Frame 4 is the last still one: its step to frame 5 is the first move, 10 px.
+    assert [r.detection is not None for r in out] == [False] * 4 + [True] * 8
+
+
+def hit_stream(racket_seen_at_handover=True, back_to_racket=False, converging=False):
+    """The readout follows the racket (tracklet 1) after a hit while the shuttle leaves on 2."""
+    stream = []
+    for i in range(14):
+        cands = []
+        if racket_seen_at_handover or i < 7:
+            cands.append(cand(500.0 + 1.0 * i, 400.0, 1))             # racket, slow
+        if i >= 3:
+            if converging:     # a player's racket closing in on the shuttle (tracklet 1)
+                cands.append(cand(700.0 - 15 * (i - 3), 400.0, 2))
+            else:              # the shuttle leaving the racket
+                cands.append(cand(520.0 + 15 * (i - 3), 400.0 - 5 * (i - 3), 2))
+        chosen = 1 if i < 7 else 2
+        if back_to_racket and i == 10:
+            chosen = 1
+        stream.append(frame(cands, chosen))
+    return stream
+
+
+def test_switch_leaves_the_racket_for_the_shuttle_earlier():
+    stream = hit_stream()
+    out, la = run(stream, params(4))
+    got = [r.detection.tracklet for r in out]
+    # Handover at frame 7; with 4 frames of future, frames 4-6 see the shuttle's tracklet
+    # followed at least min_support = 2 times and take it (frame 3 sees it once).
+    assert got == [1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2]
+    assert la.changes["switch"] == 3
+    d = out[4].detection
+    assert (d.x, d.y) == (535.0, 395.0)
+    # The racket's candidate is still there, marked as a loser.
+    assert [c.rejected_by for c in out[4].candidates if c.tracklet == 1] == [REJECT_SCORE]
+    online, _ = run(stream, params(0))
+    assert [r.detection.tracklet for r in online][:7] == [1] * 7
+
+
+def test_switch_needs_a_clean_handover():
+    out, _ = run(hit_stream(back_to_racket=True), params(4))
+    got = [r.detection.tracklet for r in out]
+    # The readout goes back to the racket at frame 10: frame 6's window (7-10) ends on it, so
+    # frame 6 keeps the racket; frames 4-5 see the last handover to the shuttle (frames 7-9).
+    assert got[:7] == [1, 1, 1, 1, 2, 2, 1]
+
+
+def test_no_switch_from_a_lost_tracklet_or_to_one_closing_in():
+    out, _ = run(hit_stream(racket_seen_at_handover=False), params(4))
+    assert [r.detection.tracklet for r in out][:7] == [1] * 7
+    out, _ = run(hit_stream(converging=True), params(4))
+    assert [r.detection.tracklet for r in out][:7] == [1] * 7
+
+
+def test_switch_and_backfill_can_be_turned_off():
+    out, la = run(hit_stream(), params(4, switch=False))
+    assert la.changes["switch"] == 0 and [r.detection.tracklet for r in out][:7] == [1] * 7
+    out, la = run(serve_stream(), params(4, backfill=False))
+    assert la.changes["backfill"] == 0 and out[4].detection is None
+
+
+def test_a_taken_candidate_is_led_to_the_cork():
+    stream = [frame([cand(100.0 + 10 * i, 300.0, 7, short_side=6.0)], 7 if i >= 3 else None)
+              for i in range(8)]
+    p = params(4).with_value("colour.head_lead", 0.5)
+    out, _ = run(stream, p)
+    # 10 px a frame at 100 fps = 1000 px/s ≥ head_lead_min_speed: moved 0.5 × 6 px forward.
+    assert out[1].detection.x == pytest.approx(110.0 + 3.0)
+    assert out[1].detection.y == pytest.approx(300.0)
+
+
+def test_stereo_lookahead_retriangulates_a_rewritten_pair():
+    rig = make_rig_for((1280, 720))
+    p = params(4)
+    la = StereoLookahead(rig, p, lambda: 6.0)
+    out = []
+    n = 12
+    for i in range(n):
+        lc, rc = [], []
+        if i >= 2:
+            x = 400.0 + 10 * (i - 2)
+            lc.append(cand(x, 300.0, 7))
+            rc.append(cand(x - 30.0, 300.0, 3))       # 30 px disparity on the same row
+        left, right = frame(lc, 7 if i >= 5 else None), frame(rc, 3 if i >= 5 else None)
+        out += la.push(TrackResult(index=i, timestamp=i / FPS, left=left, right=right))
+    out += la.flush()
+    assert [r.index for r in out] == list(range(n))
+    r = out[3]
+    assert r.left.detection is not None and r.right.detection is not None
+    assert r.point is not None and la.retriangulated == 3
+    # f = 300 px, baseline 0.3 m, disparity 30 px: Z = 3 m in the left camera's frame.
+    assert r.point[2] == pytest.approx(3.0, rel=1e-3)
+    assert r.distance == pytest.approx(math.dist((0, 0, 0), r.point), rel=1e-6)
+    assert out[6] is not None and out[6].point is None   # not rewritten: the online result as it was
+
+
+def test_lookahead_range_is_validated():
+    from badminton_gui.core.params import ParamError
+    with pytest.raises(ParamError):
+        TrackerParams().with_value("lookahead.frames", -1)
+
+
+@pytest.mark.parametrize("k", ["0", "8"])
+def test_cli_lookahead_keeps_the_output_format(tmp_path, k):
+    frames_l, _ = moving_dot_frames()
+    frames_r, _ = moving_dot_frames(offset=-10.0)
+    write_video(tmp_path / "l.avi", frames_l)
+    write_video(tmp_path / "r.avi", frames_r)
+    make_rig_for().save(tmp_path / "rig.yaml")
+    out_default, out_k = tmp_path / "a.csv", tmp_path / "b.csv"
+    common = ["track", "--left", str(tmp_path / "l.avi"), "--right", str(tmp_path / "r.avi"),
+              "--calib", str(tmp_path / "rig.yaml"), "--quiet"]
+    assert main(common + ["-o", str(out_default)]) == 0
+    assert main(common + ["-o", str(out_k), "--lookahead", k]) == 0
+    a, b = list(csv.DictReader(out_default.open())), list(csv.DictReader(out_k.open()))
+    assert len(a) == len(b) == len(frames_l)
+    assert list(a[0].keys()) == list(b[0].keys())
+    assert [r["Frame"] for r in b] == [str(i) for i in range(len(frames_l))]
+    det_a, det_b = tmp_path / "da.csv", tmp_path / "db.csv"
+    assert main(["detect", str(tmp_path / "l.avi"), "-o", str(det_a), "--quiet"]) == 0
+    assert main(["detect", str(tmp_path / "l.avi"), "-o", str(det_b), "--quiet", "--lookahead", k]) == 0
+    a, b = list(csv.DictReader(det_a.open())), list(csv.DictReader(det_b.open()))
+    assert len(a) == len(b) == len(frames_l) and list(a[0].keys()) == list(b[0].keys())
+    assert [r["Frame"] for r in b] == [str(i) for i in range(len(frames_l))]
+    # A plain moving dot: every frame found online is found with the look-ahead too.
+    assert sum(r["Visibility"] == "1" for r in b) >= sum(r["Visibility"] == "1" for r in a) - 0
+    np.testing.assert_allclose([float(r["X"]) for r in a[10:30]], [float(r["X"]) for r in b[10:30]])
+
+
+def test_cli_rejects_a_negative_lookahead(tmp_path, capsys):
+    frames, _ = moving_dot_frames(n=5)
+    write_video(tmp_path / "l.avi", frames)
+    assert main(["detect", str(tmp_path / "l.avi"), "-o", str(tmp_path / "x.csv"), "--quiet",
+                 "--lookahead", "-1"]) == 2
