@@ -233,3 +233,12 @@ def test_a_packet_that_misses_the_tick_is_shown_before_the_next_one(main_window,
     finally:
         window._timer.stop()
         window.worker = None
+
+
+def test_distance_readout_marks_a_predicted_distance():
+    from badminton_gui.gui.main_window import distance_text
+
+    assert distance_text(4.5123, None) == "4 512 mm"
+    predicted = distance_text(None, 4.5123)
+    assert "≈ 4 512 mm" in predicted and "predicted" in predicted
+    assert distance_text(None, None) == "—"

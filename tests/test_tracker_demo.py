@@ -22,9 +22,14 @@ import pytest
 from badminton_gui.io.demo_eval import evaluate_demo
 
 
+SEEN: list = []    # (result, truth) of every scored frame of the module's run
+
+
 @pytest.fixture(scope="module")
 def score():
-    return evaluate_demo(seed=3, frames=400, size=(1280, 720), rig="binocular")
+    SEEN.clear()
+    return evaluate_demo(seed=3, frames=400, size=(1280, 720), rig="binocular",
+                         on_frame=lambda result, truth, codes: SEEN.append((result, truth)))
 
 
 def test_2d_accuracy_per_camera(score):
@@ -66,3 +71,22 @@ def test_cork_correction_variance_follows_the_3d_step():
     tracker._last_blob = (0.0, blob - 0.01 * step)
     assert tracker._head_variance(1 / 120, blob, across) == 0.0
     tracker.close()
+
+
+def test_distance_is_predicted_only_where_no_point_and_close_to_truth(score):
+    """A frame with no 3D point in the middle of a flight (one camera hidden or coasting) gets
+    the flight's predicted distance instead of none; never both; and the prediction is where
+    the shuttle is."""
+    from badminton_gui.io.demo_scene import make_rig
+
+    rig = make_rig("binocular", (1280, 720))
+    errors = []
+    for result, truth in SEEN:
+        assert result.distance is None or result.predicted_distance is None
+        if result.predicted_distance is not None and truth.position is not None:
+            true_distance = float(np.linalg.norm(rig.to_left([truth.position])[0]))
+            errors.append(abs(result.predicted_distance - true_distance))
+    print(f"{len(errors)} predicted distances, errors (m): median {np.median(errors):.3f}, max {max(errors):.3f}")
+    assert len(errors) >= 3
+    assert np.median(errors) <= 0.05
+    assert max(errors) <= 0.5

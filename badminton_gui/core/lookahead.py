@@ -299,4 +299,5 @@ class StereoLookahead:
                     distance, epi = dist, err
                     self.retriangulated += 1
         return dataclasses.replace(online, left=left, right=right, point=point, distance=distance,
-                                   epipolar_error=epi)
+                                   epipolar_error=epi,
+                                   predicted_distance=None if point is not None else online.predicted_distance)

@@ -153,6 +153,7 @@ class StereoTracker:
         # Without override the guided look only serves a camera with no detection: when both
         # have one, skip predicting the flight (an RK4 propagation per frame on the hot path).
         unseen = [det is None or det.predicted for det in (det_left, det_right)]
+        guide = None
         if sp.guided_search and (sp.guided_override or any(unseen)):
             guide = self._trajectory.guide(timestamp)
             if guide is not None:
@@ -208,14 +209,20 @@ class StereoTracker:
             point_out = None
         elif measured is not None and self.rig.has_court_pose:
             point_out = self._resting_cork(measured)
-        distance = None
+        distance = predicted_distance = None
         if point_out is not None:
             distance = float(np.linalg.norm(self.rig.to_left([point_out])[0]))
+        elif flight.in_flight:
+            if guide is None:
+                guide = self._trajectory.guide(timestamp)
+            if guide is not None:
+                predicted_distance = float(np.linalg.norm(self.rig.to_left([guide[0]])[0]))
 
         return TrackResult(
             index=index, timestamp=timestamp, left=res_left, right=res_right, point=point_out,
             in_court_frame=self.rig.has_court_pose, distance=distance, speed=speed,
             epipolar_error=epi, index_right=index_right, measured_point=measured,
+            predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
 
     def _choose_pair(self, res_left: CameraResult, res_right: CameraResult

@@ -158,6 +158,10 @@ class TrackResult:
     flight: FlightInfo = field(default_factory=FlightInfo)
     # The triangulated pair as measured (cork-corrected), even when the flight refused it.
     measured_point: tuple[float, float, float] | None = None
+    # Metres from the left camera of where the followed flight puts the shuttle, on a frame with
+    # no 3D point (one camera hidden or coasting): the readout shows it marked as predicted
+    # rather than a dash in the middle of a flight. None whenever ``distance`` is set.
+    predicted_distance: float | None = None
 
     @property
     def has_point(self) -> bool:

@@ -95,6 +95,17 @@ class Banner(QFrame):
         return self.label.text() if self.isVisible() else ""
 
 
+def distance_text(measured: float | None, predicted: float | None) -> str:
+    """The distance readout: measured in mm; on a frame with no 3D point in the middle of a
+    flight (one camera hidden), the flight's prediction, greyed and marked, rather than a dash."""
+    if measured is not None:
+        return f"{measured * 1000:,.0f} mm".replace(",", " ")
+    if predicted is not None:
+        return (f"<span style='color:#999'>≈ {predicted * 1000:,.0f} mm</span>".replace(",", " ")
+                + "<span style='font-size:small; font-weight:normal; color:#999'> predicted</span>")
+    return "—"
+
+
 class Readouts(QWidget):
     """The numbers: distance (mm), speed, shot peak speed, rates, drops, latency, landing."""
 
@@ -146,7 +157,7 @@ class Readouts(QWidget):
     def show_packet(self, packet: DisplayPacket, display_hz: float) -> None:
         r, s = packet.result, packet.stats
         v = self.values
-        v["distance"].setText(f"{r.distance * 1000:,.0f} mm".replace(",", " ") if r.distance is not None else "—")
+        v["distance"].setText(distance_text(r.distance, r.predicted_distance))
         v["speed"].setText(f"{r.speed * 3.6:.0f} km/h <span style='font-size:small; font-weight:normal'>"
                            f"{r.speed:.1f} m/s</span>" if r.speed is not None else "—")
         peak = r.flight.peak_speed
