@@ -146,6 +146,7 @@ class Readouts(QWidget):
         fm_big, fm = QFontMetrics(big), self.fontMetrics()
         self.setMinimumWidth(fm.horizontalAdvance("Shot peak speed") + 24 +
                              max(fm_big.horizontalAdvance("888 km/h") + fm.horizontalAdvance(" 88.8 m/s"),
+                                 fm_big.horizontalAdvance("≈ 88 888 mm") + fm.horizontalAdvance(" predicted"),
                                  fm.horizontalAdvance("±0.00 m, lands in 0.00 s"),
                                  fm.horizontalAdvance("888 fps (888.8 ms/pair)")))
 
