@@ -291,3 +291,28 @@ def test_a_cork_led_out_of_the_image_is_not_reported():
         assert d is None or (-0.5 <= d.x < 639.5 and -0.5 <= d.y < 359.5)
     dropped = [i for i, (a, b) in enumerate(zip(runs[0.0], runs[0.5])) if a is not None and b is None]
     assert dropped and all(corks[i][0] >= 630 for i in dropped)
+
+
+def test_a_shuttle_merged_with_a_wider_blob_is_led_by_its_own_width():
+    """A shuttle crossing a racket or an arm merges with it into a much wider blob whose
+    brightest part is still the shuttle: the lead (half the shuttle's width) must not grow with
+    the merged blob's width (``colour.head_lead_width_frames``)."""
+    frames, corks = _shuttle_flight()
+    merged = range(40, 44)       # shorter than the 5 frames remembered
+    for i in merged:
+        # A dull grey patch (below half the cork's contrast: outside the measured bright part)
+        # touching the shuttle from below, moving with it.
+        x, y = corks[i]
+        cv2.rectangle(frames[i], (x - 16, y + 3), (x + 6, y + 26), (110, 110, 110), -1)
+    errors = {}
+    for frames_kept in (1, 5):
+        det = CameraDetector(_params(colour__head_lead_width_frames=frames_kept))
+        errs = []
+        for i, img in enumerate(frames):
+            d = det.process(img, i / FPS, keep_mask=False).detection
+            if i in merged:
+                assert d is not None
+                errs.append(math.hypot(d.x - corks[i][0], d.y - corks[i][1]))
+        errors[frames_kept] = errs
+    assert max(errors[1]) >= 6.0, errors          # led by the merged blob's width: past the cork
+    assert max(errors[5]) <= 3.0, errors          # led by the shuttle's own recent width

@@ -156,6 +156,14 @@ class ColourParams(ParamGroup):
                                   "this × the blob's width (0 = off)")
     head_lead_min_speed: float = param(400.0, 0.0, 20000.0, step=50.0, unit="px/s", label="... from image speed",
                                        help="Below this image speed the path's direction is too uncertain: no lead")
+    # On the demo court a shuttle crossing a racket head or an arm merges with it into a blob
+    # 20–28 px wide (the shuttle alone: 4–8 px); the blob's brightest part is still the shuttle,
+    # but half that width led the report 9–13 px past the cork (8 of the 179 errors of
+    # 3 × 1000 frames). The shuttle's apparent size changes slowly: its tracklet remembers it.
+    head_lead_width_frames: int = param(5, 1, 60, step=1, unit="frames", label="... width over",
+                                        help="The width that sets the lead is the smallest of the blob's widths on "
+                                             "its tracklet over this many frames (a shuttle merged with a racket "
+                                             "or an arm is wider than itself); 1 = this frame's only")
 
 
 @dataclass(frozen=True, slots=True)
