@@ -238,6 +238,19 @@ class AssociationParams(ParamGroup):
                                       help="A path break also forgets the tracklet's prediction residual: a "
                                            "shuttle leaving the racket on a clutter tracklet (a racket head, a "
                                            "hand) is not held back for ~10 frames by that tracklet's old misses")
+    jump_anchor_quality: float = param(0.8, 0.0, 1.0, step=0.01, label="... keeps its start from quality",
+                                       help="A path break of the followed tracklet onto a candidate at least this "
+                                            "shuttle-like (a shuttle leaving the racket) keeps the point before the "
+                                            "break as the start of its travel, so the new flight counts as moving "
+                                            "from its first frame (1 = never)")
+    followed_swap_margin: float = param(0.6, 0.0, 1.0, step=0.05, label="Followed swaps at quality margin",
+                                        help="Inside its gate the followed tracklet takes the most shuttle-like blob "
+                                             "instead of the nearest when it scores this much higher (after a hit the "
+                                             "nearest is often the racket or the hand; 1 = never)")
+    followed_swap_track_quality: float = param(0.5, 0.0, 1.0, step=0.05, label="... while its quality ≥",
+                                               help="The swap only while the followed tracklet's running quality is at "
+                                                    "least this (it was on the shuttle until the hit, not sliding over "
+                                                    "clutter after the shuttle left the view)")
     hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
