@@ -368,6 +368,10 @@ class TrajectoryParams(ParamGroup):
                                      help="Uncertainty of the aerodynamic length L before the session's first shot")
     aero_length_floor: float = param(0.1, 0.0, 3.0, step=0.01, unit="m", label="Session σ of L ≥",
                                      help="The session estimate of L never gets surer than this (feathers wear)")
+    guide_tentative_points: int = param(4, 0, 100, step=1, label="Guide from a new shot after",
+                                        help="While a new shot is being confirmed (after a hit), the cameras' guided "
+                                             "search follows it once it has this many agreeing points (0 = no guide "
+                                             "until it is confirmed)")
     min_points: int = param(6, 3, 100, step=1, label="Points before predicting",
                             help="3D points of a shot needed before a landing is predicted")
 
