@@ -291,3 +291,87 @@ def test_a_cork_led_out_of_the_image_is_not_reported():
         assert d is None or (-0.5 <= d.x < 639.5 and -0.5 <= d.y < 359.5)
     dropped = [i for i, (a, b) in enumerate(zip(runs[0.0], runs[0.5])) if a is not None and b is None]
     assert dropped and all(corks[i][0] >= 630 for i in dropped)
+
+
+def test_a_shuttle_merged_with_a_wider_blob_is_led_by_its_own_width():
+    """A shuttle crossing a racket or an arm merges with it into a much wider blob whose
+    brightest part is still the shuttle: the lead (half the shuttle's width) must not grow with
+    the merged blob's width (``colour.head_lead_width_frames``)."""
+    frames, corks = _shuttle_flight()
+    merged = range(40, 44)       # shorter than the 5 frames remembered
+    for i in merged:
+        # A dull grey patch (below half the cork's contrast: outside the measured bright part)
+        # touching the shuttle from below, moving with it.
+        x, y = corks[i]
+        cv2.rectangle(frames[i], (x - 16, y + 3), (x + 6, y + 26), (110, 110, 110), -1)
+    errors = {}
+    for frames_kept in (1, 5):
+        det = CameraDetector(_params(colour__head_lead_width_frames=frames_kept))
+        errs = []
+        for i, img in enumerate(frames):
+            d = det.process(img, i / FPS, keep_mask=False).detection
+            if i in merged:
+                assert d is not None
+                errs.append(math.hypot(d.x - corks[i][0], d.y - corks[i][1]))
+        errors[frames_kept] = errs
+    assert max(errors[1]) >= 6.0, errors          # led by the merged blob's width: past the cork
+    assert max(errors[5]) <= 3.0, errors          # led by the shuttle's own recent width
+
+
+def test_followed_tracklet_takes_the_shuttle_like_blob_over_a_nearer_racket():
+    """After a hit the racket (or the hand) is the blob nearest the followed path and the
+    shuttle leaves 20 px off it: with ``association.followed_swap_margin`` the followed tracklet
+    takes the blob that scores far higher; 1 (off) keeps the nearest."""
+    for margin in (1.0, 0.6):
+        p = TrackerParams().with_value("association.followed_swap_margin", margin)
+        assoc = TrackletAssociator(p.motion, p.association)
+        for i in range(12):
+            out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([0.9]))
+        followed = out[0][0]
+        assoc.select(followed)
+        racket, shuttle = assoc.update(12 / FPS, np.array([[220.0, 302.0], [214.0, 281.0]]),
+                                       np.array([0.1, 0.95]))
+        if margin < 1.0:
+            assert shuttle[0] == followed and shuttle[2] >= 0 and racket[0] != followed
+        else:
+            assert racket[0] == followed and shuttle[0] != followed and shuttle[2] < 0
+
+
+def test_a_path_break_of_the_followed_shuttle_keeps_its_start():
+    """The followed shuttle struck back by the racket: the step leaves the predicted path
+    (``jump_residual``), and with ``association.jump_anchor_quality`` the new path's travel
+    counts from the contact, so a slow return flight is moving at once; without it, the travel
+    starts afresh and the tracklet waits for ``min_travel`` px."""
+    merits = {}
+    for anchor in (1.0, 0.8):
+        p = TrackerParams().with_value("association.jump_anchor_quality", anchor)
+        assoc = TrackletAssociator(p.motion, p.association)
+        for i in range(12):
+            out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([0.9]))
+        assoc.select(out[0][0])
+        rows = []
+        for k in range(4):    # back up-left from the contact, 40 px off the path, then 3 px a frame
+            pos = np.array([[200.0 - 3 * k, 262.0 - 3 * k]])
+            rows.append(assoc.update((12 + k) / FPS, pos, np.array([0.95]))[0])
+        assert all(r[0] == out[0][0] for r in rows)        # the same (followed) tracklet throughout
+        merits[anchor] = [r[2] for r in rows]
+    assert all(m >= 0 for m in merits[0.8]), merits
+    assert any(m < 0 for m in merits[1.0]), merits
+
+
+def test_followed_tracklet_sliding_over_clutter_does_not_swap():
+    """A followed tracklet whose running quality is already low (sliding over clutter after the
+    shuttle left the view) does not jump onto a shuttle-like blob nearby
+    (``association.followed_swap_track_quality``)."""
+    for min_quality in (0.0, 0.5):
+        p = (TrackerParams().with_value("association.followed_swap_margin", 0.6)
+             .with_value("association.followed_swap_track_quality", min_quality))
+        assoc = TrackletAssociator(p.motion, p.association)
+        for i in range(12):
+            out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([0.3]))
+        followed = out[0][0]
+        assoc.select(followed)
+        near, bright = assoc.update(12 / FPS, np.array([[220.0, 302.0], [214.0, 281.0]]),
+                                    np.array([0.05, 0.95]))
+        assert (bright[0] == followed) == (min_quality == 0.0)
+        assert (near[0] == followed) == (min_quality > 0.0)

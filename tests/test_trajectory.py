@@ -399,3 +399,32 @@ def test_robust_sigma_limits_the_pull_of_a_point_inside_the_gate():
     clean_plain, _ = _young_flight_with(12, (0.0, 0.0, 0.0), robust_sigma=0.0)
     clean_huber, _ = _young_flight_with(12, (0.0, 0.0, 0.0), robust_sigma=2.0)
     assert clean_huber == pytest.approx(clean_plain, abs=1e-4)
+
+
+def test_a_new_shot_being_confirmed_guides_the_cameras():
+    """After a hit the old flight is wrong and the new track needs 6 agreeing points to take
+    over; meanwhile ``trajectory.guide_tentative_points`` lets the guided search follow the new
+    track (0: no guide until it is confirmed, so a shuttle merged with the player right after
+    the hit was lost and the track never got its points)."""
+    p0, v0 = np.array([0.0, -5.0, 2.5]), np.array([0.5, 22.0, 18.0])
+    t1, pos1, _ = physics.simulate(p0, v0, 5.0, dt=1e-3, aero_length=4.8)
+    cut = np.searchsorted(t1, 1.2)
+    t2, pos2, _ = physics.simulate(pos1[cut], np.array([-1.0, -25.0, 3.0]), 5.0, dt=1e-3, aero_length=4.8)
+    t_all = np.concatenate([t1[:cut], t1[cut] + t2])
+    p_all = np.concatenate([pos1[:cut], pos2])
+    times = np.arange(0.0, 1.3, 1 / 120)
+    truth = np.stack([np.interp(times, t_all, p_all[:, i]) for i in range(3)], axis=1)
+    hit = int(np.searchsorted(times, t1[cut]))
+    for points in (0, 4):
+        traj = Trajectory(TrajectoryParams(measurement_noise=0.01, guide_tentative_points=points),
+                          court_frame=True)
+        for k in range(hit + 5):              # the old flight, then 5 points of the new one
+            traj.update(times[k], tuple(truth[k]))
+            if k > hit and traj._tentative is not None and len(traj._tentative.points) >= 4:
+                break
+        assert traj._tentative is not None and len(traj._tentative.points) >= 4
+        guide = traj.guide(times[k + 1])
+        if points == 0:
+            assert guide is None
+        else:
+            assert guide is not None and np.linalg.norm(guide[0] - truth[k + 1]) < 0.05

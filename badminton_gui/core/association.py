@@ -142,6 +142,24 @@ class TrackletAssociator:
         motion = [math.nan] * n
         if self.tracklets and n:
             d, gates, cost = self._match_costs(t, positions)
+            if p.followed_swap_margin < 1.0:
+                # After a hit the nearest blob to the followed path is often the racket or the
+                # hand that struck (larger, less white: a low quality) while the shuttle leaves
+                # on a path of its own inside the same gate: the followed tracklet takes the
+                # blob that looks far more like a shuttle.
+                for i, tr in enumerate(self.tracklets):
+                    if tr.ident != self.selected:
+                        continue
+                    if tr.quality < p.followed_swap_track_quality:
+                        break
+                    inside = np.flatnonzero(d[i] <= gates[i])
+                    if len(inside) < 2:
+                        break
+                    nearest = inside[np.argmin(cost[i, inside])]
+                    best = inside[np.argmax(scores[inside])]
+                    if scores[best] - scores[nearest] >= p.followed_swap_margin:
+                        cost[i, best] = cost[i, nearest] - 1e-3
+                    break
             order = np.argsort(cost, axis=None)
             # Only pairs inside the tracklet's gate can be taken: drop the others before the
             # Python loop (it used to visit all tracklets × candidates, ~800 pairs a frame, to
@@ -285,8 +303,16 @@ class TrackletAssociator:
             # The step left the predicted path (a racket hit, or a tracklet hopping between
             # clutter blobs inside its wide gates): the travel before it says nothing about
             # what the tracklet follows now, so the travel and pause rules start afresh.
+            anchor = tr.recent[-1] if tr.recent else None
             tr.start_x, tr.start_y, tr.travel = x, y, 0.0
             tr.recent.clear()
+            if (anchor is not None and tr.ident == self.selected
+                    and score >= self.params.jump_anchor_quality):
+                # The followed shuttle struck by the racket: the new path starts where the old
+                # one ended (the contact), not at its first point after it, so the flight counts
+                # as moving at once instead of after min_travel px more.
+                tr.start_x, tr.start_y = anchor
+                tr.recent.append(anchor)
             if self.params.jump_resets_residual:
                 # ... and so does its smoothness record: after a racket contact the shuttle may
                 # take over a clutter tracklet (the racket head's, a hand's), whose old

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections import deque
 
 import cv2
 import numpy as np
@@ -71,6 +72,7 @@ class CameraDetector:
         self._background = BackgroundModel(self.params.background, self.params.binarize)
         self._associator = TrackletAssociator(self.params.motion, self.params.association)
         self._tracklet_of: dict[int, int] = {}   # id(candidate) → tracklet ident, this frame
+        self._widths: dict[int, deque] = {}      # tracklet ident → its blobs' recent short sides
         self.last_features: list = []   # (x, y, features, rejected_by) of the last frame's blobs
         self._classifier = None
         self._load_classifier()
@@ -92,6 +94,7 @@ class CameraDetector:
         self._background.reset()
         self._associator.reset()
         self._tracklet_of = {}
+        self._widths = {}
         self._previous_positions = np.zeros((0, 2))
 
     @property
@@ -243,6 +246,7 @@ class CameraDetector:
                 return self._background.is_blind(x * ms_x, y * ms_y)
         links = self._associator.update(t, positions, qualities, blind)
         self._tracklet_of = {}
+        width_frames = int(p.colour.head_lead_width_frames)
         k = 0
         for m in measured:
             x, y, length, short_side, whiteness, area, quality, reason, _ = m
@@ -258,7 +262,15 @@ class CameraDetector:
                                tracklet=-1 if ident is None else ident)
             if ident is not None:
                 self._tracklet_of[id(c)] = ident
+                if width_frames > 1:
+                    widths = self._widths.get(ident)
+                    if widths is None or widths.maxlen != width_frames:
+                        widths = self._widths[ident] = deque(widths or (), maxlen=width_frames)
+                    widths.append(short_side)
             candidates.append(c)
+        if width_frames > 1 and len(self._widths) > 2 * len(self._associator.tracklets) + 16:
+            alive = {tr.ident for tr in self._associator.tracklets}
+            self._widths = {k: v for k, v in self._widths.items() if k in alive}
         # The followed shuttle crossing a light or a white line leaves no blob: its track's
         # prediction stands in (flagged, never triangulated) until it shows again.
         coast = self._associator.coasting(t, blind)
@@ -361,7 +373,13 @@ class CameraDetector:
         speed = math.hypot(*velocity)
         if speed < c.head_lead_min_speed:
             return result, chosen
-        lead = c.head_lead * chosen.short_side / speed
+        width = chosen.short_side
+        widths = self._widths.get(self._tracklet_of.get(id(chosen)))
+        if c.head_lead_width_frames > 1 and widths:
+            # A shuttle merged with a racket or an arm: the blob is wider than the shuttle,
+            # whose own width shows in the tracklet's recent frames.
+            width = min(width, min(widths))
+        lead = c.head_lead * width / speed
         moved = dataclasses.replace(chosen, x=chosen.x + lead * velocity[0], y=chosen.y + lead * velocity[1])
         w, h = result.image_size
         if w > 0 and not (-0.5 <= moved.x < w - 0.5 and -0.5 <= moved.y < h - 0.5):

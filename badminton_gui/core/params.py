@@ -159,6 +159,14 @@ class ColourParams(ParamGroup):
                                   "this × the blob's width (0 = off)")
     head_lead_min_speed: float = param(400.0, 0.0, 20000.0, step=50.0, unit="px/s", label="... from image speed",
                                        help="Below this image speed the path's direction is too uncertain: no lead")
+    # On the demo court a shuttle crossing a racket head or an arm merges with it into a blob
+    # 20–28 px wide (the shuttle alone: 4–8 px); the blob's brightest part is still the shuttle,
+    # but half that width led the report 9–13 px past the cork (8 of the 179 errors of
+    # 3 × 1000 frames). The shuttle's apparent size changes slowly: its tracklet remembers it.
+    head_lead_width_frames: int = param(5, 1, 60, step=1, unit="frames", label="... width over",
+                                        help="The width that sets the lead is the smallest of the blob's widths on "
+                                             "its tracklet over this many frames (a shuttle merged with a racket "
+                                             "or an arm is wider than itself); 1 = this frame's only")
 
 
 @dataclass(frozen=True, slots=True)
@@ -233,6 +241,19 @@ class AssociationParams(ParamGroup):
                                       help="A path break also forgets the tracklet's prediction residual: a "
                                            "shuttle leaving the racket on a clutter tracklet (a racket head, a "
                                            "hand) is not held back for ~10 frames by that tracklet's old misses")
+    jump_anchor_quality: float = param(0.8, 0.0, 1.0, step=0.01, label="... keeps its start from quality",
+                                       help="A path break of the followed tracklet onto a candidate at least this "
+                                            "shuttle-like (a shuttle leaving the racket) keeps the point before the "
+                                            "break as the start of its travel, so the new flight counts as moving "
+                                            "from its first frame (1 = never)")
+    followed_swap_margin: float = param(0.6, 0.0, 1.0, step=0.05, label="Followed swaps at quality margin",
+                                        help="Inside its gate the followed tracklet takes the most shuttle-like blob "
+                                             "instead of the nearest when it scores this much higher (after a hit the "
+                                             "nearest is often the racket or the hand; 1 = never)")
+    followed_swap_track_quality: float = param(0.5, 0.0, 1.0, step=0.05, label="... while its quality ≥",
+                                               help="The swap only while the followed tracklet's running quality is at "
+                                                    "least this (it was on the shuttle until the hit, not sliding over "
+                                                    "clutter after the shuttle left the view)")
     hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
@@ -350,6 +371,10 @@ class TrajectoryParams(ParamGroup):
                                      help="Uncertainty of the aerodynamic length L before the session's first shot")
     aero_length_floor: float = param(0.1, 0.0, 3.0, step=0.01, unit="m", label="Session σ of L ≥",
                                      help="The session estimate of L never gets surer than this (feathers wear)")
+    guide_tentative_points: int = param(4, 0, 100, step=1, label="Guide from a new shot after",
+                                        help="While a new shot is being confirmed (after a hit), the cameras' guided "
+                                             "search follows it once it has this many agreeing points (0 = no guide "
+                                             "until it is confirmed)")
     min_points: int = param(6, 3, 100, step=1, label="Points before predicting",
                             help="3D points of a shot needed before a landing is predicted")
 

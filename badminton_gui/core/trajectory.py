@@ -412,8 +412,16 @@ class Trajectory:
         points, lost for longer than ``max_gap``, or a new track is being confirmed: a hit)."""
         f = self._flight
         p = self.params
-        if (f is None or len(f.points) < p.min_points or t - f.t > p.max_gap
-                or (self._tentative is not None and len(self._tentative.points) >= 3)):
+        tent = self._tentative
+        if (p.guide_tentative_points > 0 and tent is not None
+                and len(tent.points) >= p.guide_tentative_points and t - tent.t <= p.max_gap):
+            # A new shot being confirmed after a hit: the old flight is wrong there, but the
+            # new track's points already agree on a path; without a guide the cameras lose a
+            # shuttle that merges with a player right after the hit, and the track never gets
+            # the points that would confirm it.
+            f = tent
+        elif (f is None or len(f.points) < p.min_points or t - f.t > p.max_gap
+                or (tent is not None and len(tent.points) >= 3)):
             return None
         saved = (f.x, f.P, f.t)
         f.predict(t, p.model_noise)
