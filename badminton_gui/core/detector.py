@@ -255,7 +255,6 @@ class CameraDetector:
         if p.motion.coast_blind > 0:
             def blind(x: float, y: float) -> bool:
                 return self._background.is_blind(x * ms_x, y * ms_y)
-        outside = [] if window is None else self._window.set_aside(self._associator, t, window)
         links = self._associator.update(t, positions, qualities, blind)
         self._tracklet_of = {}
         k = 0
@@ -276,7 +275,6 @@ class CameraDetector:
         # The followed shuttle crossing a light or a white line leaves no blob: its track's
         # prediction stands in (flagged, never triangulated) until it shows again.
         coast = self._associator.coasting(t, blind)
-        self._window.restore(self._associator, outside)
         if coast is not None:
             tr, merit = coast
             px, py = tr.predict(t)

@@ -17,8 +17,13 @@ Consequences, by design:
   longer in the whole frames' masks;
 - on windowed frames the mask (and the GUI's mask preview) is empty outside the window, so
   ``is_merged`` sees nothing there; ``is_blind`` reads the running average, stale outside;
-- tracklets whose prediction lies outside the window are set aside for the frame (neither hit
-  nor missed), so a rival tracklet survives the windowed frames and meets the next whole one;
+- tracklets outside the window find no candidate there and are missed as on a whole frame
+  where their blob vanished: they end after ``association.max_misses`` windowed frames. (Setting
+  them aside for the windowed frames instead, neither hit nor missed, was tried and lost 1.5 F1
+  points: a static blob's tracklet — a shuttle lying on the floor — kept the pause allowance it
+  would have used up, came back on the next whole frame with its long history and took the
+  choice from the shuttle's tracklet after a hit; rally_11-46-22 right frames 427–456, left
+  784–911.)
 - after a whole frame on which a rival tracklet (not followed, not confirmed, running quality
   ≥ ``window.watch_quality``) was seen, the next frame is whole too, so a new serve gets its
   confirming frames in a row.
@@ -159,26 +164,6 @@ class WindowTracker:
                                        offset=(mx0, my0))
         self.windowed += 1
         return self._gray, mask, contours
-
-    @staticmethod
-    def set_aside(associator: TrackletAssociator, t: float, window: tuple[int, int, int, int]
-                  ) -> list[Tracklet]:
-        """Take the tracklets predicted outside the window out of the associator for this
-        frame (they are neither hit nor missed); ``restore`` puts them back."""
-        x0, y0, x1, y1 = window
-        inside, outside = [], []
-        for tr in associator.tracklets:
-            px, py = tr.predict(t)
-            (inside if (x0 <= px < x1 and y0 <= py < y1) else outside).append(tr)
-        for tr in outside:
-            tr.hit_now = False
-        associator.tracklets = inside
-        return outside
-
-    @staticmethod
-    def restore(associator: TrackletAssociator, outside: list[Tracklet]) -> None:
-        if outside:
-            associator.tracklets.extend(outside)
 
 
 def followed_tracklet(associator: TrackletAssociator) -> Tracklet | None:
