@@ -152,3 +152,31 @@ def test_the_window_is_clipped_to_its_largest_area():
     assert (x1 - x0) * (y1 - y0) <= (math.sqrt(2048 * 1536 / 8) + 2 * ALIGN) ** 2
     assert x0 <= 1000 < x1 and y0 <= 700 < y1
     assert abs((x0 + x1) / 2 - 1000) <= ALIGN and abs((y0 + y1) / 2 - 700) <= ALIGN
+
+
+@pytest.mark.parametrize("k", [1, 3, 7])
+def test_catch_up_teaches_the_missed_pixels_what_the_missed_frames_would_have(k):
+    """Pixels outside the windows for k frames, then a whole frame with ``catch_up``: the
+    running average is where k + 1 whole frames would have left it (inside the window too)."""
+    p = _params(background__compensate_gain=False)
+    whole, part = BackgroundModel(p.background, p.binarize), BackgroundModel(p.background, p.binarize)
+    g0 = np.full((96, 128), 40, np.uint8)
+    g1 = np.full((96, 128), 48, np.uint8)   # brighter by less than diff_threshold: still
+    for m in (whole, part):
+        m.apply(g0)
+    for _ in range(k + 1):
+        whole.apply(g1)
+    missed = np.full(g0.shape, 255, np.uint8)
+    for _ in range(k):
+        part.apply_window(g1[16:48, 32:80], 32, 16)
+    missed[16:48, 32:80] = 0
+    part.catch_up(missed, k)
+    part.apply(g1)
+    assert np.allclose(part._average, whole._average, atol=1e-3)
+    # without it the pixels outside learn k times slower
+    slow = BackgroundModel(p.background, p.binarize)
+    slow.apply(g0)
+    for _ in range(k):
+        slow.apply_window(g1[16:48, 32:80], 32, 16)
+    slow.apply(g1)
+    assert not np.allclose(slow._average[0, 0], whole._average[0, 0], atol=1e-3)

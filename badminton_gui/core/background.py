@@ -32,6 +32,9 @@ class BackgroundModel:
         self._kernel: np.ndarray | None = None
         self._shake_kernel: np.ndarray | None = None
         self._raw_mask: np.ndarray | None = None
+        # Windowed tracking: pixels (255) that missed updates, and the extra learning rate they
+        # get on the next whole frame (``catch_up``); used once.
+        self._catch_up: tuple[np.ndarray, float] | None = None
         self._configure()
 
     @property
@@ -236,7 +239,18 @@ class BackgroundModel:
             # Slow leak under the foreground too, so a change that stays (a light switched on)
             # is absorbed eventually.
             cv2.accumulateWeighted(gray, self._average, alpha * 0.1, mask=mask)
+            if self._catch_up is not None and self._catch_up[0].shape == gray.shape:
+                missed, extra = self._catch_up
+                cv2.accumulateWeighted(gray, self._average, extra,
+                                       mask=cv2.bitwise_and(self._still, missed))
+        self._catch_up = None
         return mask
+
+    def catch_up(self, missed: np.ndarray, frames: int) -> None:
+        """The next ``apply`` also teaches the still pixels where ``missed`` is 255 what the
+        ``frames`` updates they missed would have (extra rate 1 − (1 − α)^frames)."""
+        alpha = float(self._bg.learning_rate)
+        self._catch_up = (missed, 1.0 - (1.0 - alpha) ** frames) if frames > 0 and alpha > 0 else None
 
     def _three_frame_difference(self, gray: np.ndarray) -> np.ndarray:
         """Pixels that differ from *both* of the two previous frames: the object now, no ghosts."""

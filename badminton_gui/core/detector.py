@@ -132,6 +132,7 @@ class CameraDetector:
                 window = None
                 self._window.note(None)
             gray = self._model_grey(frame_bgr, scale)
+            self._window.before_whole(self._background)
             mask = self._background.apply(gray)
             contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         else:

@@ -370,6 +370,10 @@ class WindowParams(ParamGroup):
     margin: float = param(48.0, 0.0, 1000.0, step=4.0, unit="px", label="Window margin",
                           help="Added on each side to the tracklet's motion gate (the blob's own size, a "
                                "racket hit's change of direction)")
+    catch_up: bool = flag(False, label="Catch up outside the window",
+                          help="On a whole frame, the background pixels no window covered since the last "
+                               "whole frame learn as much as the frames they missed would have taught "
+                               "them (1 − (1 − α)^k), instead of learning k× slower")
     watch_quality: float = param(0.5, 0.0, 1.0, step=0.01, label="Stay whole for a rival of quality",
                                  help="After a whole frame, the next one is whole too while a tracklet outside "
                                       "the window was seen with at least this running quality and is not "

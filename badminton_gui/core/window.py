@@ -12,9 +12,12 @@ processed as before: a serve, the other camera's partner candidate, a new shuttl
 followed one is lost are found at most ``full_every − 1`` frames late.
 
 Consequences, by design:
-- the running average outside the window learns only on whole frames (at the same learning
-  rate, so ``full_every`` × slower in time there): a player's ghost outside the window lasts
-  longer in the whole frames' masks;
+- the running average outside the window learns only on whole frames: at the same learning
+  rate, so ``full_every`` × slower in time there (a player's ghost outside the window lasts
+  longer in the whole frames' masks), unless ``window.catch_up`` gives the still pixels no
+  window covered the weight of the k updates they missed, 1 − (1 − α)^k, on the next whole
+  frame (coarse preset: tuned-on F1 94.47 → 94.53 %); the flicker gain of a windowed frame is
+  estimated on the window's part of the sparse grid (a finer grid when it holds too few points);
 - on windowed frames the mask (and the GUI's mask preview) is empty outside the window, so
   ``is_merged`` sees nothing there; ``is_blind`` reads the running average, stale outside;
 - tracklets outside the window find no candidate there and are missed as on a whole frame
@@ -85,6 +88,8 @@ class WindowTracker:
         self.last_window: tuple[int, int, int, int] | None = None
         self.frames = 0
         self.windowed = 0
+        self._touched: np.ndarray | None = None   # model pixels some window covered (255)
+        self._skipped = 0                          # windowed frames since the last whole one
 
     def set_params(self, params: TrackerParams) -> None:
         self.params = params
@@ -92,6 +97,16 @@ class WindowTracker:
     def reset(self) -> None:
         self._since_full = 0
         self.last_window = None
+        self._skipped = 0
+
+    def before_whole(self, background: BackgroundModel) -> None:
+        """Call before a whole frame's ``background.apply``: with ``window.catch_up`` the pixels
+        no window covered since the last whole frame catch up on the updates they missed."""
+        if self._skipped and self._touched is not None and self.params.window.catch_up:
+            background.catch_up(cv2.bitwise_not(self._touched), self._skipped)
+        self._skipped = 0
+        if self._touched is not None:
+            self._touched.fill(0)
 
     # ---- the choice --------------------------------------------------------------------
     def plan(self, associator: TrackletAssociator, t: float, width: int, height: int,
@@ -162,6 +177,11 @@ class WindowTracker:
         mask[my0:my0 + gh, mx0:mx0 + gw] = mask_win
         contours, _ = cv2.findContours(mask_win, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE,
                                        offset=(mx0, my0))
+        if self.params.window.catch_up:
+            if self._touched is None or self._touched.shape != (model_h, model_w):
+                self._touched = np.zeros((model_h, model_w), np.uint8)
+            self._touched[my0:my0 + gh, mx0:mx0 + gw] = 255
+        self._skipped += 1
         self.windowed += 1
         return self._gray, mask, contours
 
