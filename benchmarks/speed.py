@@ -127,7 +127,8 @@ class PlainChain:
         return None if best is None else best[1]
 
 
-def load_pairs(n: int, size: tuple[int, int] | None) -> list[tuple[np.ndarray, np.ndarray, float]]:
+def load_pairs(n: int, size: tuple[int, int] | None, skip: int = 0
+               ) -> list[tuple[np.ndarray, np.ndarray, float]]:
     d = DATA / RALLY
     lt = read_timestamps(d / "CameraReader_1.csv")[1]
     rt = read_timestamps(d / "CameraReader_2.csv")[1]
@@ -138,6 +139,9 @@ def load_pairs(n: int, size: tuple[int, int] | None) -> list[tuple[np.ndarray, n
             f = src.read()
             if f is None:
                 break
+            if skip > 0:
+                skip -= 1
+                continue
             left, right = f.left, f.right
             if size is not None:
                 left = cv2.resize(left, size, interpolation=cv2.INTER_AREA)
@@ -441,6 +445,53 @@ def process_bound(full_rig: StereoRig, preset: str | None, n: int) -> None:
                       f"{1000 * (time.process_time() - cpu) / len(pairs):5.2f} ms CPU a pair")
 
 
+def window_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rounds: int,
+              preset: str | None) -> None:
+    """Windowed tracking (core/window.py) off and on, alternated in this process, 2048 px.
+
+    Per round and setting: one thread (``parallel=False``), the thread CPU time a pair and a
+    camera frame; then the tracker's two camera threads, pairs/s, latency p50 / p99 and the
+    process CPU time a pair; the share of camera frames processed in a window, and how many
+    pairs had a 3D point (the outputs are not identical: a different model outside the window).
+    """
+    import os
+    pairs = load_pairs(n, None, skip)
+    on = params.with_value("window.enabled", True)
+    off = params.with_value("window.enabled", False)
+    print(f"window A/B: {RALLY} pairs {skip}-{skip + len(pairs) - 1}, preset {preset or 'default'}, "
+          f"full_every {on.window.full_every}, max_fraction {on.window.max_fraction}, margin {on.window.margin}")
+    print(f"{'round':>5} {'window':>6} {'1-thread CPU/pair':>17} {'CPU/frame':>9} {'windowed':>8} "
+          f"{'2-thr pairs/s':>13} {'p50':>6} {'p99':>6} {'CPU/pair':>8} {'3D pts':>6} {'load':>5}")
+    for r in range(rounds):
+        for name, p in (("off", off), ("on", on)):
+            tracker = StereoTracker(full_rig, p, parallel=False)
+            cpu = 0.0
+            for lf, rf, t in pairs:
+                c0 = time.thread_time()
+                tracker.process(lf, rf, t, keep_masks=False)
+                cpu += time.thread_time() - c0
+            win = tracker.left._window, tracker.right._window
+            share = sum(w.windowed for w in win) / max(sum(w.frames for w in win), 1) if p.window.enabled else 0.0
+            tracker.close()
+            tracker = StereoTracker(full_rig, p, parallel=True)
+            lat = []
+            points = 0
+            c0, w0 = time.process_time(), time.perf_counter()
+            for lf, rf, t in pairs:
+                t0 = time.perf_counter()
+                res = tracker.process(lf, rf, t, keep_masks=False)
+                lat.append(time.perf_counter() - t0)
+                points += res.point is not None
+            wall = time.perf_counter() - w0
+            cpu2 = time.process_time() - c0
+            tracker.close()
+            lat_ms = np.asarray(lat) * 1000
+            per_pair = 1000 * cpu / len(pairs)
+            print(f"{r:>5} {name:>6} {per_pair:14.2f} ms {per_pair / 2:6.2f} ms {100 * share:7.1f}% "
+                  f"{len(pairs) / wall:13.1f} {np.percentile(lat_ms, 50):6.2f} {np.percentile(lat_ms, 99):6.2f} "
+                  f"{1000 * cpu2 / len(pairs):5.2f} ms {points:6d} {os.getloadavg()[0]:5.1f}", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pairs", type=int, default=300, help="frame pairs held in memory per resolution")
@@ -456,7 +507,18 @@ def main() -> None:
     ap.add_argument("--f1-pairs", type=int, default=100000, help="at most this many pairs per rally for F1")
     ap.add_argument("--process-bound", action="store_true",
                     help="only: the detectors in two processes against the tracker's threads (2048 px)")
+    ap.add_argument("--window", action="store_true",
+                    help="only: the preset with window.enabled off and on, alternated (2048 px, "
+                         "--pairs pairs from pair --skip on, --rounds rounds)")
+    ap.add_argument("--skip", type=int, default=0, help="--window: pairs skipped first")
+    ap.add_argument("--rounds", type=int, default=3, help="--window: alternated rounds")
     args = ap.parse_args()
+    if args.window:
+        params = load_preset(args.preset)
+        full_rig = rig_from_nycu(DATA / RALLY / "CameraReader_1.cfg", DATA / RALLY / "CameraReader_2.cfg")
+        with opencv_threads(args.cv_threads or None):
+            window_ab(full_rig, params, args.pairs, args.skip, args.rounds, args.preset)
+        return
     render, demo_fps = demo_render_rate()
     print(f"demo court 1280x720: renders {render:.1f} pairs/s (it plays at {demo_fps:.0f} fps: "
           f"{render / demo_fps:.2f}x real time)")

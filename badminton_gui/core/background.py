@@ -32,6 +32,9 @@ class BackgroundModel:
         self._kernel: np.ndarray | None = None
         self._shake_kernel: np.ndarray | None = None
         self._raw_mask: np.ndarray | None = None
+        # Windowed tracking: pixels (255) that missed updates, and the extra learning rate they
+        # get on the next whole frame (``catch_up``); used once.
+        self._catch_up: tuple[np.ndarray, float] | None = None
         self._configure()
 
     @property
@@ -77,14 +80,79 @@ class BackgroundModel:
             mask = self._brighter_than_average(gray)
         else:
             mask = self._three_frame_difference(gray)
-        if self._kernel is not None:
-            mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._kernel)
-        if self._bin.dilate_iterations > 0:
-            mask = cv2.dilate(mask, None, iterations=int(self._bin.dilate_iterations))
+        mask = self._clean(mask)
         if mask is self._raw_mask:
             # The caller keeps the mask (the GUI shows it): never hand out the reused buffer.
             mask = mask.copy()
         return mask
+
+    def _clean(self, mask: np.ndarray) -> np.ndarray:
+        """Opening and dilation of a raw mask (``binarize.open_kernel``, ``dilate_iterations``)."""
+        if self._kernel is not None:
+            mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._kernel)
+        if self._bin.dilate_iterations > 0:
+            mask = cv2.dilate(mask, None, iterations=int(self._bin.dilate_iterations))
+        return mask
+
+    def can_window(self, shape: tuple[int, int]) -> bool:
+        """True when ``apply_window`` works for a model of this (full) shape: brighter-than-
+        average only, and the running average already learnt at that size."""
+        return (self._bg.method == "bright_diff" and self._average is not None
+                and self._average.shape == tuple(shape))
+
+    def apply_window(self, gray: np.ndarray, x0: int, y0: int) -> np.ndarray:
+        """The mask of one window of the model (``gray``: the grey image of model pixels
+        ``[y0:y0+h, x0:x0+w]``); only that part of the running average learns (core/window.py).
+
+        The same arithmetic as ``apply`` on those pixels: the shake tolerance's dilation reads
+        ``shake_tolerance`` pixels around the window, the flicker gain is estimated on the same
+        sparse grid (its points inside the window; a finer grid when the window holds too few)
+        and the opening / dilation run inside the window. ``last_difference`` and
+        ``last_unlit`` stay full-size buffers, valid inside the window only. A window covering
+        the whole model gives what ``apply`` gives (tests/test_window.py).
+        """
+        avg_full = self._average
+        big_h, big_w = avg_full.shape
+        h, w = gray.shape
+        rows, cols = slice(y0, y0 + h), slice(x0, x0 + w)
+        avg = avg_full[rows, cols]
+        gain = 1.0
+        if self._bg.compensate_gain:
+            whole = (h, w) == (big_h, big_w)
+            for step in ((8,) if whole else (8, 4, 2)):
+                gy, gx = (-y0) % step, (-x0) % step   # the grid of the whole model
+                avg_s = avg[gy::step, gx::step]
+                lit = avg_s > 20
+                ratios = gray[gy::step, gx::step][lit] / avg_s[lit]
+                if ratios.size > 50:
+                    gain = median_float32(ratios)
+                    break
+        k = int(self._bg.shake_tolerance)
+        if k > 0:
+            if self._shake_kernel is None or self._shake_kernel.shape[0] != 2 * k + 1:
+                self._shake_kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (2 * k + 1, 2 * k + 1))
+            ey0, ex0 = max(y0 - k, 0), max(x0 - k, 0)
+            grown = cv2.dilate(avg_full[ey0:min(y0 + h + k, big_h), ex0:min(x0 + w + k, big_w)],
+                               self._shake_kernel)
+            reference = grown[y0 - ey0:y0 - ey0 + h, x0 - ex0:x0 - ex0 + w]
+            if gain != 1.0:
+                reference = np.multiply(reference, gain, out=reference)
+        else:
+            reference = np.multiply(avg, gain) if gain != 1.0 else avg
+        diff = cv2.subtract(gray, reference, dst=self._difference[rows, cols], dtype=cv2.CV_32F)
+        mask = cv2.compare(diff, float(self._bin.diff_threshold), cv2.CMP_GT)
+        self.last_difference = self._difference
+        self.last_unlit = None
+        if self._bin.max_background < 255:
+            unlit = cv2.compare(avg, float(self._bin.max_background), cv2.CMP_LT,
+                                dst=self._unlit[rows, cols])
+            cv2.bitwise_and(mask, unlit, dst=mask)
+            self.last_unlit = self._unlit
+        alpha = float(self._bg.learning_rate)
+        if alpha > 0:
+            cv2.accumulateWeighted(gray, avg, alpha, mask=cv2.bitwise_not(mask))
+            cv2.accumulateWeighted(gray, avg, alpha * 0.1, mask=mask)
+        return self._clean(mask)
 
     def is_blind(self, x: float, y: float) -> bool:
         """True when a shuttle at (x, y) (processing-scale px) cannot show in the mask.
@@ -171,7 +239,18 @@ class BackgroundModel:
             # Slow leak under the foreground too, so a change that stays (a light switched on)
             # is absorbed eventually.
             cv2.accumulateWeighted(gray, self._average, alpha * 0.1, mask=mask)
+            if self._catch_up is not None and self._catch_up[0].shape == gray.shape:
+                missed, extra = self._catch_up
+                cv2.accumulateWeighted(gray, self._average, extra,
+                                       mask=cv2.bitwise_and(self._still, missed))
+        self._catch_up = None
         return mask
+
+    def catch_up(self, missed: np.ndarray, frames: int) -> None:
+        """The next ``apply`` also teaches the still pixels where ``missed`` is 255 what the
+        ``frames`` updates they missed would have (extra rate 1 − (1 − α)^frames)."""
+        alpha = float(self._bg.learning_rate)
+        self._catch_up = (missed, 1.0 - (1.0 - alpha) ** frames) if frames > 0 and alpha > 0 else None
 
     def _three_frame_difference(self, gray: np.ndarray) -> np.ndarray:
         """Pixels that differ from *both* of the two previous frames: the object now, no ghosts."""

@@ -47,6 +47,7 @@ from .association import TrackletAssociator
 from .background import BackgroundModel
 from .classifier import load_classifier
 from .params import TrackerParams
+from .window import WindowTracker
 from .types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SIDE,
                     REJECT_WHITENESS, CameraResult, Candidate, make_candidate)
 
@@ -82,16 +83,19 @@ class CameraDetector:
         self._mask_scale = 0.0   # mask px per full-resolution px (0: no frame yet)
         self._last_mask: np.ndarray | None = None
         self._large_boxes = np.zeros((0, 4), np.int64)   # full-res boxes of blobs too large (filters 1, 2)
+        self._window = WindowTracker(self.params)   # windowed tracking (``window.enabled``)
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
         self.params = params
         self._background.set_params(params.background, params.binarize)
         self._associator.set_params(params.motion, params.association)
+        self._window.set_params(params)
         self._load_classifier()
 
     def reset(self) -> None:
         self._background.reset()
+        self._window.reset()
         self._associator.reset()
         self._tracklet_of = {}
         self._widths = {}
@@ -122,12 +126,23 @@ class CameraDetector:
         p = self.params
         h, w = frame_bgr.shape[:2]
         scale = model_scale(p.background, w)
-        gray = self._model_grey(frame_bgr, scale)
-        mask = self._background.apply(gray)
+        # Windowed tracking (core/window.py): only around the followed shuttle's prediction.
+        window = self._window.plan(self._associator, t, w, h, scale) if p.window.enabled else None
+        windowed = None if window is None else self._window.model_mask(frame_bgr, scale, window,
+                                                                       self._background)
+        if windowed is None:
+            if window is not None:
+                window = None
+                self._window.note(None)
+            gray = self._model_grey(frame_bgr, scale)
+            self._window.before_whole(self._background)
+            mask = self._background.apply(gray)
+            contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        else:
+            gray, mask, contours = windowed
         sx = w / mask.shape[1]
         sy = h / mask.shape[0]
         self._mask_scale = mask.shape[1] / w
-        contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
 
         # Filters 1 and 2 (contour length, short side of the tilted rectangle). OpenCV measures
         # each contour; the scaling and the decisions are done for all contours at once.

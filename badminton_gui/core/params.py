@@ -412,6 +412,35 @@ class LookaheadParams(ParamGroup):
 
 
 @dataclass(frozen=True, slots=True)
+class WindowParams(ParamGroup):
+    """Windowed tracking (issue #7): while the followed shuttle is confirmed, most frames are
+    processed only in a window around its predicted position (core/window.py)."""
+
+    TITLE: ClassVar[str] = "Windowed tracking"
+    enabled: bool = flag(False, label="Track in a window",
+                         help="While this camera follows a confirmed, travelling shuttle, process only a "
+                              "window around its predicted position (grey image, background model, mask, "
+                              "contours, measures); the whole frame every 'Whole frame every' frames")
+    full_every: int = param(8, 1, 240, step=1, unit="frames", label="Whole frame every",
+                            help="A whole frame at least this often: what the window leaves out (a new "
+                                 "serve, a second shuttle) is seen at most this − 1 frames late (1 = always)")
+    max_fraction: float = param(0.125, 0.01, 1.0, step=0.005, label="Window ≤ part of the frame",
+                                help="Largest window area as a part of the frame's; a larger gate is clipped "
+                                     "to it around the prediction")
+    margin: float = param(48.0, 0.0, 1000.0, step=4.0, unit="px", label="Window margin",
+                          help="Added on each side to the tracklet's motion gate (the blob's own size, a "
+                               "racket hit's change of direction)")
+    catch_up: bool = flag(False, label="Catch up outside the window",
+                          help="On a whole frame, the background pixels no window covered since the last "
+                               "whole frame learn as much as the frames they missed would have taught "
+                               "them (1 − (1 − α)^k), instead of learning k× slower")
+    watch_quality: float = param(0.5, 0.0, 1.0, step=0.01, label="Stay whole for a rival of quality",
+                                 help="After a whole frame, the next one is whole too while a tracklet outside "
+                                      "the window was seen with at least this running quality and is not "
+                                      "confirmed yet (a new serve gets its confirming frames; 1 = never)")
+
+
+@dataclass(frozen=True, slots=True)
 class TrackerParams:
     """Every parameter of the pipeline, one group per box of the tuning dialog."""
 
@@ -426,6 +455,7 @@ class TrackerParams:
     stereo: StereoParams = field(default_factory=StereoParams)
     trajectory: TrajectoryParams = field(default_factory=TrajectoryParams)
     lookahead: LookaheadParams = field(default_factory=LookaheadParams)
+    window: WindowParams = field(default_factory=WindowParams)
 
     # ---- generic access, used by presets, the tuning dialog and the CLI -------------------
     def groups(self) -> Iterator[tuple[str, ParamGroup]]:

@@ -1,0 +1,182 @@
+"""Windowed tracking (core/window.py): where the window goes, how often the frame is whole, and
+that a window covering the frame changes nothing."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from badminton_gui.core import window as window_module
+from badminton_gui.core.background import BackgroundModel
+from badminton_gui.core.detector import CameraDetector
+from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.window import ALIGN, WindowTracker, crop_grey, followed_tracklet
+
+from tests.test_detector import FPS, _scene
+
+
+def _params(**overrides):
+    p = TrackerParams().with_value("classifier.enabled", False).with_value("window.enabled", True)
+    for k, v in overrides.items():
+        p = p.with_value(k.replace("__", "."), v)
+    return p
+
+
+def _key(result):
+    return [(c.x, c.y, c.length, c.short_side, c.whiteness, c.area, c.motion, c.score,
+             c.rejected_by, c.predicted) for c in result.candidates]
+
+
+@pytest.mark.parametrize("coarse", [False, True])
+def test_a_window_covering_the_frame_changes_nothing(monkeypatch, coarse):
+    """Oracle: every frame 'windowed' with the whole frame as its window gives the candidates,
+    mask and detection of whole-frame processing, frame after frame (the model learns the same)."""
+    frames, _ = _scene(60)
+    extra = {"background__coarse_from_width": 640} if coarse else {}
+    whole = CameraDetector(_params(window__enabled=False, **extra))
+    windowed = CameraDetector(_params(**extra))
+    h, w = frames[0].shape[:2]
+    monkeypatch.setattr(WindowTracker, "_choose", lambda self, *a: (0, 0, w, h))
+    n_windowed = 0
+    for i, img in enumerate(frames):
+        a = whole.process(img, i / FPS)
+        before = windowed._window.windowed
+        b = windowed.process(img, i / FPS)
+        n_windowed += windowed._window.windowed - before
+        assert _key(a) == _key(b), i
+        assert np.array_equal(a.mask, b.mask), i
+        assert (a.detection is None) == (b.detection is None)
+    assert n_windowed == len(frames) - 1   # the first frame initialises the model, whole
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.5, 0.25])
+def test_a_windows_grey_and_mask_are_the_whole_frames_pixels(scale):
+    """Inside a window away from its edges the grey image, difference and mask are those of
+    whole-frame processing (same model state before)."""
+    frames, _ = _scene(12)
+    p = _params()
+    whole, part = BackgroundModel(p.background, p.binarize), BackgroundModel(p.background, p.binarize)
+    det = CameraDetector(p)
+    win = (128, 96, 416, 328)
+    for i, img in enumerate(frames):
+        g = det._model_grey(img, scale)
+        mx0, my0 = int(win[0] * scale), int(win[1] * scale)
+        gw = crop_grey(img, scale, win)
+        assert np.array_equal(gw, g[my0:my0 + gw.shape[0], mx0:mx0 + gw.shape[1]])
+        mask = whole.apply(g)
+        if i == 0:
+            part.apply(g)
+            continue
+        mw = part.apply_window(gw, mx0, my0)
+        inner = (slice(2, -2), slice(2, -2))   # the dilation reads across the window's edge
+        assert np.array_equal(mw[inner], mask[my0:my0 + gw.shape[0], mx0:mx0 + gw.shape[1]][inner])
+        # identical model inside the window (it learnt the same), unchanged outside
+        assert np.array_equal(part._average[my0 + 2:my0 + gw.shape[0] - 2, mx0 + 2:mx0 + gw.shape[1] - 2],
+                              whole._average[my0 + 2:my0 + gw.shape[0] - 2, mx0 + 2:mx0 + gw.shape[1] - 2])
+        # replay whole frames on the second model so both start the next frame equal
+        part._average[...] = whole._average
+
+
+def _run(params, frames, truth):
+    det = CameraDetector(params)
+    log = []
+    for i, (img, xy) in enumerate(zip(frames, truth)):
+        t = i / FPS
+        tr = followed_tracklet(det._associator)
+        predicted = tr.predict(t) if tr is not None else None
+        res = det.process(img, t, keep_mask=False)
+        log.append((det._window.last_window, predicted, xy, res.detection))
+    return det, log
+
+
+def test_the_window_is_around_the_prediction_and_the_flying_dot():
+    frames, truth = _scene(160)
+    p = _params(window__full_every=8, window__max_fraction=0.125)
+    det, log = _run(p, frames, truth)
+    h, w = frames[0].shape[:2]
+    windowed = [entry for entry in log if entry[0] is not None]
+    assert len(windowed) >= 0.6 * len(log)
+    for (x0, y0, x1, y1), predicted, (x, y), _ in windowed:
+        assert (x1 - x0) * (y1 - y0) <= 0.125 * w * h + 4 * ALIGN * (x1 - x0 + y1 - y0)
+        assert all(v % ALIGN == 0 for v in (x0, y0, x1, y1))
+        px, py = min(max(predicted[0], 0), w - 1), min(max(predicted[1], 0), h - 1)   # may leave the frame
+        assert x0 <= px < x1 and y0 <= py < y1
+        # the dot itself, well inside (or the window reaches the frame's edge there)
+        assert (x0 == 0 or x0 + 10 <= x) and (x1 == w or x < x1 - 10)
+        assert (y0 == 0 or y0 + 10 <= y) and (y1 == h or y < y1 - 10)
+    # and it still follows the dot as well as whole frames do
+    _, whole = _run(p.with_value("window.enabled", False), frames, truth)
+    good = [sum(1 for *_, (x, y), d in run[20:] if d is not None and math.hypot(d.x - x, d.y - y) <= 6)
+            for run in (log, whole)]
+    assert good[0] >= good[1] - 2
+
+
+@pytest.mark.parametrize("full_every", [1, 2, 5, 8])
+def test_a_whole_frame_every_full_every_frames(full_every):
+    frames, truth = _scene(120)
+    _, log = _run(_params(window__full_every=full_every), frames, truth)
+    run = longest = 0
+    for window, *_ in log:
+        run = run + 1 if window is not None else 0
+        longest = max(longest, run)
+    assert longest <= full_every - 1
+    if full_every > 1:
+        assert longest == full_every - 1   # the dot is followed: the window is used up to the limit
+
+
+def test_never_windowed_when_off_or_not_following():
+    frames, truth = _scene(60)
+    _, log = _run(_params(window__enabled=False), frames, truth)
+    assert all(window is None for window, *_ in log)
+    # nothing followed: a blank scene never gets a window
+    blank = [np.full_like(frames[0], 25) for _ in range(30)]
+    _, log = _run(_params(), blank, [(0, 0)] * 30)
+    assert all(window is None for window, *_ in log)
+
+
+def test_the_window_is_clipped_to_its_largest_area():
+    class Assoc:
+        def gate(self, tr, dt):
+            return 5000.0   # far larger than the frame
+
+    class Tr:
+        t = 0.0
+
+        def predict(self, t):
+            return 1000.0, 700.0
+
+    win = window_module.window_around(Assoc(), Tr(), 1 / 120, 2048, 1536, 48.0, 1 / 8)
+    x0, y0, x1, y1 = win
+    assert (x1 - x0) * (y1 - y0) <= (math.sqrt(2048 * 1536 / 8) + 2 * ALIGN) ** 2
+    assert x0 <= 1000 < x1 and y0 <= 700 < y1
+    assert abs((x0 + x1) / 2 - 1000) <= ALIGN and abs((y0 + y1) / 2 - 700) <= ALIGN
+
+
+@pytest.mark.parametrize("k", [1, 3, 7])
+def test_catch_up_teaches_the_missed_pixels_what_the_missed_frames_would_have(k):
+    """Pixels outside the windows for k frames, then a whole frame with ``catch_up``: the
+    running average is where k + 1 whole frames would have left it (inside the window too)."""
+    p = _params(background__compensate_gain=False)
+    whole, part = BackgroundModel(p.background, p.binarize), BackgroundModel(p.background, p.binarize)
+    g0 = np.full((96, 128), 40, np.uint8)
+    g1 = np.full((96, 128), 48, np.uint8)   # brighter by less than diff_threshold: still
+    for m in (whole, part):
+        m.apply(g0)
+    for _ in range(k + 1):
+        whole.apply(g1)
+    missed = np.full(g0.shape, 255, np.uint8)
+    for _ in range(k):
+        part.apply_window(g1[16:48, 32:80], 32, 16)
+    missed[16:48, 32:80] = 0
+    part.catch_up(missed, k)
+    part.apply(g1)
+    assert np.allclose(part._average, whole._average, atol=1e-3)
+    # without it the pixels outside learn k times slower
+    slow = BackgroundModel(p.background, p.binarize)
+    slow.apply(g0)
+    for _ in range(k):
+        slow.apply_window(g1[16:48, 32:80], 32, 16)
+    slow.apply(g1)
+    assert not np.allclose(slow._average[0, 0], whole._average[0, 0], atol=1e-3)
