@@ -318,17 +318,24 @@ def test_a_shuttle_merged_with_a_wider_blob_is_led_by_its_own_width():
     assert max(errors[5]) <= 3.0, errors          # led by the shuttle's own recent width
 
 
+def _followed_along_a_row(p, score):
+    """An associator whose selected tracklet has followed a blob of classifier ``score`` 10 px a
+    frame along y = 300 for 12 frames (x 100 … 210): (associator, the tracklet's ident)."""
+    assoc = TrackletAssociator(p.motion, p.association)
+    for i in range(12):
+        out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([score]))
+    followed = out[0][0]
+    assoc.select(followed)
+    return assoc, followed
+
+
 def test_followed_tracklet_takes_the_shuttle_like_blob_over_a_nearer_racket():
     """After a hit the racket (or the hand) is the blob nearest the followed path and the
     shuttle leaves 20 px off it: with ``association.followed_swap_margin`` the followed tracklet
     takes the blob that scores far higher; 1 (off) keeps the nearest."""
     for margin in (1.0, 0.6):
         p = TrackerParams().with_value("association.followed_swap_margin", margin)
-        assoc = TrackletAssociator(p.motion, p.association)
-        for i in range(12):
-            out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([0.9]))
-        followed = out[0][0]
-        assoc.select(followed)
+        assoc, followed = _followed_along_a_row(p, score=0.9)
         racket, shuttle = assoc.update(12 / FPS, np.array([[220.0, 302.0], [214.0, 281.0]]),
                                        np.array([0.1, 0.95]))
         if margin < 1.0:
@@ -366,11 +373,7 @@ def test_followed_tracklet_sliding_over_clutter_does_not_swap():
     for min_quality in (0.0, 0.5):
         p = (TrackerParams().with_value("association.followed_swap_margin", 0.6)
              .with_value("association.followed_swap_track_quality", min_quality))
-        assoc = TrackletAssociator(p.motion, p.association)
-        for i in range(12):
-            out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([0.3]))
-        followed = out[0][0]
-        assoc.select(followed)
+        assoc, followed = _followed_along_a_row(p, score=0.3)
         near, bright = assoc.update(12 / FPS, np.array([[220.0, 302.0], [214.0, 281.0]]),
                                     np.array([0.05, 0.95]))
         assert (bright[0] == followed) == (min_quality == 0.0)

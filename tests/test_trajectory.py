@@ -136,16 +136,22 @@ def test_a_run_of_wrong_points_does_not_replace_the_flight(run):
         assert math.hypot(pred.x - shot.landing[0], pred.y - shot.landing[1]) < 0.10
 
 
-def test_a_hit_starts_a_new_shot_and_reverses_the_prediction():
-    # A clear towards +Y, intercepted mid-air and driven back towards −Y.
+def _clear_driven_back(until: float | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+    """A clear towards +Y intercepted at 1.2 s and driven back towards −Y: (times at 120 fps up
+    to ``until`` or the landing, positions, the time of the hit, the landing point)."""
     p0, v0 = np.array([0.0, -5.0, 2.5]), np.array([0.5, 22.0, 18.0])
-    t1, pos1, vel1 = physics.simulate(p0, v0, 5.0, dt=1e-3, aero_length=4.8)
+    t1, pos1, _ = physics.simulate(p0, v0, 5.0, dt=1e-3, aero_length=4.8)
     cut = np.searchsorted(t1, 1.2)
     t2, pos2, _ = physics.simulate(pos1[cut], np.array([-1.0, -25.0, 3.0]), 5.0, dt=1e-3, aero_length=4.8)
     t_all = np.concatenate([t1[:cut], t1[cut] + t2])
     p_all = np.concatenate([pos1[:cut], pos2])
-    times = np.arange(0.0, t_all[-1], 1 / 120)
-    truth = np.stack([np.interp(times, t_all, p_all[:, i]) for i in range(3)], axis=1)
+    times = np.arange(0.0, t_all[-1] if until is None else until, 1 / 120)
+    return times, np.stack([np.interp(times, t_all, p_all[:, i]) for i in range(3)], axis=1), float(t1[cut]), pos2[-1]
+
+
+def test_a_hit_starts_a_new_shot_and_reverses_the_prediction():
+    # A clear towards +Y, intercepted mid-air and driven back towards −Y.
+    times, truth, hit_time, landing_point = _clear_driven_back()
     rng = np.random.default_rng(8)
     points = [tuple(p) for p in truth + rng.normal(0, 0.01, truth.shape)]
     traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
@@ -154,9 +160,9 @@ def test_a_hit_starts_a_new_shot_and_reverses_the_prediction():
     assert shots[-1] == 1 and max(shots) == 1
     # The new shot was recognised within a few frames of the hit.
     first_new = next(i for i, s in enumerate(shots) if s == 1)
-    assert times[first_new] - t1[cut] < 0.06
+    assert times[first_new] - hit_time < 0.06
     pred = history[-20][1].prediction
-    assert pred.y < 0 and math.hypot(pred.x - pos2[-1, 0], pred.y - pos2[-1, 1]) < 0.1
+    assert pred.y < 0 and math.hypot(pred.x - landing_point[0], pred.y - landing_point[1]) < 0.1
 
 
 def test_a_long_gap_ends_the_flight_and_the_floor_lands_it():
@@ -406,15 +412,8 @@ def test_a_new_shot_being_confirmed_guides_the_cameras():
     over; meanwhile ``trajectory.guide_tentative_points`` lets the guided search follow the new
     track (0: no guide until it is confirmed, so a shuttle merged with the player right after
     the hit was lost and the track never got its points)."""
-    p0, v0 = np.array([0.0, -5.0, 2.5]), np.array([0.5, 22.0, 18.0])
-    t1, pos1, _ = physics.simulate(p0, v0, 5.0, dt=1e-3, aero_length=4.8)
-    cut = np.searchsorted(t1, 1.2)
-    t2, pos2, _ = physics.simulate(pos1[cut], np.array([-1.0, -25.0, 3.0]), 5.0, dt=1e-3, aero_length=4.8)
-    t_all = np.concatenate([t1[:cut], t1[cut] + t2])
-    p_all = np.concatenate([pos1[:cut], pos2])
-    times = np.arange(0.0, 1.3, 1 / 120)
-    truth = np.stack([np.interp(times, t_all, p_all[:, i]) for i in range(3)], axis=1)
-    hit = int(np.searchsorted(times, t1[cut]))
+    times, truth, hit_time, _ = _clear_driven_back(until=1.3)
+    hit = int(np.searchsorted(times, hit_time))
     for points in (0, 4):
         traj = Trajectory(TrajectoryParams(measurement_noise=0.01, guide_tentative_points=points),
                           court_frame=True)
