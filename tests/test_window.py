@@ -180,3 +180,33 @@ def test_catch_up_teaches_the_missed_pixels_what_the_missed_frames_would_have(k)
         slow.apply_window(g1[16:48, 32:80], 32, 16)
     slow.apply(g1)
     assert not np.allclose(slow._average[0, 0], whole._average[0, 0], atol=1e-3)
+
+
+def test_both_cameras_windowed_run_in_turn_else_side_by_side(monkeypatch):
+    """While both cameras track in a window the tracker runs them in turn on its own thread
+    (windowed frames are mostly Python holding the GIL); otherwise the right camera goes to the
+    pool, side by side with the left."""
+    from badminton_gui.core.detector import CameraDetector
+    from badminton_gui.core.tracker import StereoTracker
+    from badminton_gui.io.demo_scene import make_rig
+
+    class CountingPool:
+        def __init__(self, pool):
+            self.pool, self.submitted = pool, 0
+
+        def submit(self, *args):
+            self.submitted += 1
+            return self.pool.submit(*args)
+
+        def shutdown(self, wait=True):
+            self.pool.shutdown(wait=wait)
+
+    frame = np.zeros((720, 1280, 3), np.uint8)
+    for windowed, expected in ((False, 2), (True, 0)):
+        monkeypatch.setattr(CameraDetector, "windowed_last_frame", property(lambda self: windowed))
+        tracker = StereoTracker(make_rig("binocular", (1280, 720)))
+        tracker._pool = CountingPool(tracker._pool)
+        for i in range(2):
+            tracker.process(frame, frame, i / 120)
+        assert tracker._pool.submitted == expected
+        tracker.close()

@@ -120,6 +120,12 @@ class CameraDetector:
         result, chosen = self.lead_to_head(result, chosen)
         return self.finalise(result, chosen)
 
+    @property
+    def windowed_last_frame(self) -> bool:
+        """The last frame was processed only in a window around the followed shuttle
+        (``window.enabled``, core/window.py)."""
+        return bool(self.params.window.enabled and self._window.last_window is not None)
+
     # ---- steps, so the stereo tracker can choose with both cameras --------------------------
     def find_candidates(self, frame_bgr: np.ndarray, t: float, keep_mask: bool = True) -> CameraResult:
         """Candidates with filters 1–4 applied (no choice made yet)."""
