@@ -84,6 +84,7 @@ class CameraDetector:
         self._last_mask: np.ndarray | None = None
         self._large_boxes = np.zeros((0, 4), np.int64)   # full-res boxes of blobs too large (filters 1, 2)
         self._window = WindowTracker(self.params)   # windowed tracking (``window.enabled``)
+        self._planned: tuple[float, tuple[int, int, int, int] | None] | None = None   # plan_window
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -96,6 +97,7 @@ class CameraDetector:
     def reset(self) -> None:
         self._background.reset()
         self._window.reset()
+        self._planned = None
         self._associator.reset()
         self._tracklet_of = {}
         self._widths = {}
@@ -120,11 +122,21 @@ class CameraDetector:
         result, chosen = self.lead_to_head(result, chosen)
         return self.finalise(result, chosen)
 
-    @property
-    def windowed_last_frame(self) -> bool:
-        """The last frame was processed only in a window around the followed shuttle
-        (``window.enabled``, core/window.py)."""
-        return bool(self.params.window.enabled and self._window.last_window is not None)
+    def plan_window(self, frame_bgr: np.ndarray, t: float) -> bool:
+        """Choose the coming frame's window now (``find_candidates`` of the same ``t`` then uses
+        it): True when the frame will be processed in a window. The stereo tracker asks both
+        cameras before it decides whether to run them side by side or in turn."""
+        h, w = frame_bgr.shape[:2]
+        p = self.params
+        window = (self._window.plan(self._associator, t, w, h, model_scale(p.background, w))
+                  if p.window.enabled else None)
+        self._planned = (t, window)
+        return window is not None
+
+    def set_window_phase(self, phase: float) -> None:
+        """Where this camera's scheduled whole frames fall in the ``window.full_every`` period
+        (``window.stagger``; 0 for the left camera, 0.5 for the right)."""
+        self._window.phase = float(phase)
 
     # ---- steps, so the stereo tracker can choose with both cameras --------------------------
     def find_candidates(self, frame_bgr: np.ndarray, t: float, keep_mask: bool = True) -> CameraResult:
@@ -132,8 +144,13 @@ class CameraDetector:
         p = self.params
         h, w = frame_bgr.shape[:2]
         scale = model_scale(p.background, w)
-        # Windowed tracking (core/window.py): only around the followed shuttle's prediction.
-        window = self._window.plan(self._associator, t, w, h, scale) if p.window.enabled else None
+        # Windowed tracking (core/window.py): only around the followed shuttle's prediction,
+        # as chosen by ``plan_window`` for this frame, or now.
+        planned, self._planned = self._planned, None
+        if planned is not None and planned[0] == t:
+            window = planned[1]
+        else:
+            window = self._window.plan(self._associator, t, w, h, scale) if p.window.enabled else None
         windowed = None if window is None else self._window.model_mask(frame_bgr, scale, window,
                                                                        self._background)
         if windowed is None:
