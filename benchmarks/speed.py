@@ -453,6 +453,10 @@ def window_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rou
     camera frame; then the tracker's two camera threads, pairs/s, latency p50 / p99 and the
     process CPU time a pair; the share of camera frames processed in a window, and how many
     pairs had a 3D point (the outputs are not identical: a different model outside the window).
+    Last, from the one-thread run: the p99 of the CPU a pair, and a latency model that the
+    machine's load does not set (a pair whose cameras both run windowed costs both cameras'
+    CPU, in turn; any other pair the slower camera's plus the rest, side by side — a lower
+    bound there, the GIL's queueing left out).
     """
     import os
     pairs = load_pairs(n, None, skip)
@@ -461,15 +465,30 @@ def window_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rou
     print(f"window A/B: {RALLY} pairs {skip}-{skip + len(pairs) - 1}, preset {preset or 'default'}, "
           f"full_every {on.window.full_every}, max_fraction {on.window.max_fraction}, margin {on.window.margin}")
     print(f"{'round':>5} {'window':>6} {'1-thread CPU/pair':>17} {'CPU/frame':>9} {'windowed':>8} "
-          f"{'2-thr pairs/s':>13} {'p50':>6} {'p99':>6} {'CPU/pair':>8} {'3D pts':>6} {'load':>5}")
+          f"{'2-thr pairs/s':>13} {'p50':>6} {'p99':>6} {'CPU/pair':>8} {'3D pts':>6} {'load':>5} "
+          f"{'CPU p99':>7} {'model p50':>9} {'p99':>6}")
     for r in range(rounds):
         for name, p in (("off", off), ("on", on)):
             tracker = StereoTracker(full_rig, p, parallel=False)
+            camera_cpu = {}
+            for side, det in (("left", tracker.left), ("right", tracker.right)):
+                def timed(frame, t, keep_mask=True, _run=det.find_candidates, _side=side):
+                    c0 = time.thread_time()
+                    result = _run(frame, t, keep_mask)
+                    camera_cpu[_side] = time.thread_time() - c0
+                    return result
+                det.find_candidates = timed
             cpu = 0.0
+            per_pair, model = [], []
             for lf, rf, t in pairs:
                 c0 = time.thread_time()
                 tracker.process(lf, rf, t, keep_masks=False)
-                cpu += time.thread_time() - c0
+                spent = time.thread_time() - c0
+                cpu += spent
+                both_windowed = all(w.last_window is not None
+                                    for w in (tracker.left._window, tracker.right._window))
+                per_pair.append(spent)
+                model.append(spent if both_windowed else spent - min(camera_cpu.values()))
             win = tracker.left._window, tracker.right._window
             share = sum(w.windowed for w in win) / max(sum(w.frames for w in win), 1) if p.window.enabled else 0.0
             tracker.close()
@@ -486,10 +505,14 @@ def window_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rou
             cpu2 = time.process_time() - c0
             tracker.close()
             lat_ms = np.asarray(lat) * 1000
+            cpu_p99 = 1000 * np.percentile(per_pair, 99)
+            model_ms = 1000 * np.asarray(model)
             per_pair = 1000 * cpu / len(pairs)
             print(f"{r:>5} {name:>6} {per_pair:14.2f} ms {per_pair / 2:6.2f} ms {100 * share:7.1f}% "
                   f"{len(pairs) / wall:13.1f} {np.percentile(lat_ms, 50):6.2f} {np.percentile(lat_ms, 99):6.2f} "
-                  f"{1000 * cpu2 / len(pairs):5.2f} ms {points:6d} {os.getloadavg()[0]:5.1f}", flush=True)
+                  f"{1000 * cpu2 / len(pairs):5.2f} ms {points:6d} {os.getloadavg()[0]:5.1f} "
+                  f"{cpu_p99:7.2f} {np.percentile(model_ms, 50):9.2f} {np.percentile(model_ms, 99):6.2f}",
+                  flush=True)
 
 
 def main() -> None:

@@ -173,6 +173,40 @@ def test_windows_measured_together_do_not_interact(scale):
         assert_same_batch(frame, mask, boxes, sx, sy, head_fraction)
 
 
+def _single_and_canvas(frame, mask, box, sx, sy, head_fraction):
+    """The box measured alone (the single-window path) and on the shared canvas (the same box
+    followed by an empty one outside the frame: the canvas path, with one window)."""
+    alone = measure_blobs(frame, mask, [box], sx, sy, head_fraction)
+    shared = measure_blobs(frame, mask, [box, (10_000, 10_000, 5, 5)], sx, sy, head_fraction)
+    return alone, tuple(part[:1] for part in shared)
+
+
+@pytest.mark.parametrize("scale", [0.25, 0.5, 1.0])
+def test_a_single_blob_is_measured_bit_for_bit_as_on_the_shared_canvas(scale):
+    """The single-window path (a windowed frame's usual case) is exact, not just close: the
+    classifier and the position see the very same numbers (track CSVs stay identical)."""
+    rng = np.random.default_rng(7)
+    cases = []
+    for seed in (0, 1, 2):
+        frame = _synthetic_frame(seed)
+        _, mask, sx, sy = _thresholded(frame, scale)
+        boxes = [(168, 78, 9, 9), (148, 38, 45, 35), (0, 0, 6, 7), (238, 184, 25, 13), (56, 196, 9, 9),
+                 (100, 120, 8, 8), (315, 235, 5, 5), (90, 90, 1, 1)]
+        boxes += [(int(rng.integers(0, 310)), int(rng.integers(0, 230)), int(rng.integers(1, 30)),
+                   int(rng.integers(1, 30))) for _ in range(20)]
+        cases += [(frame, mask, box, sx, sy) for box in boxes]
+    dark = np.full((60, 80, 3), 200, np.uint8)   # nothing brighter than the border
+    dark[20:30, 30:40] = 50
+    dark_mask = np.zeros((60, 80), np.uint8)
+    dark_mask[22:28, 32:38] = 255
+    cases += [(dark, dark_mask, (30, 20, 10, 10), 1.0, 1.0), (dark, dark_mask * 0, (30, 20, 10, 10), 1.0, 1.0)]
+    for frame, mask, box, sx, sy in cases:
+        for head_fraction in (0.0, 0.5, 0.9):
+            alone, shared = _single_and_canvas(frame, mask, box, sx, sy, head_fraction)
+            for a, b in zip(alone, shared):
+                assert a.dtype == b.dtype and np.array_equal(a, b, equal_nan=True), (box, head_fraction, a, b)
+
+
 @pytest.mark.skipif(not NYCU_LEFT.is_file(), reason="real data (../shared/data) not available")
 def test_measure_equals_the_numpy_formulas_on_real_frames(monkeypatch):
     seen = []

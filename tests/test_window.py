@@ -183,9 +183,9 @@ def test_catch_up_teaches_the_missed_pixels_what_the_missed_frames_would_have(k)
 
 
 def test_both_cameras_windowed_run_in_turn_else_side_by_side(monkeypatch):
-    """While both cameras track in a window the tracker runs them in turn on its own thread
-    (windowed frames are mostly Python holding the GIL); otherwise the right camera goes to the
-    pool, side by side with the left."""
+    """When both cameras process this frame in a window the tracker runs them in turn on its own
+    thread (windowed frames are mostly Python holding the GIL); when either takes a whole frame
+    the right camera goes to the pool, side by side with the left."""
     from badminton_gui.core.detector import CameraDetector
     from badminton_gui.core.tracker import StereoTracker
     from badminton_gui.io.demo_scene import make_rig
@@ -202,11 +202,51 @@ def test_both_cameras_windowed_run_in_turn_else_side_by_side(monkeypatch):
             self.pool.shutdown(wait=wait)
 
     frame = np.zeros((720, 1280, 3), np.uint8)
-    for windowed, expected in ((False, 2), (True, 0)):
-        monkeypatch.setattr(CameraDetector, "windowed_last_frame", property(lambda self: windowed))
+    real_plan = CameraDetector.plan_window
+    # (left windowed, right windowed) on this frame → side by side (the right to the pool)?
+    for plans, expected in (((False, False), 2), ((True, False), 2), ((False, True), 2), ((True, True), 0)):
+        def plan(self, frame_bgr, t, _plans=plans):
+            real_plan(self, frame_bgr, t)
+            return _plans[0] if self is tracker.left else _plans[1]
+        monkeypatch.setattr(CameraDetector, "plan_window", plan)
         tracker = StereoTracker(make_rig("binocular", (1280, 720)))
         tracker._pool = CountingPool(tracker._pool)
         for i in range(2):
             tracker.process(frame, frame, i / 120)
-        assert tracker._pool.submitted == expected
+        assert tracker._pool.submitted == expected, plans
         tracker.close()
+
+
+def test_staggered_cameras_never_take_a_scheduled_whole_frame_together():
+    """``window.stagger``: both cameras follow the dot; their whole frames on the fixed clock
+    fall half a period apart (never on the same pair while both follow), and a camera's
+    windowed runs still never exceed ``full_every − 1`` frames."""
+    frames, truth = _scene(120)
+    full_every = 8
+    p = _params(window__full_every=full_every, window__stagger=True)
+    left, right = CameraDetector(p), CameraDetector(p)
+    right.set_window_phase(0.5)
+    modes = []
+    for i, img in enumerate(frames):
+        for det in (left, right):
+            det.process(img, i / FPS)
+        modes.append((left._window.last_window is not None, right._window.last_window is not None))
+    following = [i for i, (a, b) in enumerate(modes) if i >= 30 and (a or b)]
+    assert len(following) >= 60
+    both_whole = [i for i in range(following[0], len(modes)) if not modes[i][0] and not modes[i][1]]
+    assert both_whole == []
+    for cam in (0, 1):
+        run = longest = 0
+        for m in modes:
+            run = run + 1 if m[cam] else 0
+            longest = max(longest, run)
+        assert longest == full_every - 1
+    # without the stagger the same two cameras take their whole frames together
+    p = p.with_value("window.stagger", False)
+    left, right = CameraDetector(p), CameraDetector(p)
+    together = 0
+    for i, img in enumerate(frames):
+        for det in (left, right):
+            det.process(img, i / FPS)
+        together += i >= following[0] and left._window.last_window is None and right._window.last_window is None
+    assert together >= 5

@@ -121,6 +121,8 @@ class BackgroundModel:
             whole = (h, w) == (big_h, big_w)
             for step in ((8,) if whole else (8, 4, 2)):
                 gy, gx = (-y0) % step, (-x0) % step   # the grid of the whole model
+                if step > 2 and -(-(h - gy) // step) * -(-(w - gx) // step) <= 50:
+                    continue   # too few grid points even if all are lit: the next grid, at once
                 avg_s = avg[gy::step, gx::step]
                 lit = avg_s > 20
                 ratios = gray[gy::step, gx::step][lit] / avg_s[lit]

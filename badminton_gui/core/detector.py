@@ -44,7 +44,7 @@ import cv2
 import numpy as np
 
 from .association import TrackletAssociator
-from .background import BackgroundModel
+from .background import BackgroundModel, median_float32
 from .classifier import load_classifier
 from .params import TrackerParams
 from .window import WindowTracker
@@ -84,6 +84,7 @@ class CameraDetector:
         self._last_mask: np.ndarray | None = None
         self._large_boxes = np.zeros((0, 4), np.int64)   # full-res boxes of blobs too large (filters 1, 2)
         self._window = WindowTracker(self.params)   # windowed tracking (``window.enabled``)
+        self._planned: tuple[float, tuple[int, int, int, int] | None] | None = None   # plan_window
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -96,6 +97,7 @@ class CameraDetector:
     def reset(self) -> None:
         self._background.reset()
         self._window.reset()
+        self._planned = None
         self._associator.reset()
         self._tracklet_of = {}
         self._widths = {}
@@ -120,11 +122,21 @@ class CameraDetector:
         result, chosen = self.lead_to_head(result, chosen)
         return self.finalise(result, chosen)
 
-    @property
-    def windowed_last_frame(self) -> bool:
-        """The last frame was processed only in a window around the followed shuttle
-        (``window.enabled``, core/window.py)."""
-        return bool(self.params.window.enabled and self._window.last_window is not None)
+    def plan_window(self, frame_bgr: np.ndarray, t: float) -> bool:
+        """Choose the coming frame's window now (``find_candidates`` of the same ``t`` then uses
+        it): True when the frame will be processed in a window. The stereo tracker asks both
+        cameras before it decides whether to run them side by side or in turn."""
+        h, w = frame_bgr.shape[:2]
+        p = self.params
+        window = (self._window.plan(self._associator, t, w, h, model_scale(p.background, w))
+                  if p.window.enabled else None)
+        self._planned = (t, window)
+        return window is not None
+
+    def set_window_phase(self, phase: float) -> None:
+        """Where this camera's scheduled whole frames fall in the ``window.full_every`` period
+        (``window.stagger``; 0 for the left camera, 0.5 for the right)."""
+        self._window.phase = float(phase)
 
     # ---- steps, so the stereo tracker can choose with both cameras --------------------------
     def find_candidates(self, frame_bgr: np.ndarray, t: float, keep_mask: bool = True) -> CameraResult:
@@ -132,8 +144,13 @@ class CameraDetector:
         p = self.params
         h, w = frame_bgr.shape[:2]
         scale = model_scale(p.background, w)
-        # Windowed tracking (core/window.py): only around the followed shuttle's prediction.
-        window = self._window.plan(self._associator, t, w, h, scale) if p.window.enabled else None
+        # Windowed tracking (core/window.py): only around the followed shuttle's prediction,
+        # as chosen by ``plan_window`` for this frame, or now.
+        planned, self._planned = self._planned, None
+        if planned is not None and planned[0] == t:
+            window = planned[1]
+        else:
+            window = self._window.plan(self._associator, t, w, h, scale) if p.window.enabled else None
         windowed = None if window is None else self._window.model_mask(frame_bgr, scale, window,
                                                                        self._background)
         if windowed is None:
@@ -538,6 +555,10 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     if not blobs:
         return pos_x, pos_y, whiteness, saturation, features
     m = len(blobs)
+    if n == 1:
+        # A windowed frame's usual case: the same canvas and arithmetic without the
+        # bookkeeping that spreads it over several windows (tests/test_detector_fast_paths.py).
+        return _measure_one(frame, mask, boxes[0], windows[0], sx, sy, head_fraction)
     height = np.array(heights)
     width = np.array(widths)
     start = np.zeros(m, dtype=np.intp)
@@ -681,6 +702,95 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
         pos_x[i] = (fallback * xs).sum() / fallback.sum() + x0
         pos_y[i] = (fallback * ys).sum() / fallback.sum() + y0
     return pos_x, pos_y, whiteness, saturation, features
+
+
+def _measure_one(frame: np.ndarray, mask: np.ndarray, box, window: tuple[int, int, int, int],
+                 sx: float, sy: float, head_fraction: float
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``measure_blobs`` of a single blob: the canvas of one window (its rows, then the blank
+    row), every sum, maximum and median taken as there, but on whole arrays and scalars instead
+    of through the per-window index bookkeeping (≈ 40 fewer numpy calls; with the GIL held
+    those calls were most of a windowed frame's measure). Same values bit for bit: the float
+    sums go through the same ``cv2.reduce`` rows and ``np.add.reduceat`` over the same
+    (blank-row-terminated) vectors, maxima and integer counts are exact, and the border median
+    is the same order statistic (``median_float32``)."""
+    x0, y0, x1, y1 = window
+    height, width = y1 - y0, x1 - x0
+    rows = height + 1
+    canvas = np.zeros((rows, width, 3), np.uint8)
+    canvas[:height] = frame[y0:y1, x0:x1]
+    inside = np.zeros((rows, width), np.uint8)
+    mx0, my0 = int(x0 / sx), int(y0 / sy)
+    mx1, my1 = max(math.ceil(x1 / sx), mx0 + 1), max(math.ceil(y1 / sy), my0 + 1)
+    mcrop = mask[my0:my1, mx0:mx1]
+    if mcrop.shape == (height, width):
+        inside[:height] = mcrop
+    else:
+        cv2.resize(mcrop, (width, height), dst=inside[:height], interpolation=cv2.INTER_NEAREST)
+
+    blue, green, red = cv2.split(canvas)
+    cmin = cv2.min(cv2.min(blue, green), red)
+    cmax = cv2.max(cv2.max(blue, green), red)
+    # Integer counts and sums: exact however they are added.
+    n_inside = int(cv2.countNonZero(inside))
+    if n_inside:
+        whiteness = int(cv2.sumElems(cv2.bitwise_and(cmin, inside))[0]) / n_inside
+        saturation = int(cv2.sumElems(cv2.bitwise_and(cv2.subtract(cmax, cmin), inside))[0]) / n_inside
+    else:
+        whiteness, saturation = 0.0, 255.0
+    gray = cv2.add(blue, green, dtype=cv2.CV_32F)
+    cv2.add(gray, red, dst=gray, dtype=cv2.CV_32F)
+    np.divide(gray, 3, out=gray)
+
+    # The border in numpy's order (top row, bottom row, left column, right column).
+    border = np.concatenate((gray[0], gray[height - 1], gray[:height, 0], gray[:height, width - 1]))
+    background = np.float32(median_float32(border))
+    excess = gray - background
+    excess[height] = -np.inf                 # the blank row, padding as on the shared canvas
+    peak = excess.max()
+    half_peak = np.float32(0.5) * peak
+    n_bright = int(np.count_nonzero(excess > half_peak))
+    spill = int(np.count_nonzero((border - background) > half_peak)) / border.size
+    peak_sat = float(cmax.max()) - float(cmin.max())
+    n_pixels = height * width
+    start = _FIRST_ROW
+    mean = np.add.reduceat(cv2.reduce(gray, 1, cv2.REDUCE_SUM, dtype=cv2.CV_64F)[:, 0], start) / n_pixels
+    mean_square = np.add.reduceat(cv2.reduce(cv2.multiply(gray, gray, dtype=cv2.CV_64F), 1, cv2.REDUCE_SUM,
+                                             dtype=cv2.CV_64F)[:, 0], start) / n_pixels
+    window_std = math.sqrt(max(float(mean_square[0]) - float(mean[0]) * float(mean[0]), 0.0))
+    features = np.array([[peak, background, math.log1p(n_bright), spill, whiteness, saturation,
+                          math.log1p(n_inside), peak_sat, window_std]], dtype=np.float32)
+
+    support = cv2.dilate(inside, _GROW) > 0
+    blob_excess = np.where(support, excess, np.float32(0))
+    blob_peak = max(blob_excess.max(), 0)
+    if blob_peak <= 0:
+        blob_excess = np.maximum(excess, 0)
+        blob_peak = peak
+    cut = np.float32(head_fraction * float(blob_peak))
+    weights = blob_excess - cut
+    np.maximum(weights, 0, out=weights)
+    row_weight = cv2.reduce(weights, 1, cv2.REDUCE_SUM, dtype=cv2.CV_64F)[:, 0]
+    total = float(np.add.reduceat(row_weight, start)[0])
+    if peak <= 0:
+        ys, xs = np.nonzero(inside[:height])
+        if len(xs) == 0:
+            x, y = box[0] + box[2] / 2, box[1] + box[3] / 2
+        else:
+            x, y = x0 + xs.mean(), y0 + ys.mean()
+    elif total <= 0:
+        fallback = np.maximum(blob_excess[:height], 0).astype(np.float64)
+        ys, xs = np.mgrid[0:fallback.shape[0], 0:fallback.shape[1]]
+        x = (fallback * xs).sum() / fallback.sum() + x0
+        y = (fallback * ys).sum() / fallback.sum() + y0
+    else:
+        sum_x = float(np.add.reduceat(weights @ np.arange(width, dtype=np.float64), start)[0])
+        sum_y = float(np.add.reduceat(row_weight * np.arange(rows), start)[0])
+        x, y = sum_x / total + x0, sum_y / total + y0
+    return (np.array([x]), np.array([y]), np.array([whiteness]), np.array([saturation]), features)
+
+
+_FIRST_ROW = np.zeros(1, dtype=np.intp)
 
 
 def _window_maxima(images: tuple[np.ndarray, ...], x0: np.ndarray, y0: np.ndarray,

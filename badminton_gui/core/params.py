@@ -434,6 +434,10 @@ class WindowParams(ParamGroup):
                           help="On a whole frame, the background pixels no window covered since the last "
                                "whole frame learn as much as the frames they missed would have taught "
                                "them (1 − (1 − α)^k), instead of learning k× slower")
+    stagger: bool = flag(False, label="Stagger the cameras' whole frames",
+                         help="The cameras take their scheduled whole frames half a period apart, on a "
+                              "fixed clock (the left camera at frames 0, 8, 16 …, the right at 4, 12 …), "
+                              "so a pair never waits for two whole frames on schedule (latency)")
     watch_quality: float = param(0.5, 0.0, 1.0, step=0.01, label="Stay whole for a rival of quality",
                                  help="After a whole frame, the next one is whole too while a tracklet outside "
                                       "the window was seen with at least this running quality and is not "

@@ -28,6 +28,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import cv2
 import numpy as np
+import numpy.ma  # noqa: F401  np.median imports it on its first call: 17 ms in the middle of a rally
 
 from .detector import CameraDetector
 from .guided import find_spot, white_near
@@ -62,6 +63,8 @@ class StereoTracker:
         self.params = params or TrackerParams()
         self.left = CameraDetector(self.params)
         self.right = CameraDetector(self.params)
+        # ``window.stagger``: the right camera's scheduled whole frames half a period after the left's.
+        self.right.set_window_phase(0.5)
         # OpenCV releases the GIL: the two cameras run side by side on two cores (GUIDE §4).
         self._pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="camera") if parallel else None
         self._trajectory = Trajectory(self.params.trajectory, rig.has_court_pose)
@@ -133,11 +136,13 @@ class StereoTracker:
             self.rig.check_image_size(wr, hr, "the right frames")
             self._checked_size = True
 
-        # A windowed frame is mostly Python holding the GIL: while both cameras track in a
-        # window they run faster in turn on this thread than side by side (coarse, in play:
-        # 179–222 against 169–172 pairs/s, README Speed); whole frames, mostly image work that
-        # releases the GIL, run side by side. Last frame's mode predicts this one's.
-        in_turn = self.left.windowed_last_frame and self.right.windowed_last_frame
+        # A windowed frame is mostly Python holding the GIL: when both cameras process this
+        # frame in a window they run faster in turn on this thread than side by side (coarse,
+        # in play: 179–222 against 169–172 pairs/s, README Speed); a pair with a whole frame,
+        # mostly image work that releases the GIL, runs side by side. The windows are chosen
+        # first, so a camera's periodic whole frame is never run in turn with the other's.
+        in_turn = (self.left.plan_window(left_bgr, timestamp)
+                   & self.right.plan_window(right_bgr, timestamp))
         if self._pool is not None and not in_turn:
             fut = self._pool.submit(self.right.find_candidates, right_bgr, timestamp, keep_masks)
             res_left = self.left.find_candidates(left_bgr, timestamp, keep_masks)

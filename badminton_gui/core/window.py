@@ -27,6 +27,10 @@ Consequences, by design:
   would have used up, came back on the next whole frame with its long history and took the
   choice from the shuttle's tracklet after a hit; rally_11-46-22 right frames 427–456, left
   784–911.)
+- ``window.stagger`` (on in coarse): the cameras' scheduled whole frames follow a fixed clock,
+  the right camera's half a period after the left's, so a pair never waits for two scheduled
+  whole frames (the slowest pairs); a whole frame forced by a missed shuttle does not move the
+  clock, so the next scheduled one may come sooner than ``full_every`` frames after it;
 - after a whole frame on which a rival tracklet (not followed, not confirmed, running quality
   ≥ ``window.watch_quality``) was seen, the next frame is whole too, so a new serve gets its
   confirming frames in a row.
@@ -90,6 +94,10 @@ class WindowTracker:
         self.windowed = 0
         self._touched: np.ndarray | None = None   # model pixels some window covered (255)
         self._skipped = 0                          # windowed frames since the last whole one
+        # ``window.stagger``: this camera's scheduled whole frames fall on the frames whose
+        # count plus ``phase`` × ``full_every`` is a multiple of ``full_every`` (the stereo
+        # tracker gives the right camera phase 0.5, so the two cameras' whole frames alternate).
+        self.phase = 0.0
 
     def set_params(self, params: TrackerParams) -> None:
         self.params = params
@@ -133,7 +141,13 @@ class WindowTracker:
         wp = self.params.window
         if not wp.enabled or wp.full_every <= 1 or not supported(self.params, width, height, scale):
             return None
-        if self._since_full + 1 >= wp.full_every:
+        if wp.stagger:
+            # A fixed clock (``self.frames`` counts this frame): windowed runs still never
+            # exceed full_every − 1 frames, and the two cameras' scheduled whole frames never
+            # fall on the same pair (both whole: the slowest pairs, README Speed).
+            if (self.frames - 1 + round(self.phase * wp.full_every)) % wp.full_every == 0:
+                return None
+        elif self._since_full + 1 >= wp.full_every:
             return None
         followed = followed_tracklet(associator)
         if (followed is None or not followed.hit_now or not followed.velocity_known
