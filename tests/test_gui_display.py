@@ -242,3 +242,45 @@ def test_distance_readout_marks_a_predicted_distance():
     predicted = distance_text(None, 4.5123)
     assert "≈ 4 512 mm" in predicted and "predicted" in predicted
     assert distance_text(None, None) == "—"
+
+
+def _has_window_colour(image) -> bool:
+    """Whether the grab shows the tracking window's cyan (antialiased, so by hue, not exactly)."""
+    import numpy as np
+    from PySide6.QtGui import QImage
+    qimage = image.toImage().convertToFormat(QImage.Format.Format_RGB32)   # bytes B, G, R, A
+    arr = np.frombuffer(qimage.constBits(), np.uint8).reshape(qimage.height(), qimage.bytesPerLine() // 4, 4)
+    b, g, r = (arr[..., i].astype(int) for i in range(3))
+    return int(((b > 120) & (g > 100) & (r < b - 60)).sum()) > 50
+
+
+def test_feed_draws_the_tracking_window_only_when_asked_and_windowed(qtbot):
+    import numpy as np
+    from badminton_gui.core.types import CameraResult
+    from badminton_gui.gui.feed_view import FeedView
+
+    feed = FeedView("Left")
+    qtbot.addWidget(feed)
+    feed.resize(640, 360)
+    image = np.zeros((360, 640, 4), np.uint8)
+    windowed = CameraResult(detection=None, image_size=(1280, 720), window=(256, 128, 768, 512))
+    feed.set_frame(image, 0.5, windowed, np.zeros((0, 3)))
+    assert not _has_window_colour(feed.grab())          # off unless a diagnostic overlay is on
+    feed.show_window = True
+    assert _has_window_colour(feed.grab())
+    feed.set_frame(image, 0.5, CameraResult(detection=None, image_size=(1280, 720)), np.zeros((0, 3)))
+    assert not _has_window_colour(feed.grab())          # a whole frame has no box
+
+
+def test_mask_preview_greys_what_the_window_left_out():
+    import numpy as np
+    from badminton_gui.gui.tuning_dialog import _shade_outside
+
+    mask = np.zeros((100, 200, 4), np.uint8)
+    mask[..., 3] = 255
+    mask[40:50, 60:70, :3] = 255                       # a blob inside the window
+    shaded = _shade_outside(mask, (200, 100, 600, 300), 0.25)   # full-res box at mask scale 1/4
+    assert (shaded[40:50, 60:70, :3] == 255).all()
+    assert (shaded[25:75, 50:150, :3][shaded[25:75, 50:150, 0] != 255] == 0).all()   # inside: as it was
+    assert (shaded[:25, :, :3] == 56).all() and (shaded[:, 150:, :3] == 56).all()    # outside: grey
+    assert (shaded[..., 3] == 255).all()

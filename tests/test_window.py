@@ -250,3 +250,22 @@ def test_staggered_cameras_never_take_a_scheduled_whole_frame_together():
             det.process(img, i / FPS)
         together += i >= following[0] and left._window.last_window is None and right._window.last_window is None
     assert together >= 5
+
+
+def test_the_result_says_which_box_was_processed():
+    """CameraResult.window is the window of a windowed frame (the views draw it) and None on a
+    whole frame, so an empty mask outside it is not read as "nothing moved"."""
+    frames, truth = _scene(60)
+    det = CameraDetector(_params(window__full_every=4))
+    seen = set()
+    for i, img in enumerate(frames):
+        res = det.process(img, i / FPS, keep_mask=True)
+        assert res.window == det._window.last_window
+        if res.window is not None:
+            x0, y0, x1, y1 = res.window
+            k = res.mask_scale
+            outside = res.mask.copy()
+            outside[int(y0 * k):int(y1 * k), int(x0 * k):int(x1 * k)] = 0
+            assert not outside.any()
+        seen.add(res.window is None)
+    assert seen == {True, False}

@@ -321,7 +321,8 @@ class CameraDetector:
             candidates.append(c)
         return CameraResult(detection=None, candidates=tuple(candidates),
                             mask=mask if keep_mask else None,
-                            mask_scale=mask.shape[1] / w, image_size=(w, h))
+                            mask_scale=mask.shape[1] / w, image_size=(w, h),
+                            window=None if window is None else tuple(int(v) for v in window))
 
     def _model_grey(self, frame_bgr: np.ndarray, scale: float) -> np.ndarray:
         """The grey image the background model reads: the frame at ``scale`` (INTER_AREA).

@@ -110,6 +110,10 @@ class CameraResult:
     mask: np.ndarray | None = None     # binary foreground mask at processing scale (display)
     mask_scale: float = 1.0            # mask pixel = full-res pixel * mask_scale
     image_size: tuple[int, int] = (0, 0)  # (width, height) of the full-resolution frame
+    # Windowed tracking (core/window.py): the full-resolution box (x0, y0, x1, y1) that was the
+    # only part of this frame processed, None when the whole frame was. The views draw it, so a
+    # mask that is empty outside it reads as "not looked at", not as "nothing moved".
+    window: tuple[int, int, int, int] | None = None
 
     @property
     def visible(self) -> bool:

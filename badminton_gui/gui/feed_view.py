@@ -17,7 +17,7 @@ from PySide6.QtGui import QColor, QFont, QFontMetrics, QImage, QPainter, QPen
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
 from ..core.types import CameraResult
-from .overlays import DETECTION_COLOUR, REJECT_STYLE, TRAIL_COLOUR, reject_style
+from .overlays import DETECTION_COLOUR, REJECT_STYLE, TRAIL_COLOUR, WINDOW_COLOUR, reject_style
 from .worker import TRAIL_SECONDS
 
 CIRCLE_RADIUS = 11.0     # widget px: clearly visible at any zoom
@@ -76,6 +76,7 @@ class FeedView(QWidget):
         self.title = title
         self.show_rejected = False
         self.show_legend = True
+        self.show_window = False     # the windowed-tracking box, with the diagnostic overlays
         self._image: np.ndarray | None = None
         self._qimage: QImage | None = None
         self._display_scale = 1.0
@@ -154,6 +155,8 @@ class FeedView(QWidget):
             else:
                 p.drawImage(r, self._qimage)
             p.setRenderHint(QPainter.RenderHint.Antialiasing, True)
+            if self.show_window and self._camera is not None and self._camera.window is not None:
+                self._paint_window(p)
             if self.show_rejected and self._camera is not None:
                 self._paint_rejected(p)
             self._paint_trail(p)
@@ -264,6 +267,21 @@ class FeedView(QWidget):
                 p.drawLines(seg)
             p.setPen(dot_pen)
             p.drawPoints([qpts[i] for i in idx])
+
+    def _paint_window(self, p: QPainter) -> None:
+        """The only part of this frame the tracker processed (windowed tracking), dashed and
+        labelled: outside it the mask is empty because nobody looked, not because nothing moved."""
+        x0, y0, x1, y1 = self._camera.window
+        top_left, bottom_right = self.image_to_widget(x0, y0), self.image_to_widget(x1, y1)
+        pen = QPen(WINDOW_COLOUR, 1.5)
+        pen.setStyle(Qt.PenStyle.DashLine)
+        p.setPen(pen)
+        p.setBrush(Qt.BrushStyle.NoBrush)
+        p.drawRect(QRectF(top_left, bottom_right))
+        f = QFont(self.font())
+        f.setPointSizeF(max(7.0, f.pointSizeF() * 0.8))
+        p.setFont(f)
+        p.drawText(QPointF(top_left.x() + 3, top_left.y() - 3), "tracking window")
 
     def _paint_rejected(self, p: QPainter) -> None:
         """Rejected candidates as rings in their filter's colour, each on a dark halo.

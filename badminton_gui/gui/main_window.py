@@ -486,6 +486,7 @@ class MainWindow(QMainWindow):
             self.worker.set_show_mask(self.mask_action.isChecked())
         for feed in (self.left_feed, self.right_feed):
             feed.show_rejected = self.rejected_action.isChecked()
+            feed.show_window = self.rejected_action.isChecked() or self.mask_action.isChecked()
             feed.update()
 
     def set_params(self, params: TrackerParams) -> None:

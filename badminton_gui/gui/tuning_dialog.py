@@ -153,6 +153,7 @@ class TuningDialog(QDialog):
         # -- live preview
         self.preview = FeedView("Mask preview")
         self.preview.show_rejected = True
+        self.preview.show_window = True
         self.preview.setMinimumSize(360, 240)
         self.preview_camera = QComboBox()
         self.preview_camera.addItems(["Left camera", "Right camera"])
@@ -294,6 +295,8 @@ class TuningDialog(QDialog):
             return
         image = (cv2.cvtColor(cam.mask, cv2.COLOR_GRAY2BGRA) if cam.mask.ndim == 2
                  else cv2.cvtColor(cam.mask, cv2.COLOR_BGR2BGRA))
+        if cam.window is not None:
+            image = _shade_outside(image, cam.window, cam.mask_scale)
         self.preview.set_frame(image, cam.mask_scale, cam, np.zeros((0, 3)))
         rejected: dict[str, int] = {}
         for c in cam.candidates:
@@ -303,3 +306,16 @@ class TuningDialog(QDialog):
         summary = ", ".join(f"{n} {k}" for k, n in sorted(rejected.items())) or "none"
         self.preview_info.setText(f"{len(cam.candidates)} candidates; "
                                   f"{'shuttle found' if cam.detection else 'no shuttle'}; rejected: {summary}")
+
+
+def _shade_outside(image: np.ndarray, window: tuple[int, int, int, int], mask_scale: float) -> np.ndarray:
+    """The mask preview with the part the tracker did not process on this frame (windowed
+    tracking) in dark grey, so it is not mistaken for "no foreground" (black)."""
+    h, w = image.shape[:2]
+    x0, y0, x1, y1 = (int(round(v * mask_scale)) for v in window)
+    x0, x1 = max(0, min(w, x0)), max(0, min(w, x1))
+    y0, y1 = max(0, min(h, y0)), max(0, min(h, y1))
+    shaded = np.full_like(image, 56)
+    shaded[..., 3] = 255
+    shaded[y0:y1, x0:x1] = image[y0:y1, x0:x1]
+    return shaded
