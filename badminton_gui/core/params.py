@@ -328,6 +328,21 @@ class StereoParams(ParamGroup):
                                     "falls on a blob too large for a shuttle (merged with a player, a racket)")
     guided_override: bool = flag(False, label="... also against a detection",
                                  help="Also replace a detection that is off the flight's projection")
+    stereo_vouch: bool = flag(True, label="Stereo confirms a young track",
+                              help="A candidate held back by the association (its track not confirmed yet, "
+                                   "or not travelling far enough) passes when the other camera has a partner "
+                                   "on its epipolar line and the two tracks' image velocities triangulate to a "
+                                   "moving 3D point: the first frames of a serve or after a hit, a shuttle "
+                                   "coming back slowly into view")
+    vouch_max_epipolar: float = param(3.0, 0.1, 100.0, step=0.1, unit="px", label="... within epipolar",
+                                      help="Largest epipolar error of such a pair, now and one velocity step back "
+                                           "(fixed: never widened to a learnt tolerance, so a rig calibrated "
+                                           "roughly does not vouch for chance alignments)")
+    vouch_min_quality: float = param(0.1, 0.0, 1.0, step=0.01, label="... track quality ≥",
+                                     help="Running quality the held-back candidate's track needs")
+    vouch_min_speed: float = param(2.0, 0.0, 100.0, step=0.5, unit="m/s", label="... 3D speed ≥",
+                                   help="The pair's 3D velocity (from the two tracks' image velocities) must be "
+                                        "at least this (lights and a shuttle at rest do not vouch)")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and
