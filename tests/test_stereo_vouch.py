@@ -32,6 +32,10 @@ class FakeDetector:
     def vouchable(self, c, min_quality):
         return self.velocities.get(id(c)) if c.rejected_by == REJECT_MOTION else None
 
+    def first_sighting(self, c, min_quality):
+        return (c.rejected_by == REJECT_MOTION and id(c) in self.velocities
+                and self.velocities[id(c)] is None and c.score >= min_quality)
+
     def tracklet_velocity(self, c):
         return self.velocities.get(id(c))
 
@@ -48,7 +52,7 @@ def _candidate(u, v, rejected=REJECT_MOTION, score=0.5):
 
 
 def _scene(tracker, velocity_3d, right_offset=(0.0, 0.0), right_velocity_offset=(0.0, 0.0),
-           right_rejected=REJECT_MOTION):
+           right_rejected=REJECT_MOTION, first=False, score=0.5):
     rig = tracker.rig
     p = np.array([[0.3, -2.0, 1.8]])                 # court frame, m
     back = p - DT * np.asarray(velocity_3d)[None]
@@ -60,9 +64,9 @@ def _scene(tracker, velocity_3d, right_offset=(0.0, 0.0), right_velocity_offset=
         if cam == 1:
             now_uv = now_uv + np.asarray(right_offset)
             vel = vel + np.asarray(right_velocity_offset)
-        c = _candidate(*now_uv, rejected=REJECT_MOTION if cam == 0 else right_rejected)
+        c = _candidate(*now_uv, rejected=REJECT_MOTION if cam == 0 else right_rejected, score=score)
         clutter = _candidate(now_uv[0] + 200, now_uv[1] + 80)
-        det = FakeDetector({id(c): tuple(vel), id(clutter): (0.0, 0.0)})
+        det = FakeDetector({id(c): None if first else tuple(vel), id(clutter): (0.0, 0.0)})
         res.append(CameraResult(None, (clutter, c), image_size=(1280, 720)))
         dets.append(det)
     tracker.left, tracker.right = dets
@@ -132,3 +136,19 @@ def test_off_by_the_flag():
         assert not called
     finally:
         t.close()
+
+
+def test_first_sightings_pass_by_position_when_they_look_like_a_shuttle(tracker):
+    """Both tracks seen for the first time (no velocity): the pair passes on its epipolar
+    agreement alone when both score at least ``vouch_first_quality``, not below it, not off the
+    epipolar line, and never when that is 1."""
+    q = tracker.params.stereo.vouch_first_quality
+    assert q < 1.0
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=q + 0.05))
+    assert len(_passed(left)) == len(_passed(right)) == 1
+    for kwargs in ({"score": q - 0.05}, {"score": 0.9, "right_offset": (0.0, 8.0)}):
+        left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, **kwargs))
+        assert not _passed(left) and not _passed(right), kwargs
+    tracker.params = tracker.params.with_value("stereo.vouch_first_quality", 1.0)
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.99))
+    assert not _passed(left) and not _passed(right)

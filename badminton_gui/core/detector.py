@@ -388,6 +388,17 @@ class CameraDetector:
                 return None
         return None
 
+    def first_sighting(self, candidate: Candidate, min_quality: float) -> bool:
+        """The held-back candidate starts a track this frame (no velocity yet) and scores at
+        least ``min_quality`` by its looks: the other camera may vouch for it by position alone."""
+        if candidate.rejected_by != REJECT_MOTION or candidate.predicted or candidate.score < min_quality:
+            return False
+        ident = self._tracklet_of.get(id(candidate))
+        for tr in self._associator.tracklets:
+            if tr.ident == ident:
+                return tr.hit_now and tr.hits == 1
+        return False
+
     def vouch(self, candidate: Candidate, score: float) -> Candidate:
         """The held-back candidate let through with ``score`` (it keeps its tracklet)."""
         passed = dataclasses.replace(candidate, rejected_by=None, score=score)

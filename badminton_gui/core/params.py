@@ -340,6 +340,9 @@ class StereoParams(ParamGroup):
                                            "roughly does not vouch for chance alignments)")
     vouch_min_quality: float = param(0.1, 0.0, 1.0, step=0.01, label="... track quality ≥",
                                      help="Running quality the held-back candidate's track needs")
+    vouch_first_quality: float = param(0.4, 0.0, 1.0, step=0.01, label="... first sighting from quality",
+                                       help="A candidate seen for the first time (its track has no velocity yet) may "
+                                            "be vouched for by position alone when it scores at least this (1 = never)")
     vouch_min_speed: float = param(2.0, 0.0, 100.0, step=0.5, unit="m/s", label="... 3D speed ≥",
                                    help="The pair's 3D velocity (from the two tracks' image velocities) must be "
                                         "at least this (lights and a shuttle at rest do not vouch)")

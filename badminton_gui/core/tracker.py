@@ -271,6 +271,8 @@ class StereoTracker:
                     v = detectors[cam].vouchable(c, sp.vouch_min_quality)
                     if v is not None:
                         pool.append((c, v))
+                    elif sp.vouch_first_quality < 1.0 and detectors[cam].first_sighting(c, sp.vouch_first_quality):
+                        pool.append((c, None))
             else:
                 # The partner is that camera's own choice (its best track), nothing else.
                 own = detectors[cam].choose(results[cam].candidates)
@@ -287,11 +289,13 @@ class StereoTracker:
         epi = self.rig.epipolar_errors(now_l, now_r)
         if not (epi <= tol).any():
             return res_left, res_right
-        back_l = now_l - VOUCH_DT * np.array([v for _, v in left])
-        back_r = now_r - VOUCH_DT * np.array([v for _, v in right])
+        back_l = now_l - VOUCH_DT * np.array([(0.0, 0.0) if v is None else v for _, v in left])
+        back_r = now_r - VOUCH_DT * np.array([(0.0, 0.0) if v is None else v for _, v in right])
         best = None
         for i, j in zip(*np.nonzero(epi <= tol)):
-            if float(self.rig.epipolar_errors(back_l[i:i + 1], back_r[j:j + 1])[0, 0]) > 2.0 * tol:
+            # A first sighting has no velocity: its pair is checked by position alone.
+            moving = left[i][1] is not None and right[j][1] is not None
+            if moving and float(self.rig.epipolar_errors(back_l[i:i + 1], back_r[j:j + 1])[0, 0]) > 2.0 * tol:
                 continue
             pts = self.rig.triangulate(np.stack([now_l[i], back_l[i]]), np.stack([now_r[j], back_r[j]]))
             dist = float(np.linalg.norm(pts[0]))
@@ -300,7 +304,7 @@ class StereoTracker:
             if self.rig.depth(1, self.rig.to_output(pts[:1]))[0] <= 0:
                 continue
             speed = float(np.linalg.norm(pts[0] - pts[1])) / VOUCH_DT
-            if not (sp.vouch_min_speed <= speed <= VOUCH_MAX_SPEED):
+            if moving and not (sp.vouch_min_speed <= speed <= VOUCH_MAX_SPEED):
                 continue
             merit = left[i][0].score + right[j][0].score - float(epi[i, j]) / tol
             if best is None or merit > best[0]:
