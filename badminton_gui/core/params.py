@@ -346,6 +346,10 @@ class StereoParams(ParamGroup):
     vouch_min_speed: float = param(2.0, 0.0, 100.0, step=0.5, unit="m/s", label="... 3D speed ≥",
                                    help="The pair's 3D velocity (from the two tracks' image velocities) must be "
                                         "at least this (lights and a shuttle at rest do not vouch)")
+    guided_weak_score: float = param(2.0, 0.0, 100.0, step=0.1, label="... against a weak lone detection",
+                                     help="Without a stereo pair, a detection scoring below this (a track that slid "
+                                          "onto a player after the shuttle's own was lost) is replaced by a spot "
+                                          "found at the flight's projection when it lies off it (0 = off)")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and

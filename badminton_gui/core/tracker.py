@@ -166,12 +166,16 @@ class StereoTracker:
         # Without override the guided look only serves a camera with no detection: when both
         # have one, skip predicting the flight (an RK4 propagation per frame on the hot path).
         unseen = [det is None or det.predicted for det in (det_left, det_right)]
+        # Without a stereo pair, a detection of little merit (a track that slid onto a player
+        # when the shuttle's own track was lost) is looked past too, at the flight's projection.
+        weak = [point_left is None and sp.guided_weak_score > 0 and det is not None
+                and not det.predicted and det.score < sp.guided_weak_score for det in (det_left, det_right)]
         guide = None
-        if sp.guided_search and (sp.guided_override or any(unseen)):
+        if sp.guided_search and (sp.guided_override or any(unseen) or any(weak)):
             guide = self._trajectory.guide(timestamp)
             if guide is not None:
-                found_left = self._guided(0, left_bgr, det_left, guide)
-                found_right = self._guided(1, right_bgr, det_right, guide)
+                found_left = self._guided(0, left_bgr, det_left, guide, weak[0])
+                found_right = self._guided(1, right_bgr, det_right, guide, weak[1])
                 if found_left is not None or found_right is not None:
                     if found_left is not None:
                         det_left = found_left
@@ -375,8 +379,9 @@ class StereoTracker:
         return 1.0 + (epi / typical) ** 2
 
     def _guided(self, camera: int, frame: np.ndarray, detection: Candidate | None,
-                guide: tuple[np.ndarray, np.ndarray]) -> Candidate | None:
-        """A spot found where the flight projects, when this camera's detection is not there."""
+                guide: tuple[np.ndarray, np.ndarray], override: bool = False) -> Candidate | None:
+        """A spot found where the flight projects, when this camera's detection is not there
+        (a detection is looked past with ``guided_override``, or ``override``: a weak one)."""
         sp = self.params.stereo
         position, covariance = guide
         depth = float(self.rig.depth(camera, position[None])[0])
@@ -389,7 +394,7 @@ class StereoTracker:
         focal = float((self.rig.M1 if camera == 0 else self.rig.M2)[0, 0])
         sigma_px = focal * math.sqrt(max(float(np.trace(covariance)) / 3.0, 0.0)) / depth
         radius = min(3.0 * sigma_px + 3.0 * w / 1280.0, 0.02 * w)
-        if detection is not None and (not sp.guided_override
+        if detection is not None and (not (sp.guided_override or override)
                                       or math.hypot(detection.x - u, detection.y - v) <= radius):
             return None
         skirt_px = focal * 0.065 / depth            # a shuttle's skirt is 6.5 cm across
