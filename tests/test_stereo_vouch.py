@@ -152,3 +152,26 @@ def test_first_sightings_pass_by_position_when_they_look_like_a_shuttle(tracker)
     tracker.params = tracker.params.with_value("stereo.vouch_first_quality", 1.0)
     left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.99))
     assert not _passed(left) and not _passed(right)
+
+
+def test_a_weak_lone_detection_is_looked_past_at_the_flights_projection(tracker):
+    """``stereo.guided_weak_score``: without a stereo pair, a detection scoring below it that
+    lies off the flight's projection gives way to a white spot found there; a strong one, a
+    paired one, or any with the setting at 0 does not."""
+    import cv2
+
+    guide = (np.array([0.3, -2.0, 1.8]), np.eye(3) * 1e-4)
+    u, v = tracker.rig.project(1, guide[0][None])[0]
+    frame = np.full((720, 1280, 3), 40, np.uint8)
+    cv2.circle(frame, (int(round(u)), int(round(v))), 3, (255, 255, 255), -1)
+    far = _candidate(u + 60, v + 40, rejected=None, score=1.0)
+    assert tracker._weak_lone(far, paired=False)
+    assert not tracker._weak_lone(dataclasses.replace(far, score=5.0), paired=False)
+    assert not tracker._weak_lone(far, paired=True)
+    assert not tracker._guided(1, frame, far, guide)                    # not looked past
+    found = tracker._guided(1, frame, far, guide, override=True)
+    assert found is not None and abs(found.x - u) < 1.5 and abs(found.y - v) < 1.5
+    near = _candidate(u + 1, v, rejected=None, score=1.0)
+    assert tracker._guided(1, frame, near, guide, override=True) is None  # already there
+    tracker.params = tracker.params.with_value("stereo.guided_weak_score", 0.0)
+    assert not tracker._weak_lone(far, paired=False)

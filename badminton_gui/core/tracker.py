@@ -168,8 +168,7 @@ class StereoTracker:
         unseen = [det is None or det.predicted for det in (det_left, det_right)]
         # Without a stereo pair, a detection of little merit (a track that slid onto a player
         # when the shuttle's own track was lost) is looked past too, at the flight's projection.
-        weak = [point_left is None and sp.guided_weak_score > 0 and det is not None
-                and not det.predicted and det.score < sp.guided_weak_score for det in (det_left, det_right)]
+        weak = [self._weak_lone(det, point_left is not None) for det in (det_left, det_right)]
         guide = None
         if sp.guided_search and (sp.guided_override or any(unseen) or any(weak)):
             guide = self._trajectory.guide(timestamp)
@@ -377,6 +376,15 @@ class StereoTracker:
         typical = max(EPIPOLAR_TYPICAL_MIN, 1.5 * float(np.median(samples))) if len(samples) >= 20 \
             else EPIPOLAR_TYPICAL_MIN
         return 1.0 + (epi / typical) ** 2
+
+    def _weak_lone(self, detection: Candidate | None, paired: bool) -> bool:
+        """A detection with no stereo partner scoring below ``stereo.guided_weak_score``: the
+        guided look may replace it by a spot at the flight's projection (a confirmed track
+        followed with its hysteresis scores ≥ ~3 on the demo court; one that slid onto a player
+        after the shuttle's own track was lost, 0.2–2)."""
+        sp = self.params.stereo
+        return (not paired and sp.guided_weak_score > 0 and detection is not None
+                and not detection.predicted and detection.score < sp.guided_weak_score)
 
     def _guided(self, camera: int, frame: np.ndarray, detection: Candidate | None,
                 guide: tuple[np.ndarray, np.ndarray], override: bool = False) -> Candidate | None:
