@@ -262,6 +262,10 @@ class AssociationParams(ParamGroup):
                                           help="The followed tracklet keeps its hysteresis only while this frame's "
                                                "candidate on it scores at least this (after a hit it goes on with the "
                                                "racket or a hand); 0 = always")
+    blind_gate: float = param(30.0, 0.0, 2000.0, step=1.0, unit="px", label="Gate in a blind spot",
+                              help="While the followed track is predicted where the detector is blind (a light, "
+                                   "a white line), it takes only a candidate this close to its prediction and "
+                                   "coasts otherwise (a hand or a racket nearby would take it over; 0 = off)")
     max_measured: int = param(32, 1, 500, step=1, label="Blobs measured",
                               help="At most this many blobs per frame get the full-resolution measurement: "
                                    "those near a live tracklet first, then the strongest differences")
