@@ -5,6 +5,7 @@ a bright blob lies still (a shuttle on the floor): the detector must follow the 
 candidate it drops must say which filter dropped it.
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -378,3 +379,32 @@ def test_followed_tracklet_sliding_over_clutter_does_not_swap():
                                     np.array([0.05, 0.95]))
         assert (bright[0] == followed) == (min_quality == 0.0)
         assert (near[0] == followed) == (min_quality > 0.0)
+
+
+@pytest.mark.parametrize("blind_gate", [0.0, 30.0])
+def test_in_a_blind_spot_the_followed_track_coasts_rather_than_take_a_far_blob(blind_gate):
+    """``association.blind_gate``: the followed track predicted where the detector is blind
+    takes only a blob within the gate of its prediction (a hand 45 px away, inside its usual
+    gate, would take it over) and coasts instead; outside a blind spot the usual gate holds.
+    (The hand scores below ``min_track_quality``, as on the demo court: a shuttle-like blob
+    near the lost track would still inherit its history, ``rebirth_radius``.)"""
+    p = TrackerParams()
+    a = TrackletAssociator(p.motion, dataclasses.replace(p.association, blind_gate=blind_gate))
+    for i in range(10):
+        (ident, _, merit), = a.update(i / FPS, np.array([[100.0 + 3 * i, 200.0]]), np.array([0.9]))
+    assert merit >= 0
+    a.select(ident)
+    t = 10 / FPS
+    hand = np.array([[130.0, 245.0]])                       # 45 px below the prediction (130, 200)
+    (hit, _, _), = a.update(t, hand, np.array([0.1]), blind=lambda x, y: True)
+    if blind_gate:
+        assert hit != ident
+        assert a.coasting(t, lambda x, y: True)[0].ident == ident
+    else:
+        assert hit == ident
+    b = TrackletAssociator(p.motion, a.params)
+    for i in range(10):
+        (ident_b, _, _), = b.update(i / FPS, np.array([[100.0 + 3 * i, 200.0]]), np.array([0.9]))
+    b.select(ident_b)
+    (hit_b, _, _), = b.update(t, hand, np.array([0.1]), blind=lambda x, y: False)
+    assert hit_b == ident_b

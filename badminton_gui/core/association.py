@@ -160,6 +160,15 @@ class TrackletAssociator:
                     if scores[best] - scores[nearest] >= p.followed_swap_margin:
                         cost[i, best] = cost[i, nearest] - 1e-3
                     break
+            if p.blind_gate > 0 and blind is not None and self.selected is not None:
+                # The followed shuttle predicted where the detector is blind (a light, a white
+                # line) cannot show there: a blob far from the prediction is something else (a
+                # hand, a racket) that would take the track over; the track coasts instead.
+                for i, tr in enumerate(self.tracklets):
+                    if (tr.ident == self.selected and tr.velocity_known and tr.hits >= p.min_hits
+                            and blind(*tr.predict(t))):
+                        gates[i] = min(gates[i], p.blind_gate)
+                        break
             order = np.argsort(cost, axis=None)
             # Only pairs inside the tracklet's gate can be taken: drop the others before the
             # Python loop (it used to visit all tracklets × candidates, ~800 pairs a frame, to

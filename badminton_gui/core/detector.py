@@ -57,6 +57,9 @@ MAX_COLOUR_CHECKS = 64
 # Margin (full-res px) around a blob's box for the sub-pixel refinement window.
 REFINE_MARGIN = 5
 _GROW = np.ones((3, 3), np.uint8)
+# px: a held-back candidate's track must have moved at least this in its last step for the other
+# camera to vouch for it (``vouchable``): its smoothed velocity remembers older motion.
+VOUCH_MIN_STEP = 1.0
 # Appearance features measured in the full-resolution window (order matters: the classifier).
 APPEARANCE_NAMES = ("contrast", "background", "log_bright_area", "spill", "whiteness",
                     "saturation", "log_mask_area", "peak_saturation", "window_std")
@@ -381,6 +384,46 @@ class CameraDetector:
             if tr.ident == ident:
                 return tr.hits
         return 0
+
+    def vouchable(self, candidate: Candidate, min_quality: float) -> tuple[float, float] | None:
+        """Image velocity (px/s) of a candidate the association held back (filter 4: its tracklet
+        is not confirmed yet, or not travelling far enough) while the tracklet is seen this frame,
+        has a known velocity and a running quality of at least ``min_quality``; else None.
+
+        The stereo tracker lets such a candidate through when the other camera sees a partner
+        on its epipolar line moving the same way in 3D (``StereoTracker._vouch``): the flight's
+        first frames after a serve or a hit, a shuttle coming back slowly into view.
+        """
+        if candidate.rejected_by != REJECT_MOTION or candidate.predicted:
+            return None
+        ident = self._tracklet_of.get(id(candidate))
+        for tr in self._associator.tracklets:
+            if tr.ident == ident:
+                if (tr.hit_now and tr.velocity_known and tr.quality >= min_quality
+                        and len(tr.recent) >= 2
+                        and math.hypot(tr.x - tr.recent[-2][0], tr.y - tr.recent[-2][1]) >= VOUCH_MIN_STEP):
+                    return tr.vx, tr.vy
+                return None
+        return None
+
+    def first_sighting(self, candidate: Candidate, min_quality: float) -> bool:
+        """The held-back candidate starts a track this frame (no velocity yet) and scores at
+        least ``min_quality`` by its looks: the other camera may vouch for it by position alone."""
+        if candidate.rejected_by != REJECT_MOTION or candidate.predicted or candidate.score < min_quality:
+            return False
+        ident = self._tracklet_of.get(id(candidate))
+        for tr in self._associator.tracklets:
+            if tr.ident == ident:
+                return tr.hit_now and tr.hits == 1
+        return False
+
+    def vouch(self, candidate: Candidate, score: float) -> Candidate:
+        """The held-back candidate let through with ``score`` (it keeps its tracklet)."""
+        passed = dataclasses.replace(candidate, rejected_by=None, score=score)
+        ident = self._tracklet_of.get(id(candidate))
+        if ident is not None:
+            self._tracklet_of[id(passed)] = ident
+        return passed
 
     def tracklet_velocity(self, candidate: Candidate) -> tuple[float, float] | None:
         """Image velocity (px/s) of the candidate's tracklet, or None when not yet known."""

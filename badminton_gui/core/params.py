@@ -262,6 +262,10 @@ class AssociationParams(ParamGroup):
                                           help="The followed tracklet keeps its hysteresis only while this frame's "
                                                "candidate on it scores at least this (after a hit it goes on with the "
                                                "racket or a hand); 0 = always")
+    blind_gate: float = param(30.0, 0.0, 2000.0, step=1.0, unit="px", label="Gate in a blind spot",
+                              help="While the followed track is predicted where the detector is blind (a light, "
+                                   "a white line), it takes only a candidate this close to its prediction and "
+                                   "coasts otherwise (a hand or a racket nearby would take it over; 0 = off)")
     max_measured: int = param(32, 1, 500, step=1, label="Blobs measured",
                               help="At most this many blobs per frame get the full-resolution measurement: "
                                    "those near a live tracklet first, then the strongest differences")
@@ -328,6 +332,28 @@ class StereoParams(ParamGroup):
                                     "falls on a blob too large for a shuttle (merged with a player, a racket)")
     guided_override: bool = flag(False, label="... also against a detection",
                                  help="Also replace a detection that is off the flight's projection")
+    stereo_vouch: bool = flag(True, label="Stereo confirms a young track",
+                              help="A candidate held back by the association (its track not confirmed yet, "
+                                   "or not travelling far enough) passes when the other camera has a partner "
+                                   "on its epipolar line and the two tracks' image velocities triangulate to a "
+                                   "moving 3D point: the first frames of a serve or after a hit, a shuttle "
+                                   "coming back slowly into view")
+    vouch_max_epipolar: float = param(3.0, 0.1, 100.0, step=0.1, unit="px", label="... within epipolar",
+                                      help="Largest epipolar error of such a pair, now and one velocity step back "
+                                           "(fixed: never widened to a learnt tolerance, so a rig calibrated "
+                                           "roughly does not vouch for chance alignments)")
+    vouch_min_quality: float = param(0.1, 0.0, 1.0, step=0.01, label="... track quality ≥",
+                                     help="Running quality the held-back candidate's track needs")
+    vouch_first_quality: float = param(0.4, 0.0, 1.0, step=0.01, label="... first sighting from quality",
+                                       help="A candidate seen for the first time (its track has no velocity yet) may "
+                                            "be vouched for by position alone when it scores at least this (1 = never)")
+    vouch_min_speed: float = param(2.0, 0.0, 100.0, step=0.5, unit="m/s", label="... 3D speed ≥",
+                                   help="The pair's 3D velocity (from the two tracks' image velocities) must be "
+                                        "at least this (lights and a shuttle at rest do not vouch)")
+    guided_weak_score: float = param(2.0, 0.0, 100.0, step=0.1, label="... against a weak lone detection",
+                                     help="Without a stereo pair, a detection scoring below this (a track that slid "
+                                          "onto a player after the shuttle's own was lost) is replaced by a spot "
+                                          "found at the flight's projection when it lies off it (0 = off)")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and

@@ -52,6 +52,12 @@ HEAD_CHECK_STEPS = 4.0
 # px at 1280 px width: how near the flight's projection a white pixel must show for a shuttle
 # merged with a larger blob (wider, a shoulder's edge next to a hidden cork passed on the demo).
 MERGED_WHITE_RADIUS = 2.0
+# s: how far back the two tracks' image velocities are followed to check that a held-back pair
+# moves consistently in 3D (``_vouch``): a few frames at 120 fps, long enough for a slow shuttle
+# to move a few px.
+VOUCH_DT = 0.02
+# m/s: the fastest 3D motion a vouched pair may show (smashes leave the racket at ≤ ~157 m/s).
+VOUCH_MAX_SPEED = 160.0
 
 
 class StereoTracker:
@@ -151,6 +157,8 @@ class StereoTracker:
             res_left = self.left.find_candidates(left_bgr, timestamp, keep_masks)
             res_right = self.right.find_candidates(right_bgr, timestamp, keep_masks)
 
+        if self.params.stereo.stereo_vouch:
+            res_left, res_right = self._vouch(res_left, res_right)
         self._learn_epipolar(res_left, res_right)
         det_left, det_right, point_left, epi = self._choose_pair(res_left, res_right)
         if point_left is None:
@@ -163,12 +171,15 @@ class StereoTracker:
         # Without override the guided look only serves a camera with no detection: when both
         # have one, skip predicting the flight (an RK4 propagation per frame on the hot path).
         unseen = [det is None or det.predicted for det in (det_left, det_right)]
+        # Without a stereo pair, a detection of little merit (a track that slid onto a player
+        # when the shuttle's own track was lost) is looked past too, at the flight's projection.
+        weak = [self._weak_lone(det, point_left is not None) for det in (det_left, det_right)]
         guide = None
-        if sp.guided_search and (sp.guided_override or any(unseen)):
+        if sp.guided_search and (sp.guided_override or any(unseen) or any(weak)):
             guide = self._trajectory.guide(timestamp)
             if guide is not None:
-                found_left = self._guided(0, left_bgr, det_left, guide)
-                found_right = self._guided(1, right_bgr, det_right, guide)
+                found_left = self._guided(0, left_bgr, det_left, guide, weak[0])
+                found_right = self._guided(1, right_bgr, det_right, guide, weak[1])
                 if found_left is not None or found_right is not None:
                     if found_left is not None:
                         det_left = found_left
@@ -235,6 +246,89 @@ class StereoTracker:
             predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
 
+    def _vouch(self, res_left: CameraResult, res_right: CameraResult
+               ) -> tuple[CameraResult, CameraResult]:
+        """Let through a candidate the association held back when the other camera agrees.
+
+        One camera alone needs ``association.min_hits`` frames and ``min_travel`` px to tell a
+        shuttle from clutter: a serve's or a hit's first frames, a shuttle coming back slowly into
+        view from the top after a clear, are lost (about half the demo court's online errors).
+        The other camera is evidence that camera lacks: a partner on the epipolar line (a tight
+        fixed tolerance, ``stereo.vouch_max_epipolar``) whose track moves the same way — the two
+        image velocities, followed back ``VOUCH_DT``, meet their epipolar lines too and
+        triangulate to a 3D velocity of at least ``vouch_min_speed`` (a light, a shuttle at rest
+        do not move; two unrelated blobs rarely move consistently). Only a camera with no
+        surviving candidate is helped; its partner is the other camera's survivor, or, when
+        neither has one, a held-back candidate of the other camera (both pass); the partner
+        survivor is the other camera's own choice. The candidate
+        keeps its own quality as its score, below any confirmed track's merit.
+        """
+        sp = self.params.stereo
+        # A camera coasting through a blind spot (a predicted candidate) is not helped: its
+        # followed track still knows where the shuttle is.
+        need = [not any(c.rejected_by is None for c in res.candidates) for res in (res_left, res_right)]
+        if not any(need):
+            return res_left, res_right
+        detectors = (self.left, self.right)
+        results = (res_left, res_right)
+        pools = []
+        for cam in (0, 1):
+            pool = []
+            if need[cam]:
+                for c in results[cam].candidates:
+                    v = detectors[cam].vouchable(c, sp.vouch_min_quality)
+                    if v is not None:
+                        pool.append((c, v))
+                    elif sp.vouch_first_quality < 1.0 and detectors[cam].first_sighting(c, sp.vouch_first_quality):
+                        pool.append((c, None))
+            else:
+                # The partner is that camera's own choice (its best track), nothing else.
+                own = detectors[cam].choose(results[cam].candidates)
+                v = None if own is None or own.predicted else detectors[cam].tracklet_velocity(own)
+                if v is not None:
+                    pool.append((own, v))
+            if not pool:
+                return res_left, res_right
+            pools.append(pool)
+        left, right = pools
+        now_l = np.array([[c.x, c.y] for c, _ in left])
+        now_r = np.array([[c.x, c.y] for c, _ in right])
+        tol = float(sp.vouch_max_epipolar)
+        epi = self.rig.epipolar_errors(now_l, now_r)
+        if not (epi <= tol).any():
+            return res_left, res_right
+        back_l = now_l - VOUCH_DT * np.array([(0.0, 0.0) if v is None else v for _, v in left])
+        back_r = now_r - VOUCH_DT * np.array([(0.0, 0.0) if v is None else v for _, v in right])
+        best = None
+        for i, j in zip(*np.nonzero(epi <= tol)):
+            # A first sighting has no velocity: its pair is checked by position alone.
+            moving = left[i][1] is not None and right[j][1] is not None
+            if moving and float(self.rig.epipolar_errors(back_l[i:i + 1], back_r[j:j + 1])[0, 0]) > 2.0 * tol:
+                continue
+            pts = self.rig.triangulate(np.stack([now_l[i], back_l[i]]), np.stack([now_r[j], back_r[j]]))
+            dist = float(np.linalg.norm(pts[0]))
+            if pts[0][2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
+                continue
+            if self.rig.depth(1, self.rig.to_output(pts[:1]))[0] <= 0:
+                continue
+            speed = float(np.linalg.norm(pts[0] - pts[1])) / VOUCH_DT
+            if moving and not (sp.vouch_min_speed <= speed <= VOUCH_MAX_SPEED):
+                continue
+            merit = left[i][0].score + right[j][0].score - float(epi[i, j]) / tol
+            if best is None or merit > best[0]:
+                best = (merit, i, j)
+        if best is None:
+            return res_left, res_right
+        _, i, j = best
+        out = []
+        for cam, (res, pick) in enumerate(((res_left, left[i][0]), (res_right, right[j][0]))):
+            if need[cam]:
+                passed = detectors[cam].vouch(pick, pick.score)
+                res = dataclasses.replace(res, candidates=tuple(passed if c is pick else c
+                                                                for c in res.candidates))
+            out.append(res)
+        return out[0], out[1]
+
     def _choose_pair(self, res_left: CameraResult, res_right: CameraResult
                      ) -> tuple[Candidate | None, Candidate | None, np.ndarray | None, float | None]:
         """The most plausible stereo-consistent pair of surviving candidates, if any."""
@@ -288,9 +382,19 @@ class StereoTracker:
             else EPIPOLAR_TYPICAL_MIN
         return 1.0 + (epi / typical) ** 2
 
+    def _weak_lone(self, detection: Candidate | None, paired: bool) -> bool:
+        """A detection with no stereo partner scoring below ``stereo.guided_weak_score``: the
+        guided look may replace it by a spot at the flight's projection (a confirmed track
+        followed with its hysteresis scores ≥ ~3 on the demo court; one that slid onto a player
+        after the shuttle's own track was lost, 0.2–2)."""
+        sp = self.params.stereo
+        return (not paired and sp.guided_weak_score > 0 and detection is not None
+                and not detection.predicted and detection.score < sp.guided_weak_score)
+
     def _guided(self, camera: int, frame: np.ndarray, detection: Candidate | None,
-                guide: tuple[np.ndarray, np.ndarray]) -> Candidate | None:
-        """A spot found where the flight projects, when this camera's detection is not there."""
+                guide: tuple[np.ndarray, np.ndarray], override: bool = False) -> Candidate | None:
+        """A spot found where the flight projects, when this camera's detection is not there
+        (a detection is looked past with ``guided_override``, or ``override``: a weak one)."""
         sp = self.params.stereo
         position, covariance = guide
         depth = float(self.rig.depth(camera, position[None])[0])
@@ -303,7 +407,7 @@ class StereoTracker:
         focal = float((self.rig.M1 if camera == 0 else self.rig.M2)[0, 0])
         sigma_px = focal * math.sqrt(max(float(np.trace(covariance)) / 3.0, 0.0)) / depth
         radius = min(3.0 * sigma_px + 3.0 * w / 1280.0, 0.02 * w)
-        if detection is not None and (not sp.guided_override
+        if detection is not None and (not (sp.guided_override or override)
                                       or math.hypot(detection.x - u, detection.y - v) <= radius):
             return None
         skirt_px = focal * 0.065 / depth            # a shuttle's skirt is 6.5 cm across

@@ -1,0 +1,177 @@
+"""The other camera vouches for a candidate the association held back (``stereo.stereo_vouch``).
+
+A shuttle point moving at a few m/s in front of the demo rig, projected into both cameras: the
+held-back candidates pass when they lie on each other's epipolar line and their tracks' image
+velocities triangulate to a moving 3D point; not when the point is at rest, when one camera's
+candidate is off the epipolar line, when its track moves another way, or when that camera
+already has a survivor of its own (it is then only a partner).
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from badminton_gui.core.association import Tracklet
+from badminton_gui.core.detector import CameraDetector
+from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.tracker import StereoTracker
+from badminton_gui.core.types import REJECT_MOTION, CameraResult, Candidate
+from badminton_gui.io.demo_scene import make_rig
+
+DT = 0.02
+
+
+class FakeDetector:
+    """Stands in for a CameraDetector: per candidate, its track's image velocity."""
+
+    def __init__(self, velocities: dict):
+        self.velocities = velocities       # id(candidate) -> (vx, vy)
+        self.vouched = []
+
+    def vouchable(self, c, min_quality):
+        return self.velocities.get(id(c)) if c.rejected_by == REJECT_MOTION else None
+
+    def first_sighting(self, c, min_quality):
+        return (c.rejected_by == REJECT_MOTION and id(c) in self.velocities
+                and self.velocities[id(c)] is None and c.score >= min_quality)
+
+    def tracklet_velocity(self, c):
+        return self.velocities.get(id(c))
+
+    def choose(self, candidates):
+        return CameraDetector.choose(None, candidates)
+
+    def vouch(self, c, score):
+        self.vouched.append(c)
+        return dataclasses.replace(c, rejected_by=None, score=score)
+
+
+def _candidate(u, v, rejected=REJECT_MOTION, score=0.5):
+    return Candidate(float(u), float(v), 30.0, 6.0, 200.0, 20.0, float("nan"), score, rejected)
+
+
+def _scene(tracker, velocity_3d, right_offset=(0.0, 0.0), right_velocity_offset=(0.0, 0.0),
+           right_rejected=REJECT_MOTION, first=False, score=0.5):
+    rig = tracker.rig
+    p = np.array([[0.3, -2.0, 1.8]])                 # court frame, m
+    back = p - DT * np.asarray(velocity_3d)[None]
+    res, dets = [], []
+    for cam in (0, 1):
+        now_uv = rig.project(cam, p)[0]
+        back_uv = rig.project(cam, back)[0]
+        vel = (now_uv - back_uv) / DT
+        if cam == 1:
+            now_uv = now_uv + np.asarray(right_offset)
+            vel = vel + np.asarray(right_velocity_offset)
+        c = _candidate(*now_uv, rejected=REJECT_MOTION if cam == 0 else right_rejected, score=score)
+        clutter = _candidate(now_uv[0] + 200, now_uv[1] + 80)
+        det = FakeDetector({id(c): None if first else tuple(vel), id(clutter): (0.0, 0.0)})
+        res.append(CameraResult(None, (clutter, c), image_size=(1280, 720)))
+        dets.append(det)
+    tracker.left, tracker.right = dets
+    return res
+
+
+@pytest.fixture
+def tracker():
+    t = StereoTracker(make_rig("binocular", (1280, 720)), TrackerParams(), parallel=False)
+    yield t
+    t.close()
+
+
+def _passed(res):
+    return [c for c in res.candidates if c.rejected_by is None]
+
+
+def test_a_moving_consistent_pair_passes_in_both_cameras(tracker):
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 3.0, 1.0)))
+    (pl,), (pr,) = _passed(left), _passed(right)
+    assert pl.score == pr.score == 0.5
+    # ... and the pair is then the stereo choice
+    det_l, det_r, point, _ = tracker._choose_pair(left, right)
+    assert det_l is pl and det_r is pr and point is not None
+
+
+def test_at_rest_off_the_epipolar_line_or_moving_apart_nothing_passes(tracker):
+    for kwargs in ({"velocity_3d": (0.0, 0.0, 0.0)},
+                   {"velocity_3d": (0.0, 3.0, 1.0), "right_offset": (0.0, 8.0)},
+                   {"velocity_3d": (0.0, 3.0, 1.0), "right_velocity_offset": (0.0, 600.0)}):
+        left, right = tracker._vouch(*_scene(tracker, **kwargs))
+        assert not _passed(left) and not _passed(right), kwargs
+
+
+def test_a_camera_with_its_own_survivor_is_only_a_partner(tracker):
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 3.0, 1.0), right_rejected=None))
+    assert len(_passed(left)) == 1
+    assert tracker.left.vouched and not tracker.right.vouched
+
+
+def test_vouchable_needs_a_moving_track_of_enough_quality():
+    det = CameraDetector(TrackerParams())
+    c = _candidate(100.0, 100.0)
+    tr = Tracklet(7, 100.0, 100.0, 0.0, 97.0, 100.0, vx=300.0, vy=0.0, hits=2, quality=0.3,
+                  velocity_known=True)
+    tr.recent.extend([(97.0, 100.0), (100.0, 100.0)])
+    det._associator.tracklets = [tr]
+    det._tracklet_of = {id(c): 7}
+    assert det.vouchable(c, 0.1) == (300.0, 0.0)
+    assert det.vouchable(c, 0.5) is None                     # quality too low
+    assert det.vouchable(dataclasses.replace(c, rejected_by=None), 0.1) is None
+    tr.recent.append((100.5, 100.0))
+    tr.x = 100.5
+    assert det.vouchable(c, 0.1) is None                     # hardly moved in its last step
+    passed = det.vouch(c, 0.3)
+    assert passed.rejected_by is None and det._tracklet_of[id(passed)] == 7
+
+
+def test_off_by_the_flag():
+    params = TrackerParams().with_value("stereo.stereo_vouch", False)
+    t = StereoTracker(make_rig("binocular", (1280, 720)), params, parallel=False)
+    try:
+        called = []
+        t._vouch = lambda a, b: called.append(1) or (a, b)
+        frame = np.zeros((720, 1280, 3), np.uint8)
+        t.process(frame, frame, 0.0)
+        assert not called
+    finally:
+        t.close()
+
+
+def test_first_sightings_pass_by_position_when_they_look_like_a_shuttle(tracker):
+    """Both tracks seen for the first time (no velocity): the pair passes on its epipolar
+    agreement alone when both score at least ``vouch_first_quality``, not below it, not off the
+    epipolar line, and never when that is 1."""
+    q = tracker.params.stereo.vouch_first_quality
+    assert q < 1.0
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=q + 0.05))
+    assert len(_passed(left)) == len(_passed(right)) == 1
+    for kwargs in ({"score": q - 0.05}, {"score": 0.9, "right_offset": (0.0, 8.0)}):
+        left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, **kwargs))
+        assert not _passed(left) and not _passed(right), kwargs
+    tracker.params = tracker.params.with_value("stereo.vouch_first_quality", 1.0)
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.99))
+    assert not _passed(left) and not _passed(right)
+
+
+def test_a_weak_lone_detection_is_looked_past_at_the_flights_projection(tracker):
+    """``stereo.guided_weak_score``: without a stereo pair, a detection scoring below it that
+    lies off the flight's projection gives way to a white spot found there; a strong one, a
+    paired one, or any with the setting at 0 does not."""
+    import cv2
+
+    guide = (np.array([0.3, -2.0, 1.8]), np.eye(3) * 1e-4)
+    u, v = tracker.rig.project(1, guide[0][None])[0]
+    frame = np.full((720, 1280, 3), 40, np.uint8)
+    cv2.circle(frame, (int(round(u)), int(round(v))), 3, (255, 255, 255), -1)
+    far = _candidate(u + 60, v + 40, rejected=None, score=1.0)
+    assert tracker._weak_lone(far, paired=False)
+    assert not tracker._weak_lone(dataclasses.replace(far, score=5.0), paired=False)
+    assert not tracker._weak_lone(far, paired=True)
+    assert not tracker._guided(1, frame, far, guide)                    # not looked past
+    found = tracker._guided(1, frame, far, guide, override=True)
+    assert found is not None and abs(found.x - u) < 1.5 and abs(found.y - v) < 1.5
+    near = _candidate(u + 1, v, rejected=None, score=1.0)
+    assert tracker._guided(1, frame, near, guide, override=True) is None  # already there
+    tracker.params = tracker.params.with_value("stereo.guided_weak_score", 0.0)
+    assert not tracker._weak_lone(far, paired=False)
