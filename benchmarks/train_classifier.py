@@ -40,7 +40,8 @@ def dump(job: tuple[str, str, str, int]) -> tuple[np.ndarray, np.ndarray]:
     """(features, is_shuttle) of every measured candidate of one video (cached in /tmp)."""
     video, labels_path, preset, max_frames = job
     cv2.setNumThreads(1)
-    key = CACHE_DIR / (f"{Path(video).parent.name}_{Path(video).stem}_{preset}_{max_frames}.npz")
+    key = CACHE_DIR / (f"{Path(video).parent.name}_{Path(video).stem}_{preset}_{max_frames}"
+                       f"_{_pipeline_digest(preset)}.npz")
     if key.is_file():
         data = np.load(key)
         return data["x"], data["y"]
@@ -51,6 +52,19 @@ def dump(job: tuple[str, str, str, int]) -> tuple[np.ndarray, np.ndarray]:
     CACHE_DIR.mkdir(exist_ok=True)
     np.savez(key, x=x, y=y)
     return x, y
+
+
+def _pipeline_digest(preset: str) -> str:
+    """A short digest of what makes the candidates: the preset's values and the core's and the
+    demo court's source. The cache in /tmp is shared by every checkout on the machine; keyed on
+    the preset's name alone, a detector change (or another branch) silently reused stale
+    features."""
+    import hashlib
+    h = hashlib.sha1(repr(load_preset(preset)).encode())
+    for folder in ("core", "io"):
+        for source in sorted((ROOT / "badminton_gui" / folder).glob("*.py")):
+            h.update(source.read_bytes())
+    return h.hexdigest()[:10]
 
 
 def dump_demo(seed: int, preset: str, max_frames: int) -> tuple[np.ndarray, np.ndarray]:
