@@ -80,3 +80,28 @@ def test_make_candidate_builds_the_same_candidate():
         assert dataclasses.replace(fast, x=3.0) == dataclasses.replace(plain, x=3.0) or math.isnan(plain.whiteness)
         with pytest.raises(dataclasses.FrozenInstanceError):
             fast.x = 0.0
+
+
+def test_epipolar_median_kept_sorted_is_numpys_median_of_the_samples():
+    """The tracker's running median of its epipolar samples (a sorted copy beside the deque)
+    equals np.median of the deque after every sample: filling, full (the oldest leaves),
+    ties, a NaN entering and leaving, and after a reset."""
+    from badminton_gui.core.tracker import StereoTracker
+    from badminton_gui.io.demo_scene import make_rig
+
+    tracker = StereoTracker(make_rig("binocular", (1280, 720)), TrackerParams(), parallel=False)
+    rng = np.random.default_rng(7)
+    try:
+        for phase in range(2):
+            values = np.round(rng.gamma(2.0, 1.5, 1500), 2 if phase else 12)
+            values[[10, 700]] = np.nan
+            for k, v in enumerate(values.tolist()):
+                tracker._add_epipolar_sample(v)
+                expected = float(np.median(tracker._epipolar_samples))
+                got = tracker._epipolar_median()
+                assert got == expected or (math.isnan(got) and math.isnan(expected)), k
+            assert len(tracker._epipolar_sorted) == len(tracker._epipolar_samples) == 600
+            tracker.reset()
+            assert not tracker._epipolar_sorted and tracker._epipolar_nans == 0
+    finally:
+        tracker.close()
