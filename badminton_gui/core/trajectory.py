@@ -143,21 +143,26 @@ def _propagate(state, k, duration, h_max=0.01):
                 _CHAINS.popitem(last=False)
         else:
             _CHAINS.move_to_end(key)
-        states, steps = chain
+        states, steps = chain      # len(states) == len(steps) + 1
         s = state
         i = 0
-        while remaining > 1e-12:
-            if i == len(steps):
-                steps.append(_step_size(s[3], s[4], s[5], k, h_max))
-            h = steps[i]
+        for h in steps:
+            if not remaining > 1e-12:
+                return s
             if remaining < h:
                 # min(step, remaining) is the remaining time: the last, cut step.
                 return _rk4(*s, k, sign * remaining)
-            if i + 1 == len(states):
-                states.append(_rk4(*s, k, sign * h))
-            s = states[i + 1]
-            remaining -= h
             i += 1
+            s = states[i]
+            remaining -= h
+        while remaining > 1e-12:
+            h = _step_size(s[3], s[4], s[5], k, h_max)
+            if remaining < h:
+                return _rk4(*s, k, sign * remaining)
+            s = _rk4(*s, k, sign * h)
+            steps.append(h)
+            states.append(s)
+            remaining -= h
         return s
 
 
