@@ -22,6 +22,9 @@ OpenCV thread, as ``track`` and the GUI run it (``--cv-threads 0``: OpenCV's own
 chain always keeps OpenCV's default): the two camera threads already use both cores, and OpenCV's
 pool on top of them costs CPU.
 
+``--trees DIR [DIR ...]`` compares source trees (other commits, extracted with ``git archive``)
+in this process, interleaved pair by pair: thread CPU a pair and its paired difference.
+
 ``--process-bound`` measures instead what the GIL costs at 2048 px: each camera's
 ``CameraDetector`` in its own process (one OpenCV thread each, its own frames in memory, both
 started together) against ``StereoTracker`` with its two camera threads on the same frames, and
@@ -41,6 +44,7 @@ from __future__ import annotations
 
 import argparse
 import cProfile
+import importlib
 import io
 import math
 import pstats
@@ -515,6 +519,87 @@ def window_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rou
                   flush=True)
 
 
+def _tree_modules(tree: Path) -> dict:
+    """The ``badminton_gui`` modules imported from another source tree (a directory holding
+    ``badminton_gui/`` and ``resources/``), kept apart from this checkout's."""
+    own = {k: m for k, m in sys.modules.items() if k == "badminton_gui" or k.startswith("badminton_gui.")}
+    for k in own:
+        del sys.modules[k]
+    sys.path.insert(0, str(tree))
+    try:
+        for name in ("core.tracker", "io.presets", "io.nycu"):
+            importlib.import_module("badminton_gui." + name)
+        mods = {k: m for k, m in sys.modules.items() if k == "badminton_gui" or k.startswith("badminton_gui.")}
+    finally:
+        sys.path.remove(str(tree))
+        for k in [k for k in sys.modules if k == "badminton_gui" or k.startswith("badminton_gui.")]:
+            del sys.modules[k]
+        sys.modules.update(own)
+    return mods
+
+
+def _use_modules(mods: dict) -> None:
+    for k in [k for k in sys.modules if k == "badminton_gui" or k.startswith("badminton_gui.")]:
+        del sys.modules[k]
+    sys.modules.update(mods)
+
+
+def trees_ab(trees: list[str], preset: str | None, n: int, skip: int, rounds: int) -> None:
+    """Source trees against each other, interleaved pair by pair in this process (2048 px).
+
+    Each tree (a directory with ``badminton_gui/`` and ``resources/``, e.g. ``git archive COMMIT
+    badminton_gui resources | tar -x -C DIR``; ``.``: this checkout) gets its own one-thread
+    tracker; every frame pair goes through all of them back to back, in an order that rotates
+    from pair to pair, so the machine's load falls on all alike. Per round and tree: thread CPU
+    a pair (mean, p50, p99), the per-pair difference to the first tree (mean, median, its
+    standard error) and a hash of the outputs (same hash: the same points and detections).
+    Runs of a few hundred pairs minutes apart differ by ±10 % on this shared machine; the
+    paired differences resolve a few per cent.
+    """
+    import hashlib
+    import os
+    pairs = load_pairs(n, None, skip)
+    own = {k: m for k, m in sys.modules.items() if k == "badminton_gui" or k.startswith("badminton_gui.")}
+    paths = [REPO if t == "." else Path(t).resolve() for t in trees]
+    modules = [own if p == REPO else _tree_modules(p) for p in paths]
+    names = [p.name for p in paths]
+    print(f"trees A/B: {RALLY} pairs {skip}-{skip + len(pairs) - 1}, preset {preset or 'default'}, "
+          f"one thread each, interleaved pair by pair; first tree {names[0]}")
+    try:
+        for r in range(rounds):
+            trackers, cpu, digests = [], [], []
+            for mods in modules:
+                _use_modules(mods)
+                rig = mods["badminton_gui.io.nycu"].rig_from_nycu(DATA / RALLY / "CameraReader_1.cfg",
+                                                                   DATA / RALLY / "CameraReader_2.cfg")
+                params = mods["badminton_gui.io.presets"].load_preset(preset)
+                trackers.append(mods["badminton_gui.core.tracker"].StereoTracker(rig, params, parallel=False))
+                cpu.append([])
+                digests.append(hashlib.sha1())
+            for i, (lf, rf, t) in enumerate(pairs):
+                for j in range(len(trees)):
+                    k = (i + j) % len(trees)
+                    _use_modules(modules[k])
+                    c0 = time.thread_time()
+                    res = trackers[k].process(lf, rf, t, keep_masks=False)
+                    cpu[k].append(time.thread_time() - c0)
+                    digests[k].update(repr((res.point, [(d.x, d.y) if d is not None else None
+                                                        for d in (res.left.detection, res.right.detection)]
+                                            )).encode())
+            for tracker in trackers:
+                tracker.close()
+            first = 1000 * np.asarray(cpu[0])
+            for name, spent, digest in zip(names, cpu, digests):
+                ms = 1000 * np.asarray(spent)
+                d = ms - first
+                print(f"round {r} {name:>24}: CPU a pair {ms.mean():6.2f} ms, p50 {np.percentile(ms, 50):6.2f}, "
+                      f"p99 {np.percentile(ms, 99):6.2f}; minus the first: mean {d.mean():+.3f} ms, "
+                      f"median {np.median(d):+.3f}, s.e. {d.std() / math.sqrt(len(d)):.3f}; "
+                      f"outputs {digest.hexdigest()[:8]}; load {os.getloadavg()[0]:.1f}", flush=True)
+    finally:
+        _use_modules(own)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pairs", type=int, default=300, help="frame pairs held in memory per resolution")
@@ -534,8 +619,16 @@ def main() -> None:
                     help="only: the preset with window.enabled off and on, alternated (2048 px, "
                          "--pairs pairs from pair --skip on, --rounds rounds)")
     ap.add_argument("--skip", type=int, default=0, help="--window: pairs skipped first")
-    ap.add_argument("--rounds", type=int, default=3, help="--window: alternated rounds")
+    ap.add_argument("--rounds", type=int, default=3, help="--window, --trees: alternated rounds")
+    ap.add_argument("--trees", nargs="+", default=None, metavar="DIR",
+                    help="only: source trees (dirs with badminton_gui/ and resources/; '.': this "
+                         "checkout) interleaved pair by pair, one thread each, thread CPU a pair "
+                         "(2048 px, --pairs pairs from pair --skip on, --rounds rounds)")
     args = ap.parse_args()
+    if args.trees:
+        with opencv_threads(args.cv_threads or None):
+            trees_ab(args.trees, args.preset, args.pairs, args.skip, args.rounds)
+        return
     if args.window:
         params = load_preset(args.preset)
         full_rig = rig_from_nycu(DATA / RALLY / "CameraReader_1.cfg", DATA / RALLY / "CameraReader_2.cfg")

@@ -80,3 +80,75 @@ def test_make_candidate_builds_the_same_candidate():
         assert dataclasses.replace(fast, x=3.0) == dataclasses.replace(plain, x=3.0) or math.isnan(plain.whiteness)
         with pytest.raises(dataclasses.FrozenInstanceError):
             fast.x = 0.0
+
+
+def test_epipolar_median_kept_sorted_is_numpys_median_of_the_samples():
+    """The tracker's running median of its epipolar samples (a sorted copy beside the deque)
+    equals np.median of the deque after every sample: filling, full (the oldest leaves),
+    ties, a NaN entering and leaving, and after a reset."""
+    from badminton_gui.core.tracker import StereoTracker
+    from badminton_gui.io.demo_scene import make_rig
+
+    tracker = StereoTracker(make_rig("binocular", (1280, 720)), TrackerParams(), parallel=False)
+    rng = np.random.default_rng(7)
+    try:
+        for phase in range(2):
+            values = np.round(rng.gamma(2.0, 1.5, 1500), 2 if phase else 12)
+            values[[10, 700]] = np.nan
+            for k, v in enumerate(values.tolist()):
+                tracker._add_epipolar_sample(v)
+                expected = float(np.median(tracker._epipolar_samples))
+                got = tracker._epipolar_median()
+                assert got == expected or (math.isnan(got) and math.isnan(expected)), k
+            assert len(tracker._epipolar_sorted) == len(tracker._epipolar_samples) == 600
+            tracker.reset()
+            assert not tracker._epipolar_sorted and tracker._epipolar_nans == 0
+    finally:
+        tracker.close()
+
+
+def _propagate_plain(state, k, duration, h_max=0.01):
+    """The drag model's propagation as a plain loop (trajectory._propagate before its steps
+    were kept): the reference."""
+    from badminton_gui.core.trajectory import _rk4, _step_size
+
+    if duration == 0.0:
+        return state
+    sign = 1.0 if duration > 0 else -1.0
+    remaining = abs(duration)
+    s = state
+    while remaining > 1e-12:
+        h = min(_step_size(s[3], s[4], s[5], k, h_max), remaining)
+        s = _rk4(*s, k, sign * h)
+        remaining -= h
+    return s
+
+
+def test_propagate_with_kept_steps_is_the_plain_loop_bit_for_bit():
+    """Repeated calls from the same states (longer, shorter, backwards, exactly a step, zero,
+    tiny), more start states than the cache keeps, and NaN: the same tuples as the plain loop."""
+    from badminton_gui.core import trajectory
+
+    rng = np.random.default_rng(11)
+    starts = [tuple(float(v) for v in np.concatenate([rng.uniform(-5, 5, 2), rng.uniform(0, 4, 1),
+                                                      rng.uniform(-60, 60, 3)]))
+              for _ in range(trajectory._CHAINS_MAX + 6)]
+    starts.append((0.0, 0.0, 1.0, float("nan"), 2.0, 3.0))
+    starts.append((0.0, -0.0, 1.0, 0.0, -0.0, 0.0))
+    checked = 0
+    for rep in range(2):
+        for n, state in enumerate(starts):
+            k = float(rng.uniform(0.05, 0.6))
+            if rep:
+                k = 0.2   # the second pass revisits evicted and kept chains alike
+            durations = list(rng.uniform(-0.4, 0.4, 6)) + [0.0, 1e-13, 0.01, -0.01, 0.02, 0.9]
+            rng.shuffle(durations)
+            for d in [float(x) for x in durations] + [0.1 * i / 8 for i in range(9)]:
+                for h_max in (0.01, 0.025):
+                    got = trajectory._propagate(state, k, d, h_max)
+                    want = _propagate_plain(state, k, d, h_max)
+                    assert len(got) == 6
+                    assert all((a == b and math.copysign(1, a) == math.copysign(1, b))
+                               or (math.isnan(a) and math.isnan(b)) for a, b in zip(got, want)), (n, d)
+                    checked += 1
+    assert checked > 3000 and len(trajectory._CHAINS) <= trajectory._CHAINS_MAX

@@ -20,6 +20,7 @@ Usage::
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import math
 import time
@@ -79,6 +80,11 @@ class StereoTracker:
         # Epipolar errors of long, confident tracklets seen by both cameras: what the rig
         # really achieves (a rig calibrated by clicking court points is off by tens of px).
         self._epipolar_samples: deque[float] = deque(maxlen=600)
+        # The same samples kept sorted (and how many are NaN, which np.median would return):
+        # their median is read several times a pair (the gate, the noise inflation) and changes
+        # with each new sample, and np.median of 600 values costs ≈ 0.05 ms a call.
+        self._epipolar_sorted: list[float] = []
+        self._epipolar_nans = 0
         # The last frame's triangulated blob point (left-camera frame) and its time: the 3D step
         # checks the direction of the cork correction (see _head_variance).
         self._last_blob: tuple[float, np.ndarray] | None = None
@@ -96,6 +102,8 @@ class StereoTracker:
         self.right.reset()
         self._trajectory.reset()
         self._epipolar_samples.clear()
+        self._epipolar_sorted.clear()
+        self._epipolar_nans = 0
         self._previous = (None, None)
         self._last_blob = None
 
@@ -104,9 +112,36 @@ class StereoTracker:
         sp = self.params.stereo
         tol = float(sp.max_epipolar_error)
         if sp.adaptive_epipolar and len(self._epipolar_samples) >= 20:
-            learnt = sp.adaptive_factor * float(np.median(self._epipolar_samples))
+            learnt = sp.adaptive_factor * self._epipolar_median()
             tol = max(tol, min(learnt, sp.max_learnt_tolerance))
         return tol
+
+    def _add_epipolar_sample(self, err: float) -> None:
+        """Append a sample to the deque and to its sorted copy (the oldest leaves both)."""
+        samples = self._epipolar_samples
+        if len(samples) == samples.maxlen:
+            old = samples[0]
+            if math.isnan(old):
+                self._epipolar_nans -= 1
+            else:
+                ordered = self._epipolar_sorted
+                del ordered[bisect.bisect_left(ordered, old)]
+        samples.append(err)
+        if math.isnan(err):
+            self._epipolar_nans += 1
+        else:
+            bisect.insort(self._epipolar_sorted, err)
+
+    def _epipolar_median(self) -> float:
+        """``float(np.median(self._epipolar_samples))`` bit for bit (non-empty), from the sorted
+        copy: the middle value, or the two middle values' sum halved as numpy's mean does."""
+        if self._epipolar_nans:
+            return float(np.median(self._epipolar_samples))
+        ordered = self._epipolar_sorted
+        n = len(ordered)
+        if n % 2:
+            return ordered[n // 2]
+        return (ordered[n // 2 - 1] + ordered[n // 2]) / 2.0
 
     def _learn_epipolar(self, res_left: CameraResult, res_right: CameraResult) -> None:
         sp = self.params.stereo
@@ -119,7 +154,7 @@ class StereoTracker:
         if min(self.left.tracklet_hits(own_left), self.right.tracklet_hits(own_right)) < sp.confident_hits:
             return
         err = float(self.rig.epipolar_errors([[own_left.x, own_left.y]], [[own_right.x, own_right.y]])[0, 0])
-        self._epipolar_samples.append(err)
+        self._add_epipolar_sample(err)
 
     def close(self) -> None:
         if self._pool is not None:
@@ -378,7 +413,7 @@ class StereoTracker:
         it with its noise scaled by 1 + (error / typical)².
         """
         samples = self._epipolar_samples
-        typical = max(EPIPOLAR_TYPICAL_MIN, 1.5 * float(np.median(samples))) if len(samples) >= 20 \
+        typical = max(EPIPOLAR_TYPICAL_MIN, 1.5 * self._epipolar_median()) if len(samples) >= 20 \
             else EPIPOLAR_TYPICAL_MIN
         return 1.0 + (epi / typical) ** 2
 

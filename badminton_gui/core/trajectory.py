@@ -45,6 +45,9 @@ predictions are withheld with a reason.
 from __future__ import annotations
 
 import math
+import struct
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -116,17 +119,59 @@ def _step_size(vx, vy, vz, k, h_max):
 
 
 def _propagate(state, k, duration, h_max=0.01):
-    """The state ``(px, py, pz, vx, vy, vz)`` after ``duration`` seconds (may be negative)."""
+    """The state ``(px, py, pz, vx, vy, vz)`` after ``duration`` seconds (may be negative).
+
+    Steps of ``_step_size`` each, the last one cut to what remains. The full steps from a
+    state do not depend on the duration, so they are kept (``_CHAINS``, keyed on the state's,
+    k's, the direction's and h_max's bits) and a later call from the same state replays them:
+    the flight's ``predicted`` at 17 instants in ``_continuous``, the tentative track at each
+    of its points in ``_consistent``, every frame a refused track is re-tried (4–5 ms spikes in
+    play, benchmarks/README.md). Only the cut last step is integrated anew; the remaining time
+    is subtracted step by step as before, so the result is the plain loop's, bit for bit
+    (tests/test_speed_oracles.py keeps the plain loop as the reference).
+    """
     if duration == 0.0:
         return state
     sign = 1.0 if duration > 0 else -1.0
     remaining = abs(duration)
-    s = state
-    while remaining > 1e-12:
-        h = min(_step_size(s[3], s[4], s[5], k, h_max), remaining)
-        s = _rk4(*s, k, sign * h)
-        remaining -= h
-    return s
+    key = _CHAIN_KEY(*state, k, sign, h_max)
+    with _CHAINS_LOCK:
+        chain = _CHAINS.get(key)
+        if chain is None:
+            chain = _CHAINS[key] = ([state], [])
+            if len(_CHAINS) > _CHAINS_MAX:
+                _CHAINS.popitem(last=False)
+        else:
+            _CHAINS.move_to_end(key)
+        states, steps = chain      # len(states) == len(steps) + 1
+        s = state
+        i = 0
+        for h in steps:
+            if not remaining > 1e-12:
+                return s
+            if remaining < h:
+                # min(step, remaining) is the remaining time: the last, cut step.
+                return _rk4(*s, k, sign * remaining)
+            i += 1
+            s = states[i]
+            remaining -= h
+        while remaining > 1e-12:
+            h = _step_size(s[3], s[4], s[5], k, h_max)
+            if remaining < h:
+                return _rk4(*s, k, sign * remaining)
+            s = _rk4(*s, k, sign * h)
+            steps.append(h)
+            states.append(s)
+            remaining -= h
+        return s
+
+
+# ``_propagate``'s full steps from recent start states: key → ([state, after 1 step, ...],
+# [step 0, step 1, ...]); the least recently used chain goes first.
+_CHAINS: OrderedDict[bytes, tuple[list, list]] = OrderedDict()
+_CHAINS_MAX = 32
+_CHAINS_LOCK = threading.Lock()
+_CHAIN_KEY = struct.Struct("9d").pack
 
 
 def _jacobians(vel: np.ndarray, k: np.ndarray | float) -> np.ndarray:
