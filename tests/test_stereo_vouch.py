@@ -52,7 +52,7 @@ def _candidate(u, v, rejected=REJECT_MOTION, score=0.5):
 
 
 def _scene(tracker, velocity_3d, right_offset=(0.0, 0.0), right_velocity_offset=(0.0, 0.0),
-           right_rejected=REJECT_MOTION, first=False, score=0.5):
+           right_rejected=REJECT_MOTION, first=False, score=0.5, right_score=None):
     rig = tracker.rig
     p = np.array([[0.3, -2.0, 1.8]])                 # court frame, m
     back = p - DT * np.asarray(velocity_3d)[None]
@@ -64,7 +64,8 @@ def _scene(tracker, velocity_3d, right_offset=(0.0, 0.0), right_velocity_offset=
         if cam == 1:
             now_uv = now_uv + np.asarray(right_offset)
             vel = vel + np.asarray(right_velocity_offset)
-        c = _candidate(*now_uv, rejected=REJECT_MOTION if cam == 0 else right_rejected, score=score)
+        c = _candidate(*now_uv, rejected=REJECT_MOTION if cam == 0 else right_rejected,
+                       score=score if cam == 0 or right_score is None else right_score)
         clutter = _candidate(now_uv[0] + 200, now_uv[1] + 80)
         det = FakeDetector({id(c): None if first else tuple(vel), id(clutter): (0.0, 0.0)})
         res.append(CameraResult(None, (clutter, c), image_size=(1280, 720)))
@@ -175,3 +176,94 @@ def test_a_weak_lone_detection_is_looked_past_at_the_flights_projection(tracker)
     assert tracker._guided(1, frame, near, guide, override=True) is None  # already there
     tracker.params = tracker.params.with_value("stereo.guided_weak_score", 0.0)
     assert not tracker._weak_lone(far, paired=False)
+
+
+def test_a_weak_first_sighting_passes_only_with_a_sure_partner(tracker):
+    """``stereo.vouch_first_partner_quality``: a first sighting scoring below
+    ``vouch_first_quality`` but at least this passes beside one that scores enough; two weak
+    ones do not, nor one below it, nor any with the setting at 1."""
+    tracker.params = tracker.params.with_value("stereo.vouch_first_partner_quality", 0.1)
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.6, right_score=0.15))
+    assert len(_passed(left)) == len(_passed(right)) == 1
+    for score, right_score in ((0.15, 0.15), (0.6, 0.05)):
+        left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=score,
+                                             right_score=right_score))
+        assert not _passed(left) and not _passed(right), (score, right_score)
+    tracker.params = tracker.params.with_value("stereo.vouch_first_partner_quality", 1.0)
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.6, right_score=0.15))
+    assert not _passed(left) and not _passed(right)
+
+
+def test_shuttle_like_blobs_pass_by_position_when_their_velocities_disagree(tracker):
+    """``stereo.vouch_position_quality``: just after a hit the tracks' smoothed velocities mix
+    the old and the new flight; a pair on the epipolar line whose held-back candidates both
+    score at least this passes anyway, a less shuttle-like one does not, nor any off the line."""
+    tracker.params = tracker.params.with_value("stereo.vouch_position_quality", 0.8)
+    kwargs = {"velocity_3d": (0.0, 3.0, 1.0), "right_velocity_offset": (0.0, 600.0)}
+    left, right = tracker._vouch(*_scene(tracker, score=0.9, **kwargs))
+    assert len(_passed(left)) == len(_passed(right)) == 1
+    for extra in ({"score": 0.9, "right_score": 0.5}, {"score": 0.9, "right_offset": (0.0, 8.0)}):
+        left, right = tracker._vouch(*_scene(tracker, **kwargs, **extra))
+        assert not _passed(left) and not _passed(right), extra
+    tracker.params = tracker.params.with_value("stereo.vouch_position_quality", 1.0)
+    left, right = tracker._vouch(*_scene(tracker, score=0.99, **kwargs))
+    assert not _passed(left) and not _passed(right)
+
+
+def test_a_camera_whose_survivor_has_no_partner_is_helped(tracker):
+    """``stereo.vouch_lone``: the right camera's only survivor (clutter) has no partner on the
+    left camera's epipolar lines while its held-back shuttle lies on the left choice's: the
+    shuttle passes and the stereo choice takes it; with the setting off, or when the right
+    survivor does pair with the left choice, nothing is let through."""
+    res_l, res_r = _scene(tracker, (0.0, 3.0, 1.0))
+    left_shuttle = dataclasses.replace(res_l.candidates[1], rejected_by=None, score=4.0)
+    tracker.left.velocities[id(left_shuttle)] = tracker.left.velocities[id(res_l.candidates[1])]
+    res_l = dataclasses.replace(res_l, candidates=(res_l.candidates[0], left_shuttle))
+    clutter_r = dataclasses.replace(res_r.candidates[0], rejected_by=None, score=1.5)
+    tracker.right.velocities[id(clutter_r)] = (0.0, 0.0)
+    res_r = dataclasses.replace(res_r, candidates=(clutter_r, res_r.candidates[1]))
+    left, right = tracker._vouch(res_l, res_r)
+    assert tracker.right.vouched == [res_r.candidates[1]] and not tracker.left.vouched
+    det_l, det_r, point, _ = tracker._choose_pair(left, right)
+    assert det_l is left_shuttle and det_r.x == res_r.candidates[1].x and point is not None
+    tracker.right.vouched.clear()
+    tracker.params = tracker.params.with_value("stereo.vouch_lone", False)
+    left, right = tracker._vouch(res_l, res_r)
+    assert len(_passed(right)) == 1 and not tracker.right.vouched
+    # the right survivor pairs with the left choice: not lone, nothing is let through
+    tracker.params = tracker.params.with_value("stereo.vouch_lone", True)
+    paired_r = dataclasses.replace(res_r.candidates[1], rejected_by=None, score=1.5)
+    tracker.right.velocities[id(paired_r)] = tracker.right.velocities[id(res_r.candidates[1])]
+    held = dataclasses.replace(res_r.candidates[1], x=res_r.candidates[1].x + 1.0)
+    tracker.right.velocities[id(held)] = tracker.right.velocities[id(res_r.candidates[1])]
+    left, right = tracker._vouch(res_l, dataclasses.replace(res_r, candidates=(paired_r, held)))
+    assert not tracker.right.vouched
+
+
+def test_a_lone_detection_at_the_border_gives_way_when_the_flight_has_left_the_image(tracker):
+    """``stereo.exit_margin``: an unpaired detection this near the border is dropped when the
+    3D flight projects just outside the image next to it; not when the projection is inside the
+    image, nor far from the detection, nor for a detection away from the border."""
+    frame = np.zeros((720, 1280, 3), np.uint8)
+    rig = tracker.rig
+    # court points 4 m in front of the left camera, projecting 2 px left of the image / 3 px inside
+    K = rig.M1
+
+    def at(u, v):
+        cam = np.array([(u - K[0, 2]) * 4.0 / K[0, 0], (v - K[1, 2]) * 4.0 / K[1, 1], 4.0])
+        return np.asarray(rig.to_output(cam[None]))[0]
+
+    out, inside = at(-2.0, 300.0), at(3.0, 300.0)
+    u, v = rig.project(0, out[None])[0]
+    assert -2.5 < u < -1.5 and 0 <= v < 720
+    tracker.params = tracker.params.with_value("stereo.exit_margin", 3.0)
+    at_border = _candidate(0.8, v - 2.0, rejected=None, score=5.0)
+    assert tracker._near_border(at_border, frame)
+    assert tracker._gone_out(0, at_border, frame, out)
+    assert rig.project(0, inside[None])[0][0] > 0
+    assert not tracker._gone_out(0, at_border, frame, inside)
+    far = dataclasses.replace(at_border, y=v + 80.0)
+    assert not tracker._gone_out(0, far, frame, out)
+    assert not tracker._near_border(dataclasses.replace(at_border, x=10.0), frame)
+    tracker.params = tracker.params.with_value("stereo.exit_margin", 0.0)
+    assert not tracker._near_border(dataclasses.replace(at_border, x=0.0), frame)
