@@ -267,3 +267,40 @@ def test_a_lone_detection_at_the_border_gives_way_when_the_flight_has_left_the_i
     assert not tracker._near_border(dataclasses.replace(at_border, x=10.0), frame)
     tracker.params = tracker.params.with_value("stereo.exit_margin", 0.0)
     assert not tracker._near_border(dataclasses.replace(at_border, x=0.0), frame)
+
+
+def test_the_stereo_look_finds_a_spot_on_the_path_and_the_epipolar_line(tracker):
+    """``stereo.stereo_look``: a camera with no detection finds the white spot where its own
+    image path continues, when it lies on the epipolar line of the other camera's detection;
+    not a spot off that line, nor with a stale or missing report, nor far from the path."""
+    import cv2
+
+    rig = tracker.rig
+    p = np.array([0.3, -2.0, 1.8])
+    ul, vl = rig.project(0, p[None])[0]
+    ur, vr = rig.project(1, p[None])[0]
+    other = _candidate(ul, vl, rejected=None, score=4.0)
+    dt = 1.0 / 120.0
+
+    def frame_with(u, v):
+        f = np.full((720, 1280, 3), 40, np.uint8)
+        cv2.circle(f, (int(round(u)), int(round(v))), 2, (255, 255, 255), -1)
+        return f
+
+    def look(spot, reports, t=2 * dt):
+        tracker._reports[1].clear()
+        tracker._reports[1].extend(reports)
+        tracker._previous = (None, np.full((720, 1280, 3), 40, np.uint8))
+        return tracker._stereo_look(1, frame_with(*spot), other, t)
+
+    # the right camera's path: 6 px a frame to the right, last reported one frame ago
+    path = [(0.0, ur - 12.0, vr, None), (dt, ur - 6.0, vr, None)]
+    found = look((ur, vr), path)
+    assert found is not None and abs(found.x - ur) < 1.0 and abs(found.y - vr) < 1.0
+    assert found.score == 0.0 and not found.predicted
+    # with the track's own velocity instead of the two reports
+    assert look((ur, vr), [(dt, ur - 6.0, vr, (720.0, 0.0))]) is not None
+    assert look((ur, vr + 6.0), path) is None                 # off the epipolar line (6 px)
+    assert look((ur, vr), path, t=dt + 0.05) is None           # the last report is stale
+    assert look((ur, vr), path[1:]) is None                    # one report, no velocity
+    assert look((ur, vr), [(0.0, ur - 40.0, vr, None), (dt, ur - 30.0, vr, None)]) is None  # off the path

@@ -366,7 +366,17 @@ class StereoParams(ParamGroup):
                                      help="Without a stereo pair, a detection scoring below this (a track that slid "
                                           "onto a player after the shuttle's own was lost) is replaced by a spot "
                                           "found at the flight's projection when it lies off it (0 = off)")
-    exit_margin: float = param(0.0, 0.0, 100.0, step=0.5, unit="px", label="Leaving the image within",
+    stereo_look: bool = flag(True, label="Look on the epipolar line",
+                             help="Without a stereo pair, a camera with no detection looks for a white spot "
+                                  "where its own image path continues, on the epipolar line of the other "
+                                  "camera's sure detection (a small shuttle after a hit, before the 3D flight "
+                                  "is known)")
+    stereo_look_min_score: float = param(1.0, 0.0, 100.0, step=0.1, label="... from the other's score",
+                                         help="The other camera's detection must score at least this")
+    stereo_look_radius: float = param(8.0, 1.0, 100.0, step=0.5, unit="px", label="... within",
+                                      help="How far from where the camera's image path continues (px at "
+                                           "1280 px width)")
+    exit_margin: float = param(2.0, 0.0, 100.0, step=0.5, unit="px", label="Leaving the image within",
                                help="Without a stereo pair, a detection this near the image's border is not "
                                     "reported when the 3D flight puts the shuttle just outside the image (the "
                                     "clipped skirt of a shuttle leaving the view; 0 = off)")

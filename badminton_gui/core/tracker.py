@@ -59,6 +59,12 @@ VOUCH_DT = 0.02
 # px at 1280 px width: how near an unpaired detection at the border the flight's projection
 # outside the image must lie for the detection to be taken as the shuttle leaving (``_gone_out``).
 EXIT_NEAR = 20.0
+# s: how old this camera's last report may be for ``_stereo_look`` to follow its image path
+# (three frames at 120 fps).
+STEREO_LOOK_AGE = 0.03
+# px² at 1280 px width: the largest spot ``_stereo_look`` takes (a shuttle near the rig is
+# ~10 px across; a player's white shirt is larger).
+STEREO_LOOK_MAX_AREA = 150.0
 # m/s: the fastest 3D motion a vouched pair may show (smashes leave the racket at ≤ ~157 m/s).
 VOUCH_MAX_SPEED = 160.0
 
@@ -79,6 +85,9 @@ class StereoTracker:
         self._trajectory = Trajectory(self.params.trajectory, rig.has_court_pose)
         self._checked_size = False
         self._previous: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
+        # Per camera, its last reported measured detections: [(t, x, y, image velocity or None)]
+        # (``_stereo_look`` follows the camera's own image path from them).
+        self._reports: tuple[deque, deque] = (deque(maxlen=2), deque(maxlen=2))
         # Epipolar errors of long, confident tracklets seen by both cameras: what the rig
         # really achieves (a rig calibrated by clicking court points is off by tens of px).
         self._epipolar_samples: deque[float] = deque(maxlen=600)
@@ -100,6 +109,8 @@ class StereoTracker:
         self._trajectory.reset()
         self._epipolar_samples.clear()
         self._previous = (None, None)
+        self._reports[0].clear()
+        self._reports[1].clear()
         self._last_blob = None
 
     def epipolar_tolerance(self) -> float:
@@ -195,6 +206,27 @@ class StereoTracker:
                 if sp.guided_coast:
                     res_left, det_left = self._coast_on_flight(0, left_bgr, res_left, det_left, guide)
                     res_right, det_right = self._coast_on_flight(1, right_bgr, res_right, det_right, guide)
+        if sp.stereo_look and point_left is None:
+            # Neither the pair nor the flight found the shuttle in one camera: the other's sure
+            # detection puts it on an epipolar line, this camera's own image path near a point.
+            dets = [det_left, det_right]
+            results = [res_left, res_right]
+            for cam, frame in ((0, left_bgr), (1, right_bgr)):
+                other = dets[1 - cam]
+                if ((dets[cam] is None or dets[cam].predicted) and other is not None
+                        and not other.predicted and other.score >= sp.stereo_look_min_score):
+                    found = self._stereo_look(cam, frame, other, timestamp)
+                    if found is not None:
+                        dets[cam] = found
+                        results[cam] = dataclasses.replace(results[cam], candidates=results[cam].candidates + (found,))
+                        point_left, epi = self._pair_point(dets[0], dets[1])
+                        break
+            det_left, det_right = dets
+            res_left, res_right = results
+        for cam, det in ((0, det_left), (1, det_right)):
+            if det is not None and not det.predicted:
+                velocity = (self.left if cam == 0 else self.right).tracklet_velocity(det)
+                self._reports[cam].append((timestamp, det.x, det.y, velocity))
         if sp.exit_margin > 0 and point_left is None:
             # A lone detection at the border while the flight has taken the shuttle out of view.
             dets = [det_left, det_right]
@@ -439,6 +471,47 @@ class StereoTracker:
         sp = self.params.stereo
         return (not paired and sp.guided_weak_score > 0 and detection is not None
                 and not detection.predicted and detection.score < sp.guided_weak_score)
+
+    def _stereo_look(self, camera: int, frame: np.ndarray, other: Candidate, t: float) -> Candidate | None:
+        """A white spot where this camera's own image path continues, on the epipolar line of
+        the other camera's detection (``stereo.stereo_look``), or None.
+
+        After a hit the 3D flight is not known yet for some frames, and a small or dim shuttle
+        (the far court, a drive low over the net) gives no blob that passes the contour filters
+        in one camera while the other follows it. This camera's last report (within
+        ``STEREO_LOOK_AGE`` s), moved on by its track's image velocity (or the step from the
+        report before), says where to look (``stereo.stereo_look_radius``); the spot must lie
+        within ``vouch_max_epipolar`` of the other detection's epipolar line.
+        """
+        sp = self.params.stereo
+        hist = self._reports[camera]
+        if not hist:
+            return None
+        t2, x2, y2, vel = hist[-1]
+        if not (0.0 < t - t2 <= STEREO_LOOK_AGE):
+            return None
+        if vel is None:
+            if len(hist) < 2:
+                return None
+            t1, x1, y1, _ = hist[-2]
+            if not (0.0 < t2 - t1 <= STEREO_LOOK_AGE):
+                return None
+            vel = ((x2 - x1) / (t2 - t1), (y2 - y1) / (t2 - t1))
+        u, v = x2 + vel[0] * (t - t2), y2 + vel[1] * (t - t2)
+        h, w = frame.shape[:2]
+        if not (0 <= u < w and 0 <= v < h):
+            return None
+        scale = w / 1280.0
+        spot = find_spot(frame, u, v, sp.stereo_look_radius * scale, sp.guided_min_contrast,
+                         STEREO_LOOK_MAX_AREA * scale * scale, self._previous[camera])
+        if spot is None:
+            return None
+        x, y, contrast, area = spot
+        pair = ([[other.x, other.y]], [[x, y]]) if camera == 1 else ([[x, y]], [[other.x, other.y]])
+        if float(self.rig.epipolar_errors(*pair)[0, 0]) > sp.vouch_max_epipolar:
+            return None
+        return Candidate(x=x, y=y, length=float("nan"), short_side=float("nan"), whiteness=contrast,
+                         area=area, motion=math.hypot(x - u, y - v), score=0.0)
 
     def _near_border(self, detection: Candidate | None, frame: np.ndarray) -> bool:
         """The detection lies within ``stereo.exit_margin`` px of the image's border."""
