@@ -304,3 +304,25 @@ def test_the_stereo_look_finds_a_spot_on_the_path_and_the_epipolar_line(tracker)
     assert look((ur, vr), path, t=dt + 0.05) is None           # the last report is stale
     assert look((ur, vr), path[1:]) is None                    # one report, no velocity
     assert look((ur, vr), [(0.0, ur - 40.0, vr, None), (dt, ur - 30.0, vr, None)]) is None  # off the path
+
+
+def test_the_image_path_and_the_flight_say_when_the_shuttle_is_out_of_view(tracker):
+    """``stereo.exit_by_path``: the camera's own image path (last report before now, moved on by
+    its track's velocity) has left the image, or not; ``stereo.out_of_view_weak`` asks whether
+    the flight projects outside the image."""
+    frame = np.zeros((720, 1280, 3), np.uint8)
+    dt = 1.0 / 120.0
+    tracker._reports[0].clear()
+    tracker._reports[0].extend([(0.0, 1.3, 132.0, (-177.0, 274.0)), (dt, 0.8, 133.5, None)])
+    # the report of this very frame is not used: the path from the one before leaves the image
+    assert tracker._path_leaves(0, frame, dt)
+    tracker._reports[0].clear()
+    tracker._reports[0].append((0.0, 1.3, 132.0, (177.0, 274.0)))
+    assert not tracker._path_leaves(0, frame, dt)          # moving into the image
+    assert not tracker._path_leaves(0, frame, 0.1)         # stale report: no path
+    rig = tracker.rig
+    p = np.array([0.3, -2.0, 1.8])
+    assert not tracker._out_of_view(0, frame, p)
+    K = rig.M1
+    cam = np.array([(-50.0 - K[0, 2]) * 4.0 / K[0, 0], (300.0 - K[1, 2]) * 4.0 / K[1, 1], 4.0])
+    assert tracker._out_of_view(0, frame, np.asarray(rig.to_output(cam[None]))[0])

@@ -377,9 +377,17 @@ class StereoParams(ParamGroup):
                                       help="How far from where the camera's image path continues (px at "
                                            "1280 px width)")
     exit_margin: float = param(2.0, 0.0, 100.0, step=0.5, unit="px", label="Leaving the image within",
-                               help="Without a stereo pair, a detection this near the image's border is not "
-                                    "reported when the 3D flight puts the shuttle just outside the image (the "
-                                    "clipped skirt of a shuttle leaving the view; 0 = off)")
+                               help="A detection this near the image's border is not reported when the 3D "
+                                    "flight puts the shuttle just outside the image next to it (the clipped "
+                                    "skirt of a shuttle leaving the view; an unpaired one only, unless 'by its "
+                                    "image path' is on; 0 = off)")
+    exit_by_path: bool = flag(True, label="... or by its image path",
+                              help="... or when the camera's own image path (its last report moved on by its "
+                                   "track's velocity) has left the image; paired detections too (the pair "
+                                   "with a clipped skirt is biased)")
+    out_of_view_weak: bool = flag(True, label="Nothing weak while out of view",
+                                  help="Without a stereo pair, a detection scoring below the weak score is not "
+                                       "reported while the 3D flight puts the shuttle outside this camera's image")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and

@@ -227,15 +227,24 @@ class StereoTracker:
             if det is not None and not det.predicted:
                 velocity = (self.left if cam == 0 else self.right).tracklet_velocity(det)
                 self._reports[cam].append((timestamp, det.x, det.y, velocity))
-        if sp.exit_margin > 0 and point_left is None:
-            # A lone detection at the border while the flight has taken the shuttle out of view.
+        if sp.exit_margin > 0 or (sp.out_of_view_weak and point_left is None):
+            # A detection at the border while the shuttle has left the view (its clipped skirt: a
+            # pair made with it is biased too), or a weak lone one while the flight is out of
+            # this camera's view.
             dets = [det_left, det_right]
             for cam, frame in ((0, left_bgr), (1, right_bgr)):
-                if self._near_border(dets[cam], frame):
-                    if guide is None and not guide_tried:
-                        guide, guide_tried = self._trajectory.guide(timestamp), True
-                    if guide is not None and self._gone_out(cam, dets[cam], frame, guide[0]):
-                        dets[cam] = None
+                border = self._near_border(dets[cam], frame) and (point_left is None or sp.exit_by_path)
+                weak_now = sp.out_of_view_weak and self._weak_lone(dets[cam], point_left is not None)
+                if not (border or weak_now):
+                    continue
+                if guide is None and not guide_tried:
+                    guide, guide_tried = self._trajectory.guide(timestamp), True
+                if ((border and sp.exit_by_path and self._path_leaves(cam, frame, timestamp))
+                        or (guide is not None
+                            and ((border and self._gone_out(cam, dets[cam], frame, guide[0]))
+                                 or (weak_now and self._out_of_view(cam, frame, guide[0]))))):
+                    dets[cam] = None
+                    point_left, epi = None, None
             det_left, det_right = dets
         # The sources hand out a new array per frame: keeping the reference costs no copy.
         self._previous = (left_bgr, right_bgr)
@@ -484,20 +493,10 @@ class StereoTracker:
         within ``vouch_max_epipolar`` of the other detection's epipolar line.
         """
         sp = self.params.stereo
-        hist = self._reports[camera]
-        if not hist:
+        path = self._path_point(camera, t)
+        if path is None:
             return None
-        t2, x2, y2, vel = hist[-1]
-        if not (0.0 < t - t2 <= STEREO_LOOK_AGE):
-            return None
-        if vel is None:
-            if len(hist) < 2:
-                return None
-            t1, x1, y1, _ = hist[-2]
-            if not (0.0 < t2 - t1 <= STEREO_LOOK_AGE):
-                return None
-            vel = ((x2 - x1) / (t2 - t1), (y2 - y1) / (t2 - t1))
-        u, v = x2 + vel[0] * (t - t2), y2 + vel[1] * (t - t2)
+        u, v = path
         h, w = frame.shape[:2]
         if not (0 <= u < w and 0 <= v < h):
             return None
@@ -512,6 +511,41 @@ class StereoTracker:
             return None
         return Candidate(x=x, y=y, length=float("nan"), short_side=float("nan"), whiteness=contrast,
                          area=area, motion=math.hypot(x - u, y - v), score=0.0)
+
+    def _path_point(self, camera: int, t: float) -> tuple[float, float] | None:
+        """Where this camera's own image path puts the shuttle at ``t``: its last report before
+        ``t`` (within ``STEREO_LOOK_AGE`` s) moved on by its track's image velocity, or by the
+        step from the report before; None without such reports."""
+        hist = [r for r in self._reports[camera] if r[0] < t]
+        if not hist:
+            return None
+        t2, x2, y2, vel = hist[-1]
+        if t - t2 > STEREO_LOOK_AGE:
+            return None
+        if vel is None:
+            if len(hist) < 2:
+                return None
+            t1, x1, y1, _ = hist[-2]
+            if not (0.0 < t2 - t1 <= STEREO_LOOK_AGE):
+                return None
+            vel = ((x2 - x1) / (t2 - t1), (y2 - y1) / (t2 - t1))
+        return x2 + vel[0] * (t - t2), y2 + vel[1] * (t - t2)
+
+    def _path_leaves(self, camera: int, frame: np.ndarray, t: float) -> bool:
+        """This camera's own image path has left the image by now (``stereo.exit_by_path``)."""
+        path = self._path_point(camera, t)
+        if path is None:
+            return False
+        h, w = frame.shape[:2]
+        return not (0 <= path[0] < w and 0 <= path[1] < h)
+
+    def _out_of_view(self, camera: int, frame: np.ndarray, position: np.ndarray) -> bool:
+        """The 3D flight's position projects outside this camera's image (or behind it)."""
+        if float(self.rig.depth(camera, position[None])[0]) <= 0.1:
+            return True
+        u, v = (float(c) for c in self.rig.project(camera, position[None])[0])
+        h, w = frame.shape[:2]
+        return not (0 <= u < w and 0 <= v < h)
 
     def _near_border(self, detection: Candidate | None, frame: np.ndarray) -> bool:
         """The detection lies within ``stereo.exit_margin`` px of the image's border."""
