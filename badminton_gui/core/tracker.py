@@ -11,6 +11,13 @@ of disparity at 5 m on the demo rig), and the drag-model filter, weighing each p
 stereo noise shape, removes most of that. A point the followed flight refuses (a wrong pair, a
 racket) is not reported as the shuttle; the raw triangulation stays in ``measured_point``.
 
+Each camera's 2D readout uses the other camera and the flight too: a candidate its association
+held back passes when the other camera agrees on the epipolar line (``_vouch``); a camera that
+lost the shuttle looks where the flight projects (``_guided``) or, before the flight is known,
+where its own image path continues on the other detection's epipolar line (``_stereo_look``);
+nothing is reported where the shuttle has left the camera's view (``stereo.exit_margin``,
+``exit_by_path``, ``out_of_view_weak``).
+
 Usage::
 
     rig = StereoRig.load("calibration/rig.yaml")
