@@ -52,7 +52,7 @@ def _candidate(u, v, rejected=REJECT_MOTION, score=0.5):
 
 
 def _scene(tracker, velocity_3d, right_offset=(0.0, 0.0), right_velocity_offset=(0.0, 0.0),
-           right_rejected=REJECT_MOTION, first=False, score=0.5):
+           right_rejected=REJECT_MOTION, first=False, score=0.5, right_score=None):
     rig = tracker.rig
     p = np.array([[0.3, -2.0, 1.8]])                 # court frame, m
     back = p - DT * np.asarray(velocity_3d)[None]
@@ -64,7 +64,8 @@ def _scene(tracker, velocity_3d, right_offset=(0.0, 0.0), right_velocity_offset=
         if cam == 1:
             now_uv = now_uv + np.asarray(right_offset)
             vel = vel + np.asarray(right_velocity_offset)
-        c = _candidate(*now_uv, rejected=REJECT_MOTION if cam == 0 else right_rejected, score=score)
+        c = _candidate(*now_uv, rejected=REJECT_MOTION if cam == 0 else right_rejected,
+                       score=score if cam == 0 or right_score is None else right_score)
         clutter = _candidate(now_uv[0] + 200, now_uv[1] + 80)
         det = FakeDetector({id(c): None if first else tuple(vel), id(clutter): (0.0, 0.0)})
         res.append(CameraResult(None, (clutter, c), image_size=(1280, 720)))
@@ -175,3 +176,153 @@ def test_a_weak_lone_detection_is_looked_past_at_the_flights_projection(tracker)
     assert tracker._guided(1, frame, near, guide, override=True) is None  # already there
     tracker.params = tracker.params.with_value("stereo.guided_weak_score", 0.0)
     assert not tracker._weak_lone(far, paired=False)
+
+
+def test_a_weak_first_sighting_passes_only_with_a_sure_partner(tracker):
+    """``stereo.vouch_first_partner_quality``: a first sighting scoring below
+    ``vouch_first_quality`` but at least this passes beside one that scores enough; two weak
+    ones do not, nor one below it, nor any with the setting at 1."""
+    tracker.params = tracker.params.with_value("stereo.vouch_first_partner_quality", 0.1)
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.6, right_score=0.15))
+    assert len(_passed(left)) == len(_passed(right)) == 1
+    for score, right_score in ((0.15, 0.15), (0.6, 0.05)):
+        left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=score,
+                                             right_score=right_score))
+        assert not _passed(left) and not _passed(right), (score, right_score)
+    tracker.params = tracker.params.with_value("stereo.vouch_first_partner_quality", 1.0)
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.6, right_score=0.15))
+    assert not _passed(left) and not _passed(right)
+
+
+def test_shuttle_like_blobs_pass_by_position_when_their_velocities_disagree(tracker):
+    """``stereo.vouch_position_quality``: just after a hit the tracks' smoothed velocities mix
+    the old and the new flight; a pair on the epipolar line whose held-back candidates both
+    score at least this passes anyway, a less shuttle-like one does not, nor any off the line."""
+    tracker.params = tracker.params.with_value("stereo.vouch_position_quality", 0.8)
+    kwargs = {"velocity_3d": (0.0, 3.0, 1.0), "right_velocity_offset": (0.0, 600.0)}
+    left, right = tracker._vouch(*_scene(tracker, score=0.9, **kwargs))
+    assert len(_passed(left)) == len(_passed(right)) == 1
+    for extra in ({"score": 0.9, "right_score": 0.5}, {"score": 0.9, "right_offset": (0.0, 8.0)}):
+        left, right = tracker._vouch(*_scene(tracker, **kwargs, **extra))
+        assert not _passed(left) and not _passed(right), extra
+    tracker.params = tracker.params.with_value("stereo.vouch_position_quality", 1.0)
+    left, right = tracker._vouch(*_scene(tracker, score=0.99, **kwargs))
+    assert not _passed(left) and not _passed(right)
+
+
+def test_a_camera_whose_survivor_has_no_partner_is_helped(tracker):
+    """``stereo.vouch_lone``: the right camera's only survivor (clutter) has no partner on the
+    left camera's epipolar lines while its held-back shuttle lies on the left choice's: the
+    shuttle passes and the stereo choice takes it; with the setting off, or when the right
+    survivor does pair with the left choice, nothing is let through."""
+    res_l, res_r = _scene(tracker, (0.0, 3.0, 1.0))
+    left_shuttle = dataclasses.replace(res_l.candidates[1], rejected_by=None, score=4.0)
+    tracker.left.velocities[id(left_shuttle)] = tracker.left.velocities[id(res_l.candidates[1])]
+    res_l = dataclasses.replace(res_l, candidates=(res_l.candidates[0], left_shuttle))
+    clutter_r = dataclasses.replace(res_r.candidates[0], rejected_by=None, score=1.5)
+    tracker.right.velocities[id(clutter_r)] = (0.0, 0.0)
+    res_r = dataclasses.replace(res_r, candidates=(clutter_r, res_r.candidates[1]))
+    left, right = tracker._vouch(res_l, res_r)
+    assert tracker.right.vouched == [res_r.candidates[1]] and not tracker.left.vouched
+    det_l, det_r, point, _ = tracker._choose_pair(left, right)
+    assert det_l is left_shuttle and det_r.x == res_r.candidates[1].x and point is not None
+    tracker.right.vouched.clear()
+    tracker.params = tracker.params.with_value("stereo.vouch_lone", False)
+    left, right = tracker._vouch(res_l, res_r)
+    assert len(_passed(right)) == 1 and not tracker.right.vouched
+    # the right survivor pairs with the left choice: not lone, nothing is let through
+    tracker.params = tracker.params.with_value("stereo.vouch_lone", True)
+    paired_r = dataclasses.replace(res_r.candidates[1], rejected_by=None, score=1.5)
+    tracker.right.velocities[id(paired_r)] = tracker.right.velocities[id(res_r.candidates[1])]
+    held = dataclasses.replace(res_r.candidates[1], x=res_r.candidates[1].x + 1.0)
+    tracker.right.velocities[id(held)] = tracker.right.velocities[id(res_r.candidates[1])]
+    left, right = tracker._vouch(res_l, dataclasses.replace(res_r, candidates=(paired_r, held)))
+    assert not tracker.right.vouched
+
+
+def test_a_lone_detection_at_the_border_gives_way_when_the_flight_has_left_the_image(tracker):
+    """``stereo.exit_margin``: an unpaired detection this near the border is dropped when the
+    3D flight projects just outside the image next to it; not when the projection is inside the
+    image, nor far from the detection, nor for a detection away from the border."""
+    frame = np.zeros((720, 1280, 3), np.uint8)
+    rig = tracker.rig
+    # court points 4 m in front of the left camera, projecting 2 px left of the image / 3 px inside
+    K = rig.M1
+
+    def at(u, v):
+        cam = np.array([(u - K[0, 2]) * 4.0 / K[0, 0], (v - K[1, 2]) * 4.0 / K[1, 1], 4.0])
+        return np.asarray(rig.to_output(cam[None]))[0]
+
+    out, inside = at(-2.0, 300.0), at(3.0, 300.0)
+    u, v = rig.project(0, out[None])[0]
+    assert -2.5 < u < -1.5 and 0 <= v < 720
+    tracker.params = tracker.params.with_value("stereo.exit_margin", 3.0)
+    at_border = _candidate(0.8, v - 2.0, rejected=None, score=5.0)
+    assert tracker._near_border(at_border, frame)
+    assert tracker._gone_out(0, at_border, frame, out)
+    assert rig.project(0, inside[None])[0][0] > 0
+    assert not tracker._gone_out(0, at_border, frame, inside)
+    far = dataclasses.replace(at_border, y=v + 80.0)
+    assert not tracker._gone_out(0, far, frame, out)
+    assert not tracker._near_border(dataclasses.replace(at_border, x=10.0), frame)
+    tracker.params = tracker.params.with_value("stereo.exit_margin", 0.0)
+    assert not tracker._near_border(dataclasses.replace(at_border, x=0.0), frame)
+
+
+def test_the_stereo_look_finds_a_spot_on_the_path_and_the_epipolar_line(tracker):
+    """``stereo.stereo_look``: a camera with no detection finds the white spot where its own
+    image path continues, when it lies on the epipolar line of the other camera's detection;
+    not a spot off that line, nor with a stale or missing report, nor far from the path."""
+    import cv2
+
+    rig = tracker.rig
+    p = np.array([0.3, -2.0, 1.8])
+    ul, vl = rig.project(0, p[None])[0]
+    ur, vr = rig.project(1, p[None])[0]
+    other = _candidate(ul, vl, rejected=None, score=4.0)
+    dt = 1.0 / 120.0
+
+    def frame_with(u, v):
+        f = np.full((720, 1280, 3), 40, np.uint8)
+        cv2.circle(f, (int(round(u)), int(round(v))), 2, (255, 255, 255), -1)
+        return f
+
+    def look(spot, reports, t=2 * dt):
+        tracker._reports[1].clear()
+        tracker._reports[1].extend(reports)
+        tracker._previous = (None, np.full((720, 1280, 3), 40, np.uint8))
+        return tracker._stereo_look(1, frame_with(*spot), other, t)
+
+    # the right camera's path: 6 px a frame to the right, last reported one frame ago
+    path = [(0.0, ur - 12.0, vr, None), (dt, ur - 6.0, vr, None)]
+    found = look((ur, vr), path)
+    assert found is not None and abs(found.x - ur) < 1.0 and abs(found.y - vr) < 1.0
+    assert found.score == 0.0 and not found.predicted
+    # with the track's own velocity instead of the two reports
+    assert look((ur, vr), [(dt, ur - 6.0, vr, (720.0, 0.0))]) is not None
+    assert look((ur, vr + 6.0), path) is None                 # off the epipolar line (6 px)
+    assert look((ur, vr), path, t=dt + 0.05) is None           # the last report is stale
+    assert look((ur, vr), path[1:]) is None                    # one report, no velocity
+    assert look((ur, vr), [(0.0, ur - 40.0, vr, None), (dt, ur - 30.0, vr, None)]) is None  # off the path
+
+
+def test_the_image_path_and_the_flight_say_when_the_shuttle_is_out_of_view(tracker):
+    """``stereo.exit_by_path``: the camera's own image path (last report before now, moved on by
+    its track's velocity) has left the image, or not; ``stereo.out_of_view_weak`` asks whether
+    the flight projects outside the image."""
+    frame = np.zeros((720, 1280, 3), np.uint8)
+    dt = 1.0 / 120.0
+    tracker._reports[0].clear()
+    tracker._reports[0].extend([(0.0, 1.3, 132.0, (-177.0, 274.0)), (dt, 0.8, 133.5, None)])
+    # the report of this very frame is not used: the path from the one before leaves the image
+    assert tracker._path_leaves(0, frame, dt)
+    tracker._reports[0].clear()
+    tracker._reports[0].append((0.0, 1.3, 132.0, (177.0, 274.0)))
+    assert not tracker._path_leaves(0, frame, dt)          # moving into the image
+    assert not tracker._path_leaves(0, frame, 0.1)         # stale report: no path
+    rig = tracker.rig
+    p = np.array([0.3, -2.0, 1.8])
+    assert not tracker._out_of_view(0, frame, p)
+    K = rig.M1
+    cam = np.array([(-50.0 - K[0, 2]) * 4.0 / K[0, 0], (300.0 - K[1, 2]) * 4.0 / K[1, 1], 4.0])
+    assert tracker._out_of_view(0, frame, np.asarray(rig.to_output(cam[None]))[0])

@@ -347,13 +347,47 @@ class StereoParams(ParamGroup):
     vouch_first_quality: float = param(0.4, 0.0, 1.0, step=0.01, label="... first sighting from quality",
                                        help="A candidate seen for the first time (its track has no velocity yet) may "
                                             "be vouched for by position alone when it scores at least this (1 = never)")
+    vouch_first_partner_quality: float = param(0.1, 0.0, 1.0, step=0.01, label="... or with a sure partner from",
+                                               help="A first sighting scoring less than that may still be vouched for "
+                                                    "when it scores at least this and its partner is sure (a first "
+                                                    "sighting scoring enough, or the other camera's own choice; 1 = never)")
     vouch_min_speed: float = param(2.0, 0.0, 100.0, step=0.5, unit="m/s", label="... 3D speed ≥",
                                    help="The pair's 3D velocity (from the two tracks' image velocities) must be "
                                         "at least this (lights and a shuttle at rest do not vouch)")
+    vouch_lone: bool = flag(True, label="... also against a lone survivor",
+                            help="A camera whose surviving candidates have no stereo partner among the other "
+                                 "camera's is helped too, with the other camera's own choice as the partner "
+                                 "(the shuttle's track held back at a racket contact while clutter passes)")
+    vouch_position_quality: float = param(0.7, 0.0, 1.0, step=0.01, label="... by position from quality",
+                                          help="A held-back candidate scoring at least this is vouched for by "
+                                               "position alone when the two tracks' smoothed velocities disagree "
+                                               "(just after a hit they mix the old and the new flight; 1 = never)")
     guided_weak_score: float = param(2.0, 0.0, 100.0, step=0.1, label="... against a weak lone detection",
                                      help="Without a stereo pair, a detection scoring below this (a track that slid "
                                           "onto a player after the shuttle's own was lost) is replaced by a spot "
                                           "found at the flight's projection when it lies off it (0 = off)")
+    stereo_look: bool = flag(True, label="Look on the epipolar line",
+                             help="Without a stereo pair, a camera with no detection looks for a white spot "
+                                  "where its own image path continues, on the epipolar line of the other "
+                                  "camera's sure detection (a small shuttle after a hit, before the 3D flight "
+                                  "is known)")
+    stereo_look_min_score: float = param(1.0, 0.0, 100.0, step=0.1, label="... from the other's score",
+                                         help="The other camera's detection must score at least this")
+    stereo_look_radius: float = param(8.0, 1.0, 100.0, step=0.5, unit="px", label="... within",
+                                      help="How far from where the camera's image path continues (px at "
+                                           "1280 px width)")
+    exit_margin: float = param(2.0, 0.0, 100.0, step=0.5, unit="px", label="Leaving the image within",
+                               help="A detection this near the image's border is not reported when the 3D "
+                                    "flight puts the shuttle just outside the image next to it (the clipped "
+                                    "skirt of a shuttle leaving the view; an unpaired one only, unless 'by its "
+                                    "image path' is on; 0 = off)")
+    exit_by_path: bool = flag(True, label="... or by its image path",
+                              help="... or when the camera's own image path (its last report moved on by its "
+                                   "track's velocity) has left the image; paired detections too (the pair "
+                                   "with a clipped skirt is biased)")
+    out_of_view_weak: bool = flag(True, label="Nothing weak while out of view",
+                                  help="Without a stereo pair, a detection scoring below the weak score is not "
+                                       "reported while the 3D flight puts the shuttle outside this camera's image")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and

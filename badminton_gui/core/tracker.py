@@ -11,6 +11,13 @@ of disparity at 5 m on the demo rig), and the drag-model filter, weighing each p
 stereo noise shape, removes most of that. A point the followed flight refuses (a wrong pair, a
 racket) is not reported as the shuttle; the raw triangulation stays in ``measured_point``.
 
+Each camera's 2D readout uses the other camera and the flight too: a candidate its association
+held back passes when the other camera agrees on the epipolar line (``_vouch``); a camera that
+lost the shuttle looks where the flight projects (``_guided``) or, before the flight is known,
+where its own image path continues on the other detection's epipolar line (``_stereo_look``);
+nothing is reported where the shuttle has left the camera's view (``stereo.exit_margin``,
+``exit_by_path``, ``out_of_view_weak``).
+
 Usage::
 
     rig = StereoRig.load("calibration/rig.yaml")
@@ -57,6 +64,15 @@ MERGED_WHITE_RADIUS = 2.0
 # moves consistently in 3D (``_vouch``): a few frames at 120 fps, long enough for a slow shuttle
 # to move a few px.
 VOUCH_DT = 0.02
+# px at 1280 px width: how near an unpaired detection at the border the flight's projection
+# outside the image must lie for the detection to be taken as the shuttle leaving (``_gone_out``).
+EXIT_NEAR = 20.0
+# s: how old this camera's last report may be for ``_stereo_look`` to follow its image path
+# (three frames at 120 fps).
+STEREO_LOOK_AGE = 0.03
+# px² at 1280 px width: the largest spot ``_stereo_look`` takes (a shuttle near the rig is
+# ~10 px across; a player's white shirt is larger).
+STEREO_LOOK_MAX_AREA = 150.0
 # m/s: the fastest 3D motion a vouched pair may show (smashes leave the racket at ≤ ~157 m/s).
 VOUCH_MAX_SPEED = 160.0
 
@@ -77,6 +93,9 @@ class StereoTracker:
         self._trajectory = Trajectory(self.params.trajectory, rig.has_court_pose)
         self._checked_size = False
         self._previous: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
+        # Per camera, its last reported measured detections: [(t, x, y, image velocity or None)]
+        # (``_stereo_look`` follows the camera's own image path from them).
+        self._reports: tuple[deque, deque] = (deque(maxlen=2), deque(maxlen=2))
         # Epipolar errors of long, confident tracklets seen by both cameras: what the rig
         # really achieves (a rig calibrated by clicking court points is off by tens of px).
         self._epipolar_samples: deque[float] = deque(maxlen=600)
@@ -105,6 +124,8 @@ class StereoTracker:
         self._epipolar_sorted.clear()
         self._epipolar_nans = 0
         self._previous = (None, None)
+        self._reports[0].clear()
+        self._reports[1].clear()
         self._last_blob = None
 
     def epipolar_tolerance(self) -> float:
@@ -210,8 +231,9 @@ class StereoTracker:
         # when the shuttle's own track was lost) is looked past too, at the flight's projection.
         weak = [self._weak_lone(det, point_left is not None) for det in (det_left, det_right)]
         guide = None
+        guide_tried = False
         if sp.guided_search and (sp.guided_override or any(unseen) or any(weak)):
-            guide = self._trajectory.guide(timestamp)
+            guide, guide_tried = self._trajectory.guide(timestamp), True
             if guide is not None:
                 found_left = self._guided(0, left_bgr, det_left, guide, weak[0])
                 found_right = self._guided(1, right_bgr, det_right, guide, weak[1])
@@ -226,6 +248,46 @@ class StereoTracker:
                 if sp.guided_coast:
                     res_left, det_left = self._coast_on_flight(0, left_bgr, res_left, det_left, guide)
                     res_right, det_right = self._coast_on_flight(1, right_bgr, res_right, det_right, guide)
+        if sp.stereo_look and point_left is None:
+            # Neither the pair nor the flight found the shuttle in one camera: the other's sure
+            # detection puts it on an epipolar line, this camera's own image path near a point.
+            dets = [det_left, det_right]
+            results = [res_left, res_right]
+            for cam, frame in ((0, left_bgr), (1, right_bgr)):
+                other = dets[1 - cam]
+                if ((dets[cam] is None or dets[cam].predicted) and other is not None
+                        and not other.predicted and other.score >= sp.stereo_look_min_score):
+                    found = self._stereo_look(cam, frame, other, timestamp)
+                    if found is not None:
+                        dets[cam] = found
+                        results[cam] = dataclasses.replace(results[cam], candidates=results[cam].candidates + (found,))
+                        point_left, epi = self._pair_point(dets[0], dets[1])
+                        break
+            det_left, det_right = dets
+            res_left, res_right = results
+        for cam, det in ((0, det_left), (1, det_right)):
+            if det is not None and not det.predicted:
+                velocity = (self.left if cam == 0 else self.right).tracklet_velocity(det)
+                self._reports[cam].append((timestamp, det.x, det.y, velocity))
+        if sp.exit_margin > 0 or (sp.out_of_view_weak and point_left is None):
+            # A detection at the border while the shuttle has left the view (its clipped skirt: a
+            # pair made with it is biased too), or a weak lone one while the flight is out of
+            # this camera's view.
+            dets = [det_left, det_right]
+            for cam, frame in ((0, left_bgr), (1, right_bgr)):
+                border = self._near_border(dets[cam], frame) and (point_left is None or sp.exit_by_path)
+                weak_now = sp.out_of_view_weak and self._weak_lone(dets[cam], point_left is not None)
+                if not (border or weak_now):
+                    continue
+                if guide is None and not guide_tried:
+                    guide, guide_tried = self._trajectory.guide(timestamp), True
+                if ((border and sp.exit_by_path and self._path_leaves(cam, frame, timestamp))
+                        or (guide is not None
+                            and ((border and self._gone_out(cam, dets[cam], frame, guide[0]))
+                                 or (weak_now and self._out_of_view(cam, frame, guide[0]))))):
+                    dets[cam] = None
+                    point_left, epi = None, None
+            det_left, det_right = dets
         # The sources hand out a new array per frame: keeping the reference costs no copy.
         self._previous = (left_bgr, right_bgr)
         # The 2D readout is the cork, not the trailing bright centroid. The 3D point is still
@@ -297,49 +359,91 @@ class StereoTracker:
         neither has one, a held-back candidate of the other camera (both pass); the partner
         survivor is the other camera's own choice. The candidate
         keeps its own quality as its score, below any confirmed track's merit.
+
+        ``stereo.vouch_lone``: a camera whose survivors have no stereo partner among the other
+        camera's (within the epipolar tolerance in use) is helped too, its partner being the other
+        camera's own choice: the shuttle's own track held back at a racket contact while a
+        clutter track passes. ``stereo.vouch_position_quality``: a held-back candidate scoring
+        at least this by its looks is vouched for by position alone when the two tracks'
+        smoothed velocities disagree (they mix the old and the new flight just after a hit).
         """
         sp = self.params.stereo
         # A camera coasting through a blind spot (a predicted candidate) is not helped: its
         # followed track still knows where the shuttle is.
-        need = [not any(c.rejected_by is None for c in res.candidates) for res in (res_left, res_right)]
-        if not any(need):
-            return res_left, res_right
+        survivors = [[c for c in res.candidates if c.rejected_by is None] for res in (res_left, res_right)]
+        need = [not s for s in survivors]
+        results = [res_left, res_right]
+        if any(need):
+            pair = self._vouch_pair(results, need)
+            if pair is not None:
+                for cam in (0, 1):
+                    if need[cam]:
+                        results[cam] = self._pass_vouched(cam, results[cam], pair[cam])
+        elif sp.vouch_lone and all(not any(c.predicted for c in s) for s in survivors):
+            pl = np.array([[c.x, c.y] for c in survivors[0]])
+            pr = np.array([[c.x, c.y] for c in survivors[1]])
+            if not (self.rig.epipolar_errors(pl, pr) <= self.epipolar_tolerance()).any():
+                picks = [self._vouch_pair(results, [cam == 0, cam == 1]) for cam in (0, 1)]
+                for cam in (0, 1):
+                    if picks[cam] is not None:
+                        results[cam] = self._pass_vouched(cam, results[cam], picks[cam][cam])
+        return results[0], results[1]
+
+    def _pass_vouched(self, cam: int, result: CameraResult, pick: Candidate) -> CameraResult:
+        """``result`` with the held-back ``pick`` let through (it keeps its own score)."""
+        passed = (self.left if cam == 0 else self.right).vouch(pick, pick.score)
+        return dataclasses.replace(result, candidates=tuple(passed if c is pick else c
+                                                            for c in result.candidates))
+
+    def _vouch_pair(self, results: list[CameraResult], need: list[bool]
+                    ) -> tuple[Candidate, Candidate] | None:
+        """The best (left, right) pair for ``_vouch``: held-back candidates of the cameras in
+        ``need``, the other camera's own choice otherwise; None when no pair agrees."""
+        sp = self.params.stereo
         detectors = (self.left, self.right)
-        results = (res_left, res_right)
+        first_floor = min(sp.vouch_first_quality, sp.vouch_first_partner_quality)
         pools = []
         for cam in (0, 1):
             pool = []
             if need[cam]:
                 for c in results[cam].candidates:
                     v = detectors[cam].vouchable(c, sp.vouch_min_quality)
+                    # (candidate, velocity, by position alone if need be, a weak first
+                    # sighting, sure enough to partner a weak first sighting)
+                    strong = c.score >= sp.vouch_first_quality
                     if v is not None:
-                        pool.append((c, v))
-                    elif sp.vouch_first_quality < 1.0 and detectors[cam].first_sighting(c, sp.vouch_first_quality):
-                        pool.append((c, None))
+                        pool.append((c, v, c.score >= sp.vouch_position_quality, False, strong))
+                    elif sp.vouch_first_quality < 1.0 and detectors[cam].first_sighting(c, first_floor):
+                        pool.append((c, None, True, not strong, strong))
             else:
                 # The partner is that camera's own choice (its best track), nothing else.
                 own = detectors[cam].choose(results[cam].candidates)
                 v = None if own is None or own.predicted else detectors[cam].tracklet_velocity(own)
                 if v is not None:
-                    pool.append((own, v))
+                    pool.append((own, v, True, False, True))
             if not pool:
-                return res_left, res_right
+                return None
             pools.append(pool)
         left, right = pools
-        now_l = np.array([[c.x, c.y] for c, _ in left])
-        now_r = np.array([[c.x, c.y] for c, _ in right])
+        now_l = np.array([[e[0].x, e[0].y] for e in left])
+        now_r = np.array([[e[0].x, e[0].y] for e in right])
         tol = float(sp.vouch_max_epipolar)
         epi = self.rig.epipolar_errors(now_l, now_r)
         if not (epi <= tol).any():
-            return res_left, res_right
-        back_l = now_l - VOUCH_DT * np.array([(0.0, 0.0) if v is None else v for _, v in left])
-        back_r = now_r - VOUCH_DT * np.array([(0.0, 0.0) if v is None else v for _, v in right])
+            return None
+        back_l = now_l - VOUCH_DT * np.array([(0.0, 0.0) if e[1] is None else e[1] for e in left])
+        back_r = now_r - VOUCH_DT * np.array([(0.0, 0.0) if e[1] is None else e[1] for e in right])
         best = None
         for i, j in zip(*np.nonzero(epi <= tol)):
-            # A first sighting has no velocity: its pair is checked by position alone.
+            # A first sighting has no velocity: its pair is checked by position alone, and
+            # one that looks little like a shuttle needs a partner that does.
+            if (left[i][3] and not right[j][4]) or (right[j][3] and not left[i][4]):
+                continue
             moving = left[i][1] is not None and right[j][1] is not None
             if moving and float(self.rig.epipolar_errors(back_l[i:i + 1], back_r[j:j + 1])[0, 0]) > 2.0 * tol:
-                continue
+                if not (left[i][2] and right[j][2]):
+                    continue
+                moving = False      # two shuttle-like blobs: by position alone
             pts = self.rig.triangulate(np.stack([now_l[i], back_l[i]]), np.stack([now_r[j], back_r[j]]))
             dist = float(np.linalg.norm(pts[0]))
             if pts[0][2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
@@ -353,16 +457,9 @@ class StereoTracker:
             if best is None or merit > best[0]:
                 best = (merit, i, j)
         if best is None:
-            return res_left, res_right
+            return None
         _, i, j = best
-        out = []
-        for cam, (res, pick) in enumerate(((res_left, left[i][0]), (res_right, right[j][0]))):
-            if need[cam]:
-                passed = detectors[cam].vouch(pick, pick.score)
-                res = dataclasses.replace(res, candidates=tuple(passed if c is pick else c
-                                                                for c in res.candidates))
-            out.append(res)
-        return out[0], out[1]
+        return left[i][0], right[j][0]
 
     def _choose_pair(self, res_left: CameraResult, res_right: CameraResult
                      ) -> tuple[Candidate | None, Candidate | None, np.ndarray | None, float | None]:
@@ -425,6 +522,92 @@ class StereoTracker:
         sp = self.params.stereo
         return (not paired and sp.guided_weak_score > 0 and detection is not None
                 and not detection.predicted and detection.score < sp.guided_weak_score)
+
+    def _stereo_look(self, camera: int, frame: np.ndarray, other: Candidate, t: float) -> Candidate | None:
+        """A white spot where this camera's own image path continues, on the epipolar line of
+        the other camera's detection (``stereo.stereo_look``), or None.
+
+        After a hit the 3D flight is not known yet for some frames, and a small or dim shuttle
+        (the far court, a drive low over the net) gives no blob that passes the contour filters
+        in one camera while the other follows it. This camera's last report (within
+        ``STEREO_LOOK_AGE`` s), moved on by its track's image velocity (or the step from the
+        report before), says where to look (``stereo.stereo_look_radius``); the spot must lie
+        within ``vouch_max_epipolar`` of the other detection's epipolar line.
+        """
+        sp = self.params.stereo
+        path = self._path_point(camera, t)
+        if path is None:
+            return None
+        u, v = path
+        h, w = frame.shape[:2]
+        if not (0 <= u < w and 0 <= v < h):
+            return None
+        scale = w / 1280.0
+        spot = find_spot(frame, u, v, sp.stereo_look_radius * scale, sp.guided_min_contrast,
+                         STEREO_LOOK_MAX_AREA * scale * scale, self._previous[camera])
+        if spot is None:
+            return None
+        x, y, contrast, area = spot
+        pair = ([[other.x, other.y]], [[x, y]]) if camera == 1 else ([[x, y]], [[other.x, other.y]])
+        if float(self.rig.epipolar_errors(*pair)[0, 0]) > sp.vouch_max_epipolar:
+            return None
+        return Candidate(x=x, y=y, length=float("nan"), short_side=float("nan"), whiteness=contrast,
+                         area=area, motion=math.hypot(x - u, y - v), score=0.0)
+
+    def _path_point(self, camera: int, t: float) -> tuple[float, float] | None:
+        """Where this camera's own image path puts the shuttle at ``t``: its last report before
+        ``t`` (within ``STEREO_LOOK_AGE`` s) moved on by its track's image velocity, or by the
+        step from the report before; None without such reports."""
+        hist = [r for r in self._reports[camera] if r[0] < t]
+        if not hist:
+            return None
+        t2, x2, y2, vel = hist[-1]
+        if t - t2 > STEREO_LOOK_AGE:
+            return None
+        if vel is None:
+            if len(hist) < 2:
+                return None
+            t1, x1, y1, _ = hist[-2]
+            if not (0.0 < t2 - t1 <= STEREO_LOOK_AGE):
+                return None
+            vel = ((x2 - x1) / (t2 - t1), (y2 - y1) / (t2 - t1))
+        return x2 + vel[0] * (t - t2), y2 + vel[1] * (t - t2)
+
+    def _path_leaves(self, camera: int, frame: np.ndarray, t: float) -> bool:
+        """This camera's own image path has left the image by now (``stereo.exit_by_path``)."""
+        path = self._path_point(camera, t)
+        if path is None:
+            return False
+        h, w = frame.shape[:2]
+        return not (0 <= path[0] < w and 0 <= path[1] < h)
+
+    def _out_of_view(self, camera: int, frame: np.ndarray, position: np.ndarray) -> bool:
+        """The 3D flight's position projects outside this camera's image (or behind it)."""
+        if float(self.rig.depth(camera, position[None])[0]) <= 0.1:
+            return True
+        u, v = (float(c) for c in self.rig.project(camera, position[None])[0])
+        h, w = frame.shape[:2]
+        return not (0 <= u < w and 0 <= v < h)
+
+    def _near_border(self, detection: Candidate | None, frame: np.ndarray) -> bool:
+        """The detection lies within ``stereo.exit_margin`` px of the image's border."""
+        m = float(self.params.stereo.exit_margin)
+        if detection is None or m <= 0:
+            return False
+        h, w = frame.shape[:2]
+        return min(detection.x, detection.y, w - 1 - detection.x, h - 1 - detection.y) <= m
+
+    def _gone_out(self, camera: int, detection: Candidate, frame: np.ndarray, position: np.ndarray) -> bool:
+        """The 3D flight puts the shuttle outside this camera's image, just past the unpaired
+        detection at its border (within ``EXIT_NEAR`` px): the blob is the skirt's end, clipped
+        by the border, or a prediction coasting out; the cork itself is out of view."""
+        if float(self.rig.depth(camera, position[None])[0]) <= 0.1:
+            return False
+        u, v = (float(c) for c in self.rig.project(camera, position[None])[0])
+        h, w = frame.shape[:2]
+        if 0 <= u < w and 0 <= v < h:
+            return False
+        return math.hypot(detection.x - u, detection.y - v) <= EXIT_NEAR * w / 1280.0
 
     def _guided(self, camera: int, frame: np.ndarray, detection: Candidate | None,
                 guide: tuple[np.ndarray, np.ndarray], override: bool = False) -> Candidate | None:
