@@ -230,6 +230,9 @@ def main() -> int:
                     help="stereo clips: the one-camera `detect` rows only (no `track`)")
     ap.add_argument("--preset", default=None,
                     help="preset name or .json for the stereo clips (default: the default preset)")
+    ap.add_argument("--rig", default=None, metavar="RIG.yaml",
+                    help="rig file for the stereo clips (default: imported from the NYCU .cfg files); "
+                         "the labels are triangulated with it too")
     ap.add_argument("--broadcast-preset", default="broadcast", metavar="NAME",
                     help="preset name or .json for the broadcast clips (default: broadcast)")
     ap.add_argument("--lookahead", type=int, default=None, metavar="N",
@@ -256,9 +259,12 @@ def main() -> int:
             tmp.mkdir(parents=True, exist_ok=True)
         else:
             tmp = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="accuracy_")))
-        rig_path = tmp / "nycu_rig.yaml"
-        cfg1, cfg2 = nycu_cfgs()
-        run_cli(["import-calib", "--nycu", str(cfg1), str(cfg2), "-o", str(rig_path)])
+        if args.rig:
+            rig_path = Path(args.rig).resolve()
+        else:
+            rig_path = tmp / "nycu_rig.yaml"
+            cfg1, cfg2 = nycu_cfgs()
+            run_cli(["import-calib", "--nycu", str(cfg1), str(cfg2), "-o", str(rig_path)])
         jobs = []
         for c in stereo:
             clip_jobs = stereo_jobs(c, tmp, max_frames, rig_path, args.preset, args.lookahead)
