@@ -193,13 +193,14 @@ def three_d_errors(rows, clip, rig_path: Path) -> np.ndarray | None:
     return np.linalg.norm(np.array(ours) - truth, axis=1)
 
 
-def broadcast_job(clip, tmp: Path, max_frames: int | None, lookahead: int | None = None):
+def broadcast_job(clip, tmp: Path, max_frames: int | None, lookahead: int | None = None,
+                  preset: str = "broadcast"):
     def job():
         out = tmp / f"{clip.name}_detect.csv"
         if max_frames:
-            rate = detect_in_process(clip.video, out, max_frames, "broadcast", lookahead)
+            rate = detect_in_process(clip.video, out, max_frames, preset, lookahead)
         else:
-            rate, _ = run_cli(["detect", str(clip.video), "-o", str(out), "--preset", "broadcast"]
+            rate, _ = run_cli(["detect", str(clip.video), "-o", str(out), "--preset", preset]
                               + _lookahead_args(lookahead))
         return [Row(clip.name, "-", "detect", clip.held_out, "broadcast",
                     score(read_detect(out), clip.labels, 1280, max_frames), rate, "frames/s")], None
@@ -229,6 +230,11 @@ def main() -> int:
                     help="stereo clips: the one-camera `detect` rows only (no `track`)")
     ap.add_argument("--preset", default=None,
                     help="preset name or .json for the stereo clips (default: the default preset)")
+    ap.add_argument("--rig", default=None, metavar="RIG.yaml",
+                    help="rig file for the stereo clips (default: imported from the NYCU .cfg files); "
+                         "the labels are triangulated with it too")
+    ap.add_argument("--broadcast-preset", default="broadcast", metavar="NAME",
+                    help="preset name or .json for the broadcast clips (default: broadcast)")
     ap.add_argument("--lookahead", type=int, default=None, metavar="N",
                     help="frames of look-ahead for every CLI run (default: the CLI's own default; 0 = live readout)")
     ap.add_argument("--keep", default=None, metavar="DIR",
@@ -253,14 +259,17 @@ def main() -> int:
             tmp.mkdir(parents=True, exist_ok=True)
         else:
             tmp = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="accuracy_")))
-        rig_path = tmp / "nycu_rig.yaml"
-        cfg1, cfg2 = nycu_cfgs()
-        run_cli(["import-calib", "--nycu", str(cfg1), str(cfg2), "-o", str(rig_path)])
+        if args.rig:
+            rig_path = Path(args.rig).resolve()
+        else:
+            rig_path = tmp / "nycu_rig.yaml"
+            cfg1, cfg2 = nycu_cfgs()
+            run_cli(["import-calib", "--nycu", str(cfg1), str(cfg2), "-o", str(rig_path)])
         jobs = []
         for c in stereo:
             clip_jobs = stereo_jobs(c, tmp, max_frames, rig_path, args.preset, args.lookahead)
             jobs += clip_jobs[:1] if args.track_only else clip_jobs[1:] if args.detect_only else clip_jobs
-        jobs += [broadcast_job(c, tmp, max_frames, args.lookahead) for c in broadcast]
+        jobs += [broadcast_job(c, tmp, max_frames, args.lookahead, args.broadcast_preset) for c in broadcast]
         start = time.perf_counter()
         with ThreadPoolExecutor(args.jobs) as pool:
             results = list(pool.map(lambda j: j(), jobs))

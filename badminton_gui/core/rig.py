@@ -224,6 +224,22 @@ class StereoRig:
         d_left = num / np.hypot(lines_l[:, 0], lines_l[:, 1])[None, :]
         return 0.5 * (d_right + d_left)
 
+    def pair_errors(self, pts_left, pts_right) -> np.ndarray:
+        """Symmetric epipolar distance (px) of each matched pair (i, i): (N,), the diagonal of
+        ``epipolar_errors`` without its N × N matrix."""
+        ul = self.undistort_pixels(0, pts_left)
+        ur = self.undistort_pixels(1, pts_right)
+        if len(ul) == 0:
+            return np.zeros(0)
+        f = self.fundamental()
+        hl = np.hstack([ul, np.ones((len(ul), 1))])
+        hr = np.hstack([ur, np.ones((len(ur), 1))])
+        lines_r = hl @ f.T
+        lines_l = hr @ f
+        num = np.abs(np.einsum("ij,ij->i", hr, lines_r))
+        return 0.5 * (num / np.hypot(lines_r[:, 0], lines_r[:, 1])
+                      + num / np.hypot(lines_l[:, 0], lines_l[:, 1]))
+
     def triangulate(self, pts_left, pts_right) -> np.ndarray:
         """Matched pixel points (N, 2) × 2 → 3D points (N, 3) in the left camera's frame."""
         nl = self.undistort(0, pts_left)

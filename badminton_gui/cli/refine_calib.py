@@ -1,0 +1,92 @@
+"""`badminton-track refine-calib --left L.mp4 --right R.mp4 --calib RIG.yaml -o REFINED.yaml`.
+
+Why this file exists: a rig whose two cameras were calibrated separately (the NYCU ``.cfg``
+pair) can be degrees off in their relative pose, which no chessboard session fixes after the
+fact. This command tracks a recorded rally with that rig, keeps the pairs of detections that
+are the followed shuttle in both cameras (labels are never read), refits the relative pose to
+them (core/rig_refine.py) and writes the refined rig — or, when the rally cannot support a
+refit (too few flights, too little of the image covered), says why and exits non-zero.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from ..core.rig import StereoRig
+from ..core.rig_refine import PairCollector, refine_relative_pose
+from ..core.tracker import StereoTracker, configure_opencv_threads
+from ..io.labels import read_timestamps
+from ..io.prefetch import PrefetchingReader
+from ..io.video import VideoPair
+from .common import INPUT_ERRORS, Progress, UserError, add_preset_argument, params_from_args
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("refine-calib", help="refine a rig's relative pose from a tracked rally",
+                       description="Track a recorded rally, keep the shuttle's pairs of detections "
+                                   "and refit the cameras' relative pose to them (self-calibration; "
+                                   "intrinsics, baseline length and the court pose are kept).")
+    p.add_argument("--left", required=True, help="left camera video")
+    p.add_argument("--right", required=True, help="right camera video")
+    p.add_argument("--calib", required=True, help="rig file to start from (.yaml)")
+    p.add_argument("-o", "--output", required=True, help="refined rig file to write (.yaml)")
+    p.add_argument("--left-times", help="CSV with Frame,Timestamp for the left video")
+    p.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
+    p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_preset_argument(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    params = params_from_args(args)
+    if (args.left_times is None) != (args.right_times is None):
+        raise UserError("give --left-times and --right-times together")
+    try:
+        rig = StereoRig.load(args.calib)
+        lt = rt = None
+        if args.left_times:
+            lt = read_timestamps(args.left_times)[1]
+            rt = read_timestamps(args.right_times)[1]
+        source = VideoPair(args.left, args.right, lt, rt)
+        rig.check_image_size(*source.image_size, what="the videos")
+    except INPUT_ERRORS as exc:
+        raise UserError(str(exc)) from None
+    source = PrefetchingReader(source)
+    configure_opencv_threads()
+    tracker = StereoTracker(rig, params)
+    collector = PairCollector()
+    total = source.frame_count if lt is None else min(len(lt), source.frame_count or len(lt))
+    if args.max_frames:
+        total = min(total, args.max_frames) if total else args.max_frames
+    progress = Progress(total or None, "refine-calib")
+    n = 0
+    try:
+        while args.max_frames is None or n < args.max_frames:
+            frame = source.read()
+            if frame is None:
+                break
+            collector.add(tracker.process(frame.left, frame.right, frame.t_left, frame.index,
+                                          frame.index_right, keep_masks=False))
+            n += 1
+            if not args.quiet:
+                progress.update(n)
+    finally:
+        source.close()
+        tracker.close()
+        if not args.quiet:
+            progress.close()
+    if n == 0:
+        raise UserError("the videos hold no frames")
+    refined, report = refine_relative_pose(rig, *collector.points())
+    print(f"{n} frame pairs: {report.summary()}")
+    if not report.accepted:
+        raise UserError(f"not refined: {report.reason}; {args.output} not written")
+    try:
+        refined.save(args.output)
+    except INPUT_ERRORS as exc:
+        raise UserError(str(exc)) from None
+    except OSError as exc:
+        raise UserError(f"cannot write {args.output}: {exc.strerror or exc}") from None
+    print(f"refined rig → {args.output}")
+    return 0
