@@ -100,3 +100,29 @@ def params_from_args(args):
         return params
     except INPUT_ERRORS as exc:
         raise UserError(str(exc)) from None
+
+
+def open_stereo_videos(args):
+    """(rig, source, pair count or None) for the commands that read a recorded video pair
+    (`track`, `refine-calib`): ``--left --right --calib [--left-times --right-times]
+    [--max-frames]``; the pairs are decoded on a reader thread (io/prefetch.py)."""
+    from ..core.rig import StereoRig
+    from ..io.labels import read_timestamps
+    from ..io.prefetch import PrefetchingReader
+    from ..io.video import VideoPair
+    if (args.left_times is None) != (args.right_times is None):
+        raise UserError("give --left-times and --right-times together")
+    try:
+        rig = StereoRig.load(args.calib)
+        lt = rt = None
+        if args.left_times:
+            lt = read_timestamps(args.left_times)[1]
+            rt = read_timestamps(args.right_times)[1]
+        source = VideoPair(args.left, args.right, lt, rt)
+        rig.check_image_size(*source.image_size, what="the videos")
+    except INPUT_ERRORS as exc:
+        raise UserError(str(exc)) from None
+    total = source.frame_count if lt is None else min(len(lt), source.frame_count or len(lt))
+    if args.max_frames:
+        total = min(total, args.max_frames) if total else args.max_frames
+    return rig, PrefetchingReader(source), total or None

@@ -12,13 +12,10 @@ from __future__ import annotations
 
 import argparse
 
-from ..core.rig import StereoRig
 from ..core.rig_refine import PairCollector, refine_relative_pose
 from ..core.tracker import StereoTracker, configure_opencv_threads
-from ..io.labels import read_timestamps
-from ..io.prefetch import PrefetchingReader
-from ..io.video import VideoPair
-from .common import INPUT_ERRORS, Progress, UserError, add_preset_argument, params_from_args
+from .common import (INPUT_ERRORS, Progress, UserError, add_preset_argument, open_stereo_videos,
+                     params_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -40,26 +37,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     params = params_from_args(args)
-    if (args.left_times is None) != (args.right_times is None):
-        raise UserError("give --left-times and --right-times together")
-    try:
-        rig = StereoRig.load(args.calib)
-        lt = rt = None
-        if args.left_times:
-            lt = read_timestamps(args.left_times)[1]
-            rt = read_timestamps(args.right_times)[1]
-        source = VideoPair(args.left, args.right, lt, rt)
-        rig.check_image_size(*source.image_size, what="the videos")
-    except INPUT_ERRORS as exc:
-        raise UserError(str(exc)) from None
-    source = PrefetchingReader(source)
+    rig, source, total = open_stereo_videos(args)
     configure_opencv_threads()
     tracker = StereoTracker(rig, params)
     collector = PairCollector()
-    total = source.frame_count if lt is None else min(len(lt), source.frame_count or len(lt))
-    if args.max_frames:
-        total = min(total, args.max_frames) if total else args.max_frames
-    progress = Progress(total or None, "refine-calib")
+    progress = Progress(total, "refine-calib")
     n = 0
     try:
         while args.max_frames is None or n < args.max_frames:

@@ -8,13 +8,10 @@ import time
 from pathlib import Path
 
 from ..core.lookahead import StereoLookahead
-from ..core.rig import StereoRig
 from ..core.tracker import StereoTracker, configure_opencv_threads
-from ..io.labels import TRACK_COLUMNS, read_timestamps, track_row
-from ..io.prefetch import PrefetchingReader
-from ..io.video import VideoPair
-from .common import (INPUT_ERRORS, Progress, UserError, add_lookahead_argument, add_preset_argument,
-                     params_from_args)
+from ..io.labels import TRACK_COLUMNS, track_row
+from .common import (Progress, UserError, add_lookahead_argument, add_preset_argument,
+                     open_stereo_videos, params_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -41,34 +38,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     params = params_from_args(args)
-    if (args.left_times is None) != (args.right_times is None):
-        raise UserError("give --left-times and --right-times together")
-    try:
-        rig = StereoRig.load(args.calib)
-        lt = rt = None
-        if args.left_times:
-            lt = read_timestamps(args.left_times)[1]
-            rt = read_timestamps(args.right_times)[1]
-        source = VideoPair(args.left, args.right, lt, rt)
-        rig.check_image_size(*source.image_size, what="the videos")
-    except INPUT_ERRORS as exc:
-        raise UserError(str(exc)) from None
-    # Decode the next pairs on a reader thread while this one tracks (io/prefetch.py).
-    source = PrefetchingReader(source)
-
+    rig, source, total = open_stereo_videos(args)
     link = None
     if args.robot:
         from ..io.robot_link import RobotLink
         link = RobotLink(args.robot, args.baud)
-
     configure_opencv_threads()
     tracker = StereoTracker(rig, params)
     # The CSV gets the re-decided readout; the robot keeps the live one (no latency).
     lookahead = StereoLookahead(rig, params, tracker.epipolar_tolerance)
-    total = source.frame_count if lt is None else min(len(lt), source.frame_count or len(lt))
-    if args.max_frames:
-        total = min(total, args.max_frames) if total else args.max_frames
-    progress = Progress(total or None, "track")
+    progress = Progress(total, "track")
     n = hits3d = 0
     start = time.perf_counter()
     out_path = Path(args.output)
