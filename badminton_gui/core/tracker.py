@@ -43,7 +43,7 @@ from .guided import find_spot, white_near
 from .params import TrackerParams
 from .rig import StereoRig
 from .trajectory import Trajectory
-from .types import CameraResult, Candidate, TrackResult
+from .types import REJECT_STEREO, CameraResult, Candidate, TrackResult
 
 
 # Time step (s) over which the tracklets' image velocities are followed back to find the
@@ -107,6 +107,9 @@ class StereoTracker:
         # The last frame's triangulated blob point (left-camera frame) and its time: the 3D step
         # checks the direction of the cork correction (see _head_variance).
         self._last_blob: tuple[float, np.ndarray] | None = None
+        # Per camera, for ``stereo.alone_limit``: [reports alone in a row, frames without a
+        # report in a row, the readout continues one that had a 3D point].
+        self._alone = ([0, 0, False], [0, 0, False])
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -127,6 +130,7 @@ class StereoTracker:
         self._reports[0].clear()
         self._reports[1].clear()
         self._last_blob = None
+        self._alone = ([0, 0, False], [0, 0, False])
 
     def epipolar_tolerance(self) -> float:
         """The epipolar gate in use: the configured one, widened to the rig's measured error."""
@@ -327,6 +331,7 @@ class StereoTracker:
             point_out = None
         elif measured is not None and self.rig.has_court_pose:
             point_out = self._resting_cork(measured)
+        res_left, res_right = self._limit_alone(res_left, res_right, point_out is not None)
         distance = predicted_distance = None
         if point_out is not None:
             distance = float(np.linalg.norm(self.rig.to_left([point_out])[0]))
@@ -342,6 +347,47 @@ class StereoTracker:
             epipolar_error=epi, index_right=index_right, measured_point=measured,
             predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
+
+    def _limit_alone(self, res_left: CameraResult, res_right: CameraResult, has_point: bool
+                     ) -> tuple[CameraResult, CameraResult]:
+        """Withhold a camera's report the other camera has not confirmed (``stereo.alone_limit``).
+
+        On the NYCU rallies most detections reported by one camera while the other reports
+        nothing and no 3D point exists are not the shuttle (the labels say none is in view): a
+        shuttle held or lying still, a racket, a white shoe, which one camera's association
+        followed on its own. A real shuttle seen by one camera only is mostly a flight the other
+        camera lost (out of its view, behind a player), and then this camera's readout runs on
+        from frames that had a 3D point. So a one-camera report is kept when this camera's
+        readout has continued, with no break longer than ``alone_anchor_gap`` frames, since a
+        frame with a 3D point; otherwise at most ``alone_max_frames`` such reports in a row are
+        kept. Only the readout changes (the detection is marked ``REJECT_STEREO``): the
+        association, the flight and the look-ahead's tracklets are left as they were.
+        """
+        sp = self.params.stereo
+        results = [res_left, res_right]
+        present = [r.detection is not None for r in results]
+        for cam in (0, 1):
+            state = self._alone[cam]
+            if not present[cam]:
+                state[0] = 0
+                state[1] += 1
+                if state[1] > sp.alone_anchor_gap:
+                    state[2] = False
+                continue
+            state[1] = 0
+            if has_point:
+                state[0], state[2] = 0, True
+            elif present[1 - cam]:
+                state[0] = 0
+            else:
+                state[0] += 1
+                if sp.alone_limit and not state[2] and state[0] > sp.alone_max_frames:
+                    det = results[cam].detection
+                    results[cam] = dataclasses.replace(
+                        results[cam], detection=None,
+                        candidates=tuple(dataclasses.replace(c, rejected_by=REJECT_STEREO) if c is det else c
+                                         for c in results[cam].candidates))
+        return results[0], results[1]
 
     def _vouch(self, res_left: CameraResult, res_right: CameraResult
                ) -> tuple[CameraResult, CameraResult]:
