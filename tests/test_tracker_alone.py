@@ -70,3 +70,52 @@ def test_off_by_the_flag():
 def test_the_count_restarts_when_the_camera_is_not_alone(frames):
     assert _run(_tracker(alone_max_frames=3), frames) == frames
     assert _run(_tracker(alone_max_frames=2), frames) == frames[:2] + "." + frames[3:6] + "."
+
+
+# ---- stereo.landed_frames ---------------------------------------------------------------------
+
+def _cand(x, rejected=None):
+    return Candidate(float(x), 500.0, 30.0, 6.0, 200.0, 20.0, 1.0, 0.5, rejected, tracklet=4)
+
+
+def _hold(tracker, xs, last_z=0.0, t0=1.0, dt=0.01, paired=True):
+    """The first x is reported by the detector; the others are the same track's candidate held
+    back by the association. Returns the x reported per frame (None: nothing)."""
+    out = []
+    for k, x in enumerate(xs):
+        t = t0 + k * dt
+        if k == 0:
+            tracker._last_point = (t, last_z)
+            c = _cand(x)
+            res, det = tracker._hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, t)
+            tracker._held[0][4] = paired        # that report had a 3D point (set by process())
+        else:
+            c = _cand(x, "motion")
+            res, det = tracker._hold_landed(0, CameraResult(None, (c,), image_size=(1280, 720)), None, t)
+            if det is not None:
+                assert det.rejected_by is None and det in res.candidates
+        out.append(None if det is None else det.x)
+    tracker.close()
+    return out
+
+
+def test_a_landed_shuttle_is_held_while_it_stays_put_for_the_allowed_frames():
+    xs = [100, 101, 101, 102, 102, 102]
+    assert _hold(_tracker(landed_frames=3), xs) == [100, 101, 101, 102, None, None]
+    assert _hold(_tracker(landed_frames=0), xs) == [100, None, None, None, None, None]
+
+
+def test_no_hold_above_the_floor_when_the_flight_is_old_or_the_candidate_moves_off():
+    xs = [100, 101, 101]
+    assert _hold(_tracker(landed_frames=10), xs, last_z=1.2) == [100, None, None]
+    # a track reported without a 3D point (clutter after the rally) is not held
+    assert _hold(_tracker(landed_frames=10), xs, paired=False) == [100, None, None]
+    t = _tracker(landed_frames=10)
+    t._last_point = (-5.0, 0.0)
+    c = _cand(100)
+    t._hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, 0.0)
+    t._held[0][4] = True
+    m = _cand(101, "motion")
+    assert t._hold_landed(0, CameraResult(None, (m,), image_size=(1280, 720)), None, 0.01)[1] is None
+    t.close()
+    assert _hold(_tracker(landed_frames=10), [100, 101, 120, 121]) == [100, 101, None, None]

@@ -399,6 +399,12 @@ class StereoParams(ParamGroup):
     alone_anchor_gap: int = param(3, 0, 100, step=1, label="... anchored across",
                                   help="How many frames without a report this camera's readout may skip and still "
                                        "continue the stereo-confirmed readout before it")
+    landed_frames: int = param(40, 0, 10000, step=1, unit="frames", label="Keep a landed shuttle",
+                               help="When a camera's followed track stops being reported (its pause allowance "
+                                    "ran out) soon after the 3D flight's last point near the floor, its candidate "
+                                    "there is still reported for this many frames while it stays put (0 = off)")
+    landed_max_height: float = param(0.3, 0.0, 5.0, step=0.05, unit="m", label="... landed below",
+                                     help="The flight's last 3D point must be this low above the court")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and
