@@ -388,6 +388,23 @@ class StereoParams(ParamGroup):
     out_of_view_weak: bool = flag(True, label="Nothing weak while out of view",
                                   help="Without a stereo pair, a detection scoring below the weak score is not "
                                        "reported while the 3D flight puts the shuttle outside this camera's image")
+    alone_limit: bool = flag(True, label="Limit one-camera reports",
+                             help="A detection the other camera does not see (no report there, no 3D point) "
+                                  "is reported for at most 'for' frames in a row, unless this camera's readout "
+                                  "has run on without a break since a frame with a 3D point (a flight the other "
+                                  "camera lost: out of its view, behind a player)")
+    alone_max_frames: int = param(0, 0, 1000, step=1, label="... for",
+                                  help="How many frames in a row such a one-camera report is kept (0 = none: a "
+                                       "camera reports alone only what continues a stereo-confirmed readout)")
+    alone_anchor_gap: int = param(3, 0, 100, step=1, label="... anchored across",
+                                  help="How many frames without a report this camera's readout may skip and still "
+                                       "continue the stereo-confirmed readout before it")
+    landed_frames: int = param(40, 0, 10000, step=1, unit="frames", label="Keep a landed shuttle",
+                               help="When a camera's followed track stops being reported (its pause allowance "
+                                    "ran out) soon after the 3D flight's last point near the floor, its candidate "
+                                    "there is still reported for this many frames while it stays put (0 = off)")
+    landed_max_height: float = param(0.3, 0.0, 5.0, step=0.05, unit="m", label="... landed below",
+                                     help="The flight's last 3D point must be this low above the court")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and

@@ -43,7 +43,7 @@ from .guided import find_spot, white_near
 from .params import TrackerParams
 from .rig import StereoRig
 from .trajectory import Trajectory
-from .types import CameraResult, Candidate, TrackResult
+from .types import REJECT_STEREO, CameraResult, Candidate, TrackResult
 
 
 # Time step (s) over which the tracklets' image velocities are followed back to find the
@@ -75,6 +75,13 @@ STEREO_LOOK_AGE = 0.03
 STEREO_LOOK_MAX_AREA = 150.0
 # m/s: the fastest 3D motion a vouched pair may show (smashes leave the racket at ≤ ~157 m/s).
 VOUCH_MAX_SPEED = 160.0
+# s: how recent the flight's last low 3D point must be when a camera's followed track stops
+# being reported for ``stereo.landed_frames`` to hold it (a shuttle lands and comes to rest in
+# a fraction of a second; the pause allowance runs out 40 frames later at 119 fps).
+LANDED_RECENT = 1.0
+# px at 1280 px width: how far a held landed shuttle's candidate may move from one frame to the
+# next (it slides or rolls a little; a hand picking it up moves more).
+LANDED_STEP = 4.0
 
 
 class StereoTracker:
@@ -107,6 +114,15 @@ class StereoTracker:
         # The last frame's triangulated blob point (left-camera frame) and its time: the 3D step
         # checks the direction of the cork correction (see _head_variance).
         self._last_blob: tuple[float, np.ndarray] | None = None
+        # Per camera, for ``stereo.alone_limit``: [reports alone in a row, frames without a
+        # report in a row, the readout continues one that had a 3D point].
+        self._alone = ([0, 0, False], [0, 0, False])
+        # Per camera, for ``stereo.landed_frames``: [tracklet of the last report (-1: none),
+        # frames held since, its last x, y, that report had a 3D point]; and (t, court height)
+        # of the last 3D point.
+        self._held = ([-1, 0, 0.0, 0.0, False], [-1, 0, 0.0, 0.0, False])
+        self._held_now = [False, False]
+        self._last_point: tuple[float, float] | None = None
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -127,6 +143,10 @@ class StereoTracker:
         self._reports[0].clear()
         self._reports[1].clear()
         self._last_blob = None
+        self._alone = ([0, 0, False], [0, 0, False])
+        self._held = ([-1, 0, 0.0, 0.0, False], [-1, 0, 0.0, 0.0, False])
+        self._held_now = [False, False]
+        self._last_point = None
 
     def epipolar_tolerance(self) -> float:
         """The epipolar gate in use: the configured one, widened to the rig's measured error."""
@@ -288,6 +308,10 @@ class StereoTracker:
                     dets[cam] = None
                     point_left, epi = None, None
             det_left, det_right = dets
+        self._held_now = [False, False]
+        if sp.landed_frames > 0 and self.rig.has_court_pose:
+            res_left, det_left = self._hold_landed(0, res_left, det_left, timestamp)
+            res_right, det_right = self._hold_landed(1, res_right, det_right, timestamp)
         # The sources hand out a new array per frame: keeping the reference costs no copy.
         self._previous = (left_bgr, right_bgr)
         # The 2D readout is the cork, not the trailing bright centroid. The 3D point is still
@@ -327,6 +351,12 @@ class StereoTracker:
             point_out = None
         elif measured is not None and self.rig.has_court_pose:
             point_out = self._resting_cork(measured)
+        if point_out is not None:
+            self._last_point = (timestamp, float(point_out[2]))
+        for cam, det in ((0, det_left), (1, det_right)):
+            if not self._held_now[cam]:
+                self._held[cam][4] = det is not None and point_out is not None
+        res_left, res_right = self._limit_alone(res_left, res_right, point_out is not None)
         distance = predicted_distance = None
         if point_out is not None:
             distance = float(np.linalg.norm(self.rig.to_left([point_out])[0]))
@@ -342,6 +372,101 @@ class StereoTracker:
             epipolar_error=epi, index_right=index_right, measured_point=measured,
             predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
+
+    def _hold_landed(self, cam: int, result: CameraResult, det: Candidate | None, t: float
+                     ) -> tuple[CameraResult, Candidate | None]:
+        """Keep reporting a shuttle that landed and lies still (``stereo.landed_frames``).
+
+        The association reports a still track only for ``association.pause_frames`` after it
+        flew; a shuttle that has just landed lies there longer, and the NYCU labels mark it
+        visible for another ≈ 0.3–0.8 s. When this camera's report stops, its last report had a
+        3D point, the 3D flight's last point (within ``LANDED_RECENT`` s) lay near the floor and
+        the track it followed still has
+        a candidate where the last report was (within ``LANDED_STEP`` px a frame), that candidate
+        is reported, for at most ``landed_frames`` frames. A shuttle held before the serve has
+        no low 3D point before it; one picked up moves off.
+        """
+        sp = self.params.stereo
+        state = self._held[cam]
+        if det is not None:
+            if det.predicted or det.tracklet < 0:
+                state[0] = -1
+            else:
+                state[:4] = [det.tracklet, 0, det.x, det.y]
+            return result, det
+        if state[0] < 0:
+            return result, None
+        if state[1] >= sp.landed_frames or (state[1] == 0 and not (state[4] and self._landed(t))):
+            state[0] = -1
+            return result, None
+        step = LANDED_STEP * result.image_size[0] / 1280.0
+        for c in result.candidates:
+            if (c.tracklet == state[0] and not c.predicted
+                    and math.hypot(c.x - state[2], c.y - state[3]) <= step):
+                state[1] += 1
+                state[2], state[3] = c.x, c.y
+                self._held_now[cam] = True
+                held = dataclasses.replace(c, rejected_by=None)
+                return dataclasses.replace(result, candidates=tuple(held if k is c else k
+                                                                    for k in result.candidates)), held
+        state[0] = -1
+        return result, None
+
+    def _landed(self, t: float) -> bool:
+        """The 3D flight's last point, within ``LANDED_RECENT`` s, lay near the floor."""
+        last = self._last_point
+        return (last is not None and t - last[0] <= LANDED_RECENT
+                and last[1] <= self.params.stereo.landed_max_height)
+
+    def _limit_alone(self, res_left: CameraResult, res_right: CameraResult, has_point: bool
+                     ) -> tuple[CameraResult, CameraResult]:
+        """Withhold a camera's report the other camera has not confirmed (``stereo.alone_limit``).
+
+        On the NYCU rallies most detections reported by one camera while the other reports
+        nothing and no 3D point exists are not the shuttle (the labels say none is in view): a
+        shuttle held or lying still, a racket, a white shoe, which one camera's association
+        followed on its own. A real shuttle seen by one camera only is mostly a flight the other
+        camera lost (out of its view, behind a player), and then this camera's readout runs on
+        from frames that had a 3D point. So a one-camera report is kept when this camera's
+        readout has continued, with no break longer than ``alone_anchor_gap`` frames, since a
+        frame with a 3D point; otherwise at most ``alone_max_frames`` such reports in a row are
+        kept. Only the readout changes (the detection is marked ``REJECT_STEREO``): the
+        association, the flight and the look-ahead's tracklets are left as they were.
+        """
+        sp = self.params.stereo
+        results = [res_left, res_right]
+        present = [r.detection is not None for r in results]
+        for cam in (0, 1):
+            state = self._alone[cam]
+            if present[cam] and self._held_now[cam]:
+                # A landed shuttle held on (``_hold_landed``) is reported, but no flight goes on:
+                # what this camera reports after it does not continue the stereo readout, and
+                # the other camera's report beside it is a report alone.
+                state[0] = 0
+                state[1] += 1
+                if state[1] > sp.alone_anchor_gap:
+                    state[2] = False
+                continue
+            if not present[cam]:
+                state[0] = 0
+                state[1] += 1
+                if state[1] > sp.alone_anchor_gap:
+                    state[2] = False
+                continue
+            state[1] = 0
+            if has_point:
+                state[0], state[2] = 0, True
+            elif present[1 - cam] and not self._held_now[1 - cam]:
+                state[0] = 0
+            else:
+                state[0] += 1
+                if sp.alone_limit and not state[2] and state[0] > sp.alone_max_frames:
+                    det = results[cam].detection
+                    results[cam] = dataclasses.replace(
+                        results[cam], detection=None,
+                        candidates=tuple(dataclasses.replace(c, rejected_by=REJECT_STEREO) if c is det else c
+                                         for c in results[cam].candidates))
+        return results[0], results[1]
 
     def _vouch(self, res_left: CameraResult, res_right: CameraResult
                ) -> tuple[CameraResult, CameraResult]:

@@ -1,0 +1,121 @@
+"""A detection only one camera reports is withheld unless it continues a stereo readout
+(``stereo.alone_limit``, ``alone_max_frames``, ``alone_anchor_gap``).
+
+Sequences of per-frame readouts go through the tracker's last readout step: a camera that
+starts reporting on its own (a shuttle held before the serve, a shoe) is withheld after
+``alone_max_frames`` frames; one whose readout continues a frame with a 3D point (the other
+camera lost the flight) is kept, across gaps up to ``alone_anchor_gap`` frames but not longer;
+both cameras reporting without a 3D point is not "alone"; the flag off changes nothing.
+"""
+
+import dataclasses
+
+import pytest
+
+from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.tracker import StereoTracker
+from badminton_gui.core.types import REJECT_STEREO, CameraResult, Candidate
+from badminton_gui.io.demo_scene import make_rig
+
+
+def _result(seen: bool) -> CameraResult:
+    if not seen:
+        return CameraResult(None, (), image_size=(1280, 720))
+    c = Candidate(600.0, 300.0, 30.0, 6.0, 200.0, 20.0, 1.0, 3.0, None, tracklet=7)
+    return CameraResult(c, (c,), image_size=(1280, 720))
+
+
+def _tracker(**stereo) -> StereoTracker:
+    p = TrackerParams()
+    p = dataclasses.replace(p, stereo=dataclasses.replace(p.stereo, **stereo))
+    return StereoTracker(make_rig("binocular", (1280, 720)), p, parallel=False)
+
+
+def _run(tracker: StereoTracker, frames: str) -> str:
+    """``frames``: per frame L (left only), R (right only), B (both, no 3D point), 3 (both with
+    a 3D point), P (right only, with the flight's 3D point), . (neither). Returns per frame what
+    the readout shows: L, R, B or ."""
+    out = []
+    for f in frames:
+        left, right = _result(f in "LB3"), _result(f in "RB3P")
+        left, right = tracker._limit_alone(left, right, f in "3P")
+        shown = (left.detection is not None, right.detection is not None)
+        out.append({(True, True): "B", (True, False): "L", (False, True): "R", (False, False): "."}[shown])
+        for res in (left, right):
+            if res.detection is None and res.candidates:
+                assert res.candidates[0].rejected_by == REJECT_STEREO
+    tracker.close()
+    return "".join(out)
+
+
+def test_a_camera_starting_on_its_own_is_withheld_after_the_allowed_frames():
+    assert _run(_tracker(alone_max_frames=0), "..LLLL..RRR.") == "............"
+    assert _run(_tracker(alone_max_frames=2), "..LLLL..RRR.") == "..LL....RR.."
+
+
+def test_a_readout_continuing_a_3d_point_is_kept_across_short_gaps_only():
+    t = _tracker(alone_max_frames=0, alone_anchor_gap=3)
+    assert _run(t, "333LLL..LL....LL") == "BBBLLL..LL......"
+    # both cameras without a 3D point keep the anchor, and are never withheld
+    assert _run(_tracker(alone_max_frames=0), "33BBRRBB") == "BBBBRRBB"
+    # a 3D point while this camera reported nothing does not anchor it
+    assert _run(_tracker(alone_max_frames=0), "PPPLLRR") == "RRR..RR"
+
+
+def test_off_by_the_flag():
+    assert _run(_tracker(alone_limit=False, alone_max_frames=0), "..LLLL..RRR.") == "..LLLL..RRR."
+
+
+@pytest.mark.parametrize("frames", ["LLLBLLL", "RRR.RRR"])
+def test_the_count_restarts_when_the_camera_is_not_alone(frames):
+    assert _run(_tracker(alone_max_frames=3), frames) == frames
+    assert _run(_tracker(alone_max_frames=2), frames) == frames[:2] + "." + frames[3:6] + "."
+
+
+# ---- stereo.landed_frames ---------------------------------------------------------------------
+
+def _cand(x, rejected=None):
+    return Candidate(float(x), 500.0, 30.0, 6.0, 200.0, 20.0, 1.0, 0.5, rejected, tracklet=4)
+
+
+def _hold(tracker, xs, last_z=0.0, t0=1.0, dt=0.01, paired=True):
+    """The first x is reported by the detector; the others are the same track's candidate held
+    back by the association. Returns the x reported per frame (None: nothing)."""
+    out = []
+    for k, x in enumerate(xs):
+        t = t0 + k * dt
+        if k == 0:
+            tracker._last_point = (t, last_z)
+            c = _cand(x)
+            res, det = tracker._hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, t)
+            tracker._held[0][4] = paired        # that report had a 3D point (set by process())
+        else:
+            c = _cand(x, "motion")
+            res, det = tracker._hold_landed(0, CameraResult(None, (c,), image_size=(1280, 720)), None, t)
+            if det is not None:
+                assert det.rejected_by is None and det in res.candidates
+        out.append(None if det is None else det.x)
+    tracker.close()
+    return out
+
+
+def test_a_landed_shuttle_is_held_while_it_stays_put_for_the_allowed_frames():
+    xs = [100, 101, 101, 102, 102, 102]
+    assert _hold(_tracker(landed_frames=3), xs) == [100, 101, 101, 102, None, None]
+    assert _hold(_tracker(landed_frames=0), xs) == [100, None, None, None, None, None]
+
+
+def test_no_hold_above_the_floor_when_the_flight_is_old_or_the_candidate_moves_off():
+    xs = [100, 101, 101]
+    assert _hold(_tracker(landed_frames=10), xs, last_z=1.2) == [100, None, None]
+    # a track reported without a 3D point (clutter after the rally) is not held
+    assert _hold(_tracker(landed_frames=10), xs, paired=False) == [100, None, None]
+    t = _tracker(landed_frames=10)
+    t._last_point = (-5.0, 0.0)
+    c = _cand(100)
+    t._hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, 0.0)
+    t._held[0][4] = True
+    m = _cand(101, "motion")
+    assert t._hold_landed(0, CameraResult(None, (m,), image_size=(1280, 720)), None, 0.01)[1] is None
+    t.close()
+    assert _hold(_tracker(landed_frames=10), [100, 101, 120, 121]) == [100, 101, None, None]
