@@ -134,7 +134,7 @@ class ContourLengthParams(ParamGroup):
     # A shuttle touching a racket, an arm or a lit line's ghost merges with it into one blob: the
     # shuttle is the part of it that brightened since the previous frame (it moves ≥ its own size
     # a frame; a ghost or a slow arm does not), split off as a candidate of its own.
-    split_min_length: float = param(40.0, 0.0, 5000.0, step=5.0, unit="px", label="Split blobs from length",
+    split_min_length: float = param(0.0, 0.0, 5000.0, step=5.0, unit="px", label="Split blobs from length",
                                     help="Blobs at least this long (px at 1280 px width, scaled) also give "
                                          "candidates from their compact parts that brightened since the previous "
                                          "frame (a shuttle merged with a racket or an arm); 0 = off")
