@@ -514,3 +514,29 @@ def test_a_shuttle_merged_with_a_wide_blob_is_split_off_it(split):
         assert all(found)
     else:
         assert not any(found)      # lost inside the merged blob
+
+
+@pytest.mark.parametrize("max_misses", [0, 50])
+def test_no_split_around_a_track_that_lost_its_blob(max_misses):
+    """A track whose blob has been missing for frames (the shuttle hidden behind a player) has a
+    grown gate, in which a player's brightening hand or racket would be split off and taken for
+    it: the split waits for a track seen in the previous frame (``split_max_misses``)."""
+    frames, truth = _flight_across_a_wide_blob()
+    hidden = range(26, 30)       # the dot is not drawn just before it reaches the patch
+    rng = np.random.default_rng(11)
+    for i in hidden:
+        img = _noisy_frame(rng, 30, (360, 640))
+        x0 = 290 + (i - 20)
+        cv2.rectangle(img, (x0, 168), (x0 + 70, 200), (150, 150, 150), -1)
+        frames[i] = img
+    det = CameraDetector(_params(contour_length__split_min_length=100.0,
+                                 contour_length__split_max_misses=max_misses))
+    splits = []
+    for i, img in enumerate(frames):
+        det.process(img, i / FPS, keep_mask=False)
+        if 30 <= i <= 41:
+            splits.append(det.last_split)
+    if max_misses == 0:
+        assert not any(splits)
+    else:
+        assert any(splits)

@@ -374,7 +374,9 @@ class CameraDetector:
         since the previous frame (processing scale) hold it: each compact group of them (grown
         by a pixel like the mask, and within filters 1 and 2) inside the followed tracklet's
         gate becomes a candidate of its own, measured on its own pixels. Whole frames only (a
-        window has no previous frame here).
+        window has no previous frame here), and only around a track seen lately
+        (``split_max_misses``): the grown gate of one that lost its blob behind a player holds
+        the player's brightening hand or racket, split off in both cameras alike.
         """
         cl = self.params.contour_length
         prev, self._previous_gray = self._previous_gray, None
@@ -389,6 +391,11 @@ class CameraDetector:
         # elsewhere a moving hand or racket edge split off a player would start tracks of its own.
         followed = self._associator._followed()
         if followed is None or not followed.velocity_known:
+            return None
+        if followed.misses > cl.split_max_misses:
+            # A track that lost its blob a while ago: its gate has grown, and what brightens
+            # in it then is more often a player's hand or racket than the shuttle (hidden
+            # behind the player).
             return None
         px, py = followed.predict(t)
         radius = self._associator.gate(followed, max(t - followed.t, 1e-3))
