@@ -376,7 +376,7 @@ class CameraDetector:
         gate becomes a candidate of its own, measured on its own pixels. Whole frames only (a
         window has no previous frame here), and only around a track seen lately
         (``split_max_misses``): the grown gate of one that lost its blob behind a player holds
-        the player's brightening hand or racket, split off in both cameras alike.
+        brightening parts of the player, split off in both cameras alike.
         """
         cl = self.params.contour_length
         prev, self._previous_gray = self._previous_gray, None
@@ -394,7 +394,7 @@ class CameraDetector:
             return None
         if followed.misses > cl.split_max_misses:
             # A track that lost its blob a while ago: its gate has grown, and what brightens
-            # in it then is more often a player's hand or racket than the shuttle (hidden
+            # in it then is more often part of a player than the shuttle (hidden
             # behind the player).
             return None
         px, py = followed.predict(t)
