@@ -408,3 +408,135 @@ def test_in_a_blind_spot_the_followed_track_coasts_rather_than_take_a_far_blob(b
     b.select(ident_b)
     (hit_b, _, _), = b.update(t, hand, np.array([0.1]), blind=lambda x, y: False)
     assert hit_b == ident_b
+
+
+def test_a_shuttle_clipped_by_the_edge_it_leaves_is_not_reported():
+    """Leaving the image, the visible part of a clipped shuttle keeps its bright centroid inside
+    the frame after the cork has gone: a detection near the edge its track moves towards, whose
+    blob lost a good part of its usual area, is dropped (``colour.edge_exit``)."""
+    frames, corks = _shuttle_flight(n=86)      # x = 80 + 7 i: the cork leaves at i ≈ 80
+    runs = {}
+    for edge_exit in (0.0, 12.0):
+        det = CameraDetector(_params(colour__head_lead=0.0, colour__edge_exit=edge_exit))
+        runs[edge_exit] = [det.process(img, i / FPS, keep_mask=False).detection for i, img in enumerate(frames)]
+    # (a cork half a pixel out, with most of the shuttle in view, may still be reported)
+    outside = [i for i, d in enumerate(runs[0.0]) if d is not None and corks[i][0] > 642]
+    assert outside                                   # without it: reported while the cork is out
+    for i, d in enumerate(runs[12.0]):
+        assert d is None or corks[i][0] <= 642
+    # Only the frames at the edge change.
+    changed = [i for i, (a, b) in enumerate(zip(runs[0.0], runs[12.0])) if (a is None) != (b is None)]
+    assert changed and all(corks[i][0] >= 625 for i in changed)
+
+
+def test_leaving_edge_needs_the_motion_towards_that_edge():
+    from badminton_gui.core.detector import _leaving_edge
+    assert _leaving_edge(1.0, 100.0, (-50.0, 0.0), 640, 360, 2.0)
+    assert not _leaving_edge(1.0, 100.0, (50.0, 0.0), 640, 360, 2.0)      # coming in
+    assert not _leaving_edge(5.0, 100.0, (-50.0, 0.0), 640, 360, 2.0)     # not near it
+    assert _leaving_edge(300.0, 358.0, (0.0, 20.0), 640, 360, 2.0)        # the bottom edge
+    assert _leaving_edge(638.0, 100.0, (10.0, 0.0), 640, 360, 2.0)        # the right edge
+
+
+def _small_dot_flight(n=60, small=range(30, 34)):
+    """A dot flying right; in the ``small`` frames it shrinks to 2 × 2 px (a far, edge-on
+    shuttle: a 3 × 3 blob of the half-scale mask, shorter than the contour-length minimum).
+    A static 2 × 2 dot far from the path is there in those frames too."""
+    rng = np.random.default_rng(7)
+    frames, truth = [], []
+    for i in range(n):
+        img = _noisy_frame(rng, 30, (360, 640))
+        x, y = 60.0 + 8.0 * i, 180.0
+        xi, yi = int(round(x)), int(round(y))
+        if i in small:
+            img[yi:yi + 2, xi:xi + 2] = 240
+            img[300:302, 100:102] = 240
+        else:
+            cv2.circle(img, (xi, yi), 3, (240, 240, 240), -1)
+        frames.append(img)
+        truth.append((xi + 0.5 if i in small else xi, yi + 0.5 if i in small else yi))
+    return frames, truth
+
+
+def test_a_short_blob_passes_filter_1_only_where_the_followed_shuttle_is_predicted():
+    frames, truth = _small_dot_flight()
+    small = range(30, 34)
+    found = {}
+    for guided in (0.0, 14.0):
+        det = CameraDetector(_params(contour_length__guided_min_length=guided))
+        hits = []
+        for i, img in enumerate(frames):
+            res = det.process(img, i / FPS, keep_mask=False)
+            if i in small:
+                d = res.detection
+                hits.append(d is not None and math.hypot(d.x - truth[i][0], d.y - truth[i][1]) <= 3)
+                # The static dot far from the path stays rejected by filter 1.
+                far = [c for c in res.candidates if math.hypot(c.x - 100.5, c.y - 300.5) <= 3]
+                assert far and all(c.rejected_by == "length" for c in far)
+        found[guided] = hits
+    assert not any(found[0.0])
+    assert all(found[14.0])
+
+
+def _flight_across_a_wide_blob(n=50):
+    """A dot flying right at 8 px a frame crosses a wide grey patch that appeared just before
+    (in the mask, too wide for filter 2: the shuttle merges with it, as with an arm or a racket
+    head, frames ~29–41)."""
+    rng = np.random.default_rng(11)
+    frames, truth = [], []
+    for i in range(n):
+        img = _noisy_frame(rng, 30, (360, 640))
+        if i >= 20:
+            x0 = 290 + (i - 20)      # creeping: it stays in the mask
+            cv2.rectangle(img, (x0, 168), (x0 + 70, 200), (150, 150, 150), -1)
+        x, y = 60 + 8 * i, 180
+        cv2.circle(img, (x, y), 3, (250, 250, 250), -1)
+        frames.append(img)
+        truth.append((x, y))
+    return frames, truth
+
+
+@pytest.mark.parametrize("split", [0.0, 100.0])
+def test_a_shuttle_merged_with_a_wide_blob_is_split_off_it(split):
+    """The part of a long blob that brightened since the previous frame, near the followed
+    shuttle's prediction, is a candidate of its own (``contour_length.split_min_length``)."""
+    frames, truth = _flight_across_a_wide_blob()
+    det = CameraDetector(_params(contour_length__split_min_length=split))
+    merged = range(30, 41)
+    found = []
+    for i, img in enumerate(frames):
+        res = det.process(img, i / FPS, keep_mask=False)
+        if i in merged:
+            d = res.detection
+            found.append(d is not None and math.hypot(d.x - truth[i][0], d.y - truth[i][1]) <= 6)
+            assert (det.last_split > 0) == (split > 0)
+    if split > 0:
+        assert all(found)
+    else:
+        assert not any(found)      # lost inside the merged blob
+
+
+@pytest.mark.parametrize("max_misses", [0, 50])
+def test_no_split_around_a_track_that_lost_its_blob(max_misses):
+    """A track whose blob has been missing for frames (the shuttle hidden behind a player) has a
+    grown gate, in which a player's brightening hand or racket would be split off and taken for
+    it: the split waits for a track seen in the previous frame (``split_max_misses``)."""
+    frames, truth = _flight_across_a_wide_blob()
+    hidden = range(26, 30)       # the dot is not drawn just before it reaches the patch
+    rng = np.random.default_rng(11)
+    for i in hidden:
+        img = _noisy_frame(rng, 30, (360, 640))
+        x0 = 290 + (i - 20)
+        cv2.rectangle(img, (x0, 168), (x0 + 70, 200), (150, 150, 150), -1)
+        frames[i] = img
+    det = CameraDetector(_params(contour_length__split_min_length=100.0,
+                                 contour_length__split_max_misses=max_misses))
+    splits = []
+    for i, img in enumerate(frames):
+        det.process(img, i / FPS, keep_mask=False)
+        if 30 <= i <= 41:
+            splits.append(det.last_split)
+    if max_misses == 0:
+        assert not any(splits)
+    else:
+        assert any(splits)

@@ -3,12 +3,15 @@
 A smaller sample than the benchmark (``benchmarks/demo_accuracy.py`` runs 1000 frames × 3 seeds
 at 1280×720) to keep the suite fast: seed 3, 400 frames, whose serve passes within 6 m of the
 rig. Issue 2 asks for 2D accuracy ≥ 99 % per camera and a 3D RMS ≤ 1 cm within 6 m. The 3D
-bound is asserted as the issue states it (measured 0.41 cm over 25 points: the reported point is
-the flight filter's, weighing each triangulation by its stereo noise shape; 0.83 cm unfiltered). The 2D bound is not met yet on the benchmark (the
-remaining misses: a shuttle merged with the player's blob around a hit, flights the candidate
+bound is asserted as the issue states it (measured 0.56 cm over 26 points: the reported point is
+the flight filter's, weighing each triangulation by its stereo noise shape; 0.83 cm unfiltered). The 2D bound is met on the benchmark, only just
+(99.40 / 99.00 % online); on this sample it is not (the remaining misses: a shuttle merged with the player's blob around a hit, flights the candidate
 classifier scores low, a flight's first frames before confirmation), so the test holds the level
-reached on this sample instead of 99 %: accuracy ≥ 95 % per camera (measured 98.0 % / 97.5 %)
-and precision ≥ 98 % (measured 98.6 % / 98.9 %). The few detections the truth calls false here
+reached on this sample instead of 99 %: accuracy ≥ 95 % per camera (measured 98.5 % / 98.25 %)
+and precision ≥ 98 % (measured 98.9 % / 99.2 %). The precision floor also guards the split of
+merged blobs (``contour_length.split_min_length``): split around a track that had lost its blob
+behind the player (``split_max_misses`` unbounded), the player's hand was split off in both
+cameras and reported in frames 316–319 (right precision 97.85 %). The few detections the truth calls false here
 are a shuttle the truth calls hidden because its cork is behind a player's head or body while
 part of its skirt still shows, found by the guided look at the flight's projection (frames
 310, 315, 325, 326), and right frame 320, where the flight's projection stands in for a

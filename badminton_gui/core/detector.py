@@ -60,6 +60,8 @@ _GROW = np.ones((3, 3), np.uint8)
 # px: a held-back candidate's track must have moved at least this in its last step for the other
 # camera to vouch for it (``vouchable``): its smoothed velocity remembers older motion.
 VOUCH_MIN_STEP = 1.0
+# Frames of a tracklet's blob areas remembered for ``colour.edge_exit``.
+EDGE_AREA_FRAMES = 8
 # Appearance features measured in the full-resolution window (order matters: the classifier).
 APPEARANCE_NAMES = ("contrast", "background", "log_bright_area", "spill", "whiteness",
                     "saturation", "log_mask_area", "peak_saturation", "window_std")
@@ -77,6 +79,7 @@ class CameraDetector:
         self._associator = TrackletAssociator(self.params.motion, self.params.association)
         self._tracklet_of: dict[int, int] = {}   # id(candidate) → tracklet ident, this frame
         self._widths: dict[int, deque] = {}      # tracklet ident → its blobs' recent short sides
+        self._areas: dict[int, deque] = {}       # tracklet ident → its blobs' recent areas (edge_exit)
         self.last_features: list = []   # (x, y, features, rejected_by) of the last frame's blobs
         self._classifier = None
         self._load_classifier()
@@ -88,6 +91,8 @@ class CameraDetector:
         self._large_boxes = np.zeros((0, 4), np.int64)   # full-res boxes of blobs too large (filters 1, 2)
         self._window = WindowTracker(self.params)   # windowed tracking (``window.enabled``)
         self._planned: tuple[float, tuple[int, int, int, int] | None] | None = None   # plan_window
+        self._previous_gray: np.ndarray | None = None   # last whole frame's grey image (split_min_length)
+        self.last_split = 0   # candidates split off merged blobs in the last frame
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -104,6 +109,8 @@ class CameraDetector:
         self._associator.reset()
         self._tracklet_of = {}
         self._widths = {}
+        self._areas = {}
+        self._previous_gray = None
         self._previous_positions = np.zeros((0, 2))
 
     @property
@@ -185,6 +192,15 @@ class CameraDetector:
                      & (length_all <= p.contour_length.max_length))
         short_ok = ((p.tilted_rect.min_short_side <= short_all)
                     & (short_all <= p.tilted_rect.max_short_side))
+        cl = p.contour_length
+        if 0 < cl.guided_min_length < cl.min_length and len(contours):
+            # Guided exception to filter 1: a short blob where the followed shuttle is predicted.
+            followed = self._associator._followed()
+            if followed is not None and followed.velocity_known:
+                px, py = followed.predict(t)
+                short = (cl.guided_min_length <= length_all) & (length_all < cl.min_length)
+                near = np.hypot((bx + bw / 2) * sx - px, (by + bh / 2) * sy - py) <= cl.guided_radius * w / 1280.0
+                length_ok = length_ok | (short & near)
         passed = length_ok & short_ok
         # Blobs too large for a shuttle (a player, a racket and what touches them): a shuttle
         # merged into one cannot be told apart (``is_merged``).
@@ -247,9 +263,19 @@ class CameraDetector:
         # Filter 3 and the appearance features of all the frame's blobs at once; the
         # classifier then scores them in one call too.
         measured = []
-        features = np.empty((len(geometric), len(FEATURE_NAMES)))
         pos_x, pos_y, whiteness_all, saturation_all, appearance_all = measure_blobs(
             frame_bgr, mask, [g[4] for g in geometric], sx, sy, p.colour.head_fraction)
+        split = self._split_merged(gray, mask, contours, length_all, t, w, sx, sy, windowed is None)
+        self.last_split = len(split[1]) if split is not None else 0
+        if split is not None:
+            # Parts split off merged blobs, measured on their own pixels (``_split_merged``).
+            core_mask, parts = split
+            more = measure_blobs(frame_bgr, core_mask, [g[4] for g in parts], sx, sy, p.colour.head_fraction)
+            pos_x, pos_y, whiteness_all, saturation_all, appearance_all = (
+                np.concatenate([a, b]) for a, b in zip(
+                    (pos_x, pos_y, whiteness_all, saturation_all, appearance_all), more))
+            geometric = geometric + parts
+        features = np.empty((len(geometric), len(FEATURE_NAMES)))
         features[:, 4:] = appearance_all
         for row, ((_, length, short_side, area, _box), x, y, whiteness, saturation, contrast) in enumerate(zip(
                 geometric, pos_x.tolist(), pos_y.tolist(), whiteness_all.tolist(),
@@ -288,6 +314,7 @@ class CameraDetector:
         links = self._associator.update(t, positions, qualities, blind)
         self._tracklet_of = {}
         width_frames = int(p.colour.head_lead_width_frames)
+        edge_exit = p.colour.edge_exit > 0
         k = 0
         for m in measured:
             x, y, length, short_side, whiteness, area, quality, reason, _ = m
@@ -308,10 +335,18 @@ class CameraDetector:
                     if widths is None or widths.maxlen != width_frames:
                         widths = self._widths[ident] = deque(widths or (), maxlen=width_frames)
                     widths.append(short_side)
+                if edge_exit:
+                    areas = self._areas.get(ident)
+                    if areas is None:
+                        areas = self._areas[ident] = deque(maxlen=EDGE_AREA_FRAMES)
+                    areas.append(area)
             candidates.append(c)
         if width_frames > 1 and len(self._widths) > 2 * len(self._associator.tracklets) + 16:
             alive = {tr.ident for tr in self._associator.tracklets}
             self._widths = {k: v for k, v in self._widths.items() if k in alive}
+        if edge_exit and len(self._areas) > 2 * len(self._associator.tracklets) + 16:
+            alive = {tr.ident for tr in self._associator.tracklets}
+            self._areas = {k: v for k, v in self._areas.items() if k in alive}
         # The followed shuttle crossing a light or a white line leaves no blob: its track's
         # prediction stands in (flagged, never triangulated) until it shows again.
         coast = self._associator.coasting(t, blind)
@@ -326,6 +361,84 @@ class CameraDetector:
                             mask=mask if keep_mask else None,
                             mask_scale=mask.shape[1] / w, image_size=(w, h),
                             window=None if window is None else tuple(int(v) for v in window))
+
+    def _split_merged(self, gray: np.ndarray, mask: np.ndarray, contours, length_all: np.ndarray,
+                      t: float, w: int, sx: float, sy: float, whole: bool):
+        """(mask of the parts, parts as (index, length, short side, area, box)) split off the
+        frame's long blobs (``contour_length.split_min_length``), or None.
+
+        A shuttle touching a racket, an arm, or the ghost a racket leaves on a lit line merges
+        with it into one blob that filters 1 and 2 reject or that scores as a poor shuttle; the
+        tracker then loses the shuttle or follows the racket. The shuttle moves by about its
+        own size a frame, so the pixels of a long blob that brightened by ``split_threshold``
+        since the previous frame (processing scale) hold it: each compact group of them (grown
+        by a pixel like the mask, and within filters 1 and 2) inside the followed tracklet's
+        gate becomes a candidate of its own, measured on its own pixels. Whole frames only (a
+        window has no previous frame here), and only around a track seen lately
+        (``split_max_misses``): the grown gate of one that lost its blob behind a player holds
+        brightening parts of the player, split off in both cameras alike.
+        """
+        cl = self.params.contour_length
+        prev, self._previous_gray = self._previous_gray, None
+        if cl.split_min_length <= 0:
+            return None
+        if not whole:
+            return None
+        self._previous_gray = gray.copy()
+        if prev is None or prev.shape != gray.shape:
+            return None
+        # Only where the followed shuttle may be (its tracklet's gate around its prediction):
+        # elsewhere a moving hand or racket edge split off a player would start tracks of its own.
+        followed = self._associator._followed()
+        if followed is None or not followed.velocity_known:
+            return None
+        if followed.misses > cl.split_max_misses:
+            # A track that lost its blob a while ago: its gate has grown, and what brightens
+            # in it then is more often part of a player than the shuttle (hidden
+            # behind the player).
+            return None
+        px, py = followed.predict(t)
+        radius = self._associator.gate(followed, max(t - followed.t, 1e-3))
+        big = np.flatnonzero(length_all >= cl.split_min_length * w / 1280.0)
+        if not len(big):
+            return None
+        s_mean = 0.5 * (sx + sy)
+        tr = self.params.tilted_rect
+        core_mask = None
+        parts = []
+        h_m, w_m = mask.shape[:2]
+        for k in big.tolist():
+            x0, y0, bw, bh = cv2.boundingRect(contours[k])
+            if not (x0 * sx - radius <= px <= (x0 + bw) * sx + radius
+                    and y0 * sy - radius <= py <= (y0 + bh) * sy + radius):
+                continue
+            blob = np.zeros((bh, bw), np.uint8)
+            cv2.drawContours(blob, contours, k, 255, -1, offset=(-x0, -y0))
+            rise = cv2.subtract(gray[y0:y0 + bh, x0:x0 + bw], prev[y0:y0 + bh, x0:x0 + bw])
+            core = cv2.compare(rise, float(cl.split_threshold), cv2.CMP_GT)
+            cv2.bitwise_and(core, blob, dst=core)
+            if not cv2.countNonZero(core):
+                continue
+            core = cv2.dilate(core, _GROW)
+            cv2.bitwise_and(core, blob, dst=core)
+            found, _ = cv2.findContours(core, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+            for c in found:
+                length = cv2.arcLength(c, True) * s_mean
+                short_side = min(cv2.minAreaRect(c)[1]) * s_mean
+                if not (cl.min_length <= length <= min(cl.max_length, 0.5 * length_all[k])
+                        and tr.min_short_side <= short_side <= tr.max_short_side):
+                    continue
+                cx, cy, cw, ch = cv2.boundingRect(c)
+                if math.hypot((x0 + cx + cw / 2) * sx - px, (y0 + cy + ch / 2) * sy - py) > radius:
+                    continue
+                if core_mask is None:
+                    core_mask = np.zeros((h_m, w_m), np.uint8)
+                cv2.drawContours(core_mask, [c], 0, 255, -1, offset=(x0, y0))
+                box = _scaled_boxes(np.array([[cx + x0, cy + y0, cw, ch]], dtype=float), sx, sy)[0]
+                parts.append((k, length, short_side, cv2.contourArea(c) * sx * sy, tuple(box.tolist())))
+        if not parts:
+            return None
+        return core_mask, parts
 
     def _model_grey(self, frame_bgr: np.ndarray, scale: float) -> np.ndarray:
         """The grey image the background model reads: the frame at ``scale`` (INTER_AREA).
@@ -433,6 +546,18 @@ class CameraDetector:
                 return (tr.vx, tr.vy) if tr.velocity_known else None
         return None
 
+    def _velocity_of(self, ident: int | None) -> tuple[float, float] | None:
+        """Image velocity (px/s) of the tracklet ``ident`` (or of the followed one's ghost)."""
+        if ident is None:
+            return None
+        for tr in self._associator.tracklets:
+            if tr.ident == ident:
+                return (tr.vx, tr.vy) if tr.velocity_known else None
+        ghost = self._associator._followed()
+        if ghost is not None and ghost.ident == ident and ghost.velocity_known:
+            return ghost.vx, ghost.vy
+        return None
+
     def lead_to_head(self, result: CameraResult, chosen: Candidate | None
                      ) -> tuple[CameraResult, Candidate | None]:
         """Move a moving detection forward along its tracklet to the cork (``colour.head_lead``).
@@ -446,28 +571,50 @@ class CameraDetector:
         out of the image.
         """
         c = self.params.colour
-        if (chosen is None or c.head_lead <= 0 or chosen.predicted
+        w, h = result.image_size
+        if chosen is not None and chosen.predicted:
+            # A coasting prediction (no blob) at the edge its track leaves through: the blob is
+            # missing because the shuttle has left the image, not because it is hidden.
+            ident = self._tracklet_of.get(id(chosen), chosen.tracklet if chosen.tracklet >= 0 else None)
+            velocity = self._velocity_of(ident)
+            if (c.edge_exit > 0 and w > 0 and velocity is not None
+                    and _leaving_edge(chosen.x, chosen.y, velocity, w, h, c.edge_exit * w / 1280.0)):
+                return result, None
+            return result, chosen
+        if (chosen is None or (c.head_lead <= 0 and c.edge_exit <= 0)
                 or not math.isfinite(chosen.short_side)):
             return result, chosen
         velocity = self.tracklet_velocity(chosen)
         if velocity is None:
             return result, chosen
+        moved = chosen
         speed = math.hypot(*velocity)
-        if speed < c.head_lead_min_speed:
+        if c.head_lead > 0 and speed >= c.head_lead_min_speed:
+            width = chosen.short_side
+            widths = self._widths.get(self._tracklet_of.get(id(chosen)))
+            if c.head_lead_width_frames > 1 and widths:
+                # A shuttle merged with a racket or an arm: the blob is wider than the shuttle,
+                # whose own width shows in the tracklet's recent frames.
+                width = min(width, min(widths))
+            lead = c.head_lead * width / speed
+            moved = dataclasses.replace(chosen, x=chosen.x + lead * velocity[0],
+                                        y=chosen.y + lead * velocity[1])
+            if w > 0 and not (-0.5 <= moved.x < w - 0.5 and -0.5 <= moved.y < h - 0.5):
+                # The cork has left the image (only the skirt's end still shows at the border):
+                # no point inside the frame is the shuttle's, and none outside it can be reported.
+                return result, None
+        if (c.edge_exit > 0 and w > 0
+                and _leaving_edge(moved.x, moved.y, velocity, w, h, c.edge_exit * w / 1280.0)):
+            # A shuttle clipped by the edge it is leaving through: its visible part's bright
+            # centroid stays inside while the cork is already out (``colour.edge_exit``). The
+            # cork leads, so it is out once the blob has lost a good part of its usual area.
+            areas = self._areas.get(self._tracklet_of.get(id(chosen)))
+            if areas is not None and len(areas) >= 3:
+                usual = float(np.median(list(areas)[:-1]))
+                if chosen.area < c.edge_exit_area * usual:
+                    return result, None
+        if moved is chosen:
             return result, chosen
-        width = chosen.short_side
-        widths = self._widths.get(self._tracklet_of.get(id(chosen)))
-        if c.head_lead_width_frames > 1 and widths:
-            # A shuttle merged with a racket or an arm: the blob is wider than the shuttle,
-            # whose own width shows in the tracklet's recent frames.
-            width = min(width, min(widths))
-        lead = c.head_lead * width / speed
-        moved = dataclasses.replace(chosen, x=chosen.x + lead * velocity[0], y=chosen.y + lead * velocity[1])
-        w, h = result.image_size
-        if w > 0 and not (-0.5 <= moved.x < w - 0.5 and -0.5 <= moved.y < h - 0.5):
-            # The cork has left the image (only the skirt's end still shows at the border): no
-            # point inside the frame is the shuttle's, and none outside it can be reported.
-            return result, None
         ident = self._tracklet_of.get(id(chosen))
         if ident is not None:
             self._tracklet_of[id(moved)] = ident
@@ -530,6 +677,15 @@ class CameraDetector:
         """(x, y, whiteness, saturation, appearance features) of one blob (see ``measure_blobs``)."""
         x, y, whiteness, saturation, features = measure_blobs(frame, mask, [box], sx, sy, head_fraction)
         return float(x[0]), float(y[0]), float(whiteness[0]), float(saturation[0]), features[0]
+
+
+def _leaving_edge(x: float, y: float, velocity: tuple[float, float], w: int, h: int,
+                  margin: float) -> bool:
+    """True when (x, y) lies within ``margin`` px of an image edge that ``velocity`` moves
+    towards (pixel centres are integers: the image spans -0.5 … w - 0.5)."""
+    vx, vy = velocity
+    return ((vx < 0 and x + 0.5 < margin) or (vx > 0 and w - 0.5 - x < margin)
+            or (vy < 0 and y + 0.5 < margin) or (vy > 0 and h - 0.5 - y < margin))
 
 
 def model_scale(background, width: int) -> float:

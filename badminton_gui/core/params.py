@@ -121,6 +121,35 @@ class ContourLengthParams(ParamGroup):
     TITLE: ClassVar[str] = "Contour length"
     min_length: float = param(20.0, 0.0, 2000.0, step=1.0, unit="px", label="Minimum length")
     max_length: float = param(250.0, 1.0, 5000.0, step=5.0, unit="px", label="Maximum length")
+    # A shuttle far from the camera, or edge-on, makes a blob of 3 × 3 mask pixels (16 px long at
+    # the demo court's half-scale model) in a frame or two of its flight: too short for the
+    # minimum, which keeps the noise out, but where the followed shuttle is predicted it is the
+    # shuttle far more often than noise.
+    guided_min_length: float = param(14.0, 0.0, 2000.0, step=1.0, unit="px", label="... near the followed shuttle",
+                                     help="A blob at least this long (and below the minimum) still passes where "
+                                          "the followed shuttle is predicted (within 'guided radius'); 0 = off")
+    guided_radius: float = param(12.0, 0.0, 200.0, step=1.0, unit="px", label="... guided radius",
+                                 help="Distance from the followed shuttle's predicted position (px at 1280 px "
+                                      "width, scaled with the width) within which the shorter blobs pass")
+    # A shuttle touching a racket, an arm or a lit line's ghost merges with it into one blob: the
+    # shuttle is the part of it that brightened since the previous frame (it moves ≥ its own size
+    # a frame; a ghost or a slow arm does not), split off as a candidate of its own.
+    split_min_length: float = param(40.0, 0.0, 5000.0, step=5.0, unit="px", label="Split blobs from length",
+                                    help="Blobs at least this long (px at 1280 px width, scaled) also give "
+                                         "candidates from their compact parts that brightened since the previous "
+                                         "frame (a shuttle merged with a racket or an arm); 0 = off")
+    split_threshold: float = param(40.0, 1.0, 255.0, step=1.0, label="... brightened by",
+                                   help="Grey levels (at the processing scale) a pixel must have brightened since "
+                                        "the previous frame to belong to a split-off part")
+    # On the demo court (seed 3) a shuttle hidden behind a player for a few frames left its track
+    # coasting with a grown gate, in which brightening parts of the player were split off
+    # in both cameras, paired with each other and reported (8 FP2 in 400 frames). Requiring a
+    # split part to have a candidate of the other camera near its epipolar line instead does not
+    # stop them (they are each other's partners: right precision stays 0.9785), and on top of
+    # this rule it costs 18 / 30 -> 22 / 33 wrong frames L / R on the 3 × 1000-frame benchmark.
+    split_max_misses: int = param(0, 0, 50, step=1, unit="frames", label="... while the track missed at most",
+                                  help="Split only around a followed track that missed its blob in at most this "
+                                       "many of the last frames (0: it was seen in the previous frame)")
 
 
 @dataclass(frozen=True, slots=True)
@@ -167,6 +196,19 @@ class ColourParams(ParamGroup):
                                         help="The width that sets the lead is the smallest of the blob's widths on "
                                              "its tracklet over this many frames (a shuttle merged with a racket "
                                              "or an arm is wider than itself); 1 = this frame's only")
+    # A shuttle leaving the image is clipped by the edge: its visible part's bright centroid stays
+    # 0.3–2.2 px inside while the cork is already 1–5 px outside (demo court: 6 of the 87 online
+    # errors of 3 × 1000 frames were such reports, counted FP2 as the cork is not in the image).
+    # Since main's own border rules (stereo.exit_margin, exit_by_path) landed, 4 px cost more than
+    # it gave there (split on, wrong frames L / R of 3 × 1000: 4 px 18 / 33 — in the right camera
+    # 4 corks still 0–4.4 px inside dropped, 1 FP2 avoided —, 2 px and 0 both 18 / 30).
+    edge_exit: float = param(2.0, 0.0, 20.0, step=0.5, unit="px", label="Head: gone at the edge within",
+                             help="A detection whose track moves towards an image edge and which lies within "
+                                  "this distance of it (px at 1280 px width, scaled with the width) is a clipped "
+                                  "shuttle whose cork has left: nothing is reported (0 = off)")
+    edge_exit_area: float = param(0.6, 0.0, 1.0, step=0.05, label="... when its area is below",
+                                  help="... and its blob's area is below this fraction of the median of its "
+                                       "tracklet's previous blobs' areas (the cork leads: it leaves first)")
 
 
 @dataclass(frozen=True, slots=True)
