@@ -403,9 +403,14 @@ class RefineCalibrationDialog(QDialog):
             return
         self.report = report
         v = self.result_values
-        v["median"].setText(f"{_px(report.before_median_px)} → <b>{_px(report.after_median_px)}</b>")
-        v["p90"].setText(f"{_px(report.before_p90_px)} → <b>{_px(report.after_p90_px)}</b>")
-        v["held"].setText(f"{_px(report.held_back_before_px)} → {_px(report.held_back_after_px)}")
+
+        def change(before: float, after: float, bold: bool = True) -> str:
+            if not math.isfinite(after):
+                return f"{_px(before)} (no refit)"
+            return f"{_px(before)} → <b>{_px(after)}</b>" if bold else f"{_px(before)} → {_px(after)}"
+        v["median"].setText(change(report.before_median_px, report.after_median_px))
+        v["p90"].setText(change(report.before_p90_px, report.after_p90_px))
+        v["held"].setText(change(report.held_back_before_px, report.held_back_after_px, bold=False))
         v["agree"].setText(f"{report.inliers} of {report.pairs}" if report.inliers else "—")
         v["turn"].setText(f"rotation {report.rotation_change_deg:.2f}°, baseline direction "
                           f"{report.baseline_turn_deg:.2f}°"
