@@ -224,3 +224,24 @@ def test_a_failed_save_says_why_and_loses_nothing(qtbot, tmp_path):
     good = dialog.save_to(tmp_path / "ok.yaml")
     assert good is not None and np.allclose(StereoRig.load(good).R, dialog.refined.R)
     assert dialog.default_save_path().parent == tmp_path
+
+
+def test_shared_pairs_hold_what_the_pair_collector_keeps():
+    """SharedPairs stores the kept pairs itself (for cheap copies): they must be the collector's."""
+    from badminton_gui.core.rig_refine import PairCollector
+    from badminton_gui.gui.refine_dialog import SharedPairs
+    from tests.test_rig_refine import result
+
+    rng = np.random.default_rng(2)
+    shared, plain = SharedPairs(), PairCollector()
+    for i in range(2000):
+        left = (float(rng.uniform(0, 640)), float(rng.uniform(0, 360)), i // 40, bool(rng.random() < 0.05))
+        right = (float(rng.uniform(0, 640)), float(rng.uniform(0, 360)), i // 55, False)
+        one = result(left, right if rng.random() > 0.02 else None)
+        shared.add(one)
+        plain.add(one)
+    assert len(shared) == len(plain) > 300
+    for got, want in zip(shared.points(), plain.points()):
+        assert np.array_equal(got, want)
+    shared.clear()
+    assert len(shared) == 0 and shared.points()[0].shape == (0, 2)
