@@ -15,17 +15,32 @@ A refit is only accepted when it is clearly better on the pairs it was fitted to
 epipolar error at least ``min_improvement`` times smaller), when most pairs agree with it, when
 the pairs spread over the image (a single flight lies in one plane, which leaves the essential
 matrix ambiguous), and when it does not turn the rig by more than ``max_rotation_deg``.
+
+The desktop application runs the refit on a worker thread while tracking goes on
+(gui/refine_dialog.py): ``progress`` reports its stages and ``cancel`` stops it between them
+(and between polishing iterations) with :class:`RefineCancelled`.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Callable
 
 import cv2
 import numpy as np
 
 from .rig import StereoRig
+
+# The fewest pairs a refit looks at, and the share of the image's width and height the agreeing
+# pairs must span in both cameras (``refine_relative_pose``'s defaults; the GUI's refine dialog
+# shows the collection against them).
+DEFAULT_MIN_PAIRS = 100
+DEFAULT_MIN_SPREAD = 0.1
+
+
+class RefineCancelled(Exception):
+    """The refit stopped because its ``cancel`` callable said so; nothing was changed."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -59,17 +74,31 @@ class RefineReport:
 
 
 def refine_relative_pose(rig: StereoRig, pts_left, pts_right, *, threshold_px: float = 3.0,
-                         min_pairs: int = 100, min_improvement: float = 2.0,
-                         min_inlier_share: float = 0.3, min_spread: float = 0.1,
-                         max_rotation_deg: float = 30.0) -> tuple[StereoRig, RefineReport]:
+                         min_pairs: int = DEFAULT_MIN_PAIRS, min_improvement: float = 2.0,
+                         min_inlier_share: float = 0.3, min_spread: float = DEFAULT_MIN_SPREAD,
+                         max_rotation_deg: float = 30.0,
+                         progress: Callable[[float, str], None] | None = None,
+                         cancel: Callable[[], bool] | None = None) -> tuple[StereoRig, RefineReport]:
     """The rig with R and T's direction refitted to the matched pixel points, and a report.
 
     ``pts_left`` / ``pts_right``: (N, 2) raw (distorted) pixel positions of the same physical
     points in the two cameras, in time order. ``threshold_px``: RANSAC inlier distance. ``min_spread``: the
     agreeing pairs must cover at least this share of the image's width and of its height in
     both cameras. Returns the input rig unchanged (``report.accepted`` False, with the reason)
-    when any condition fails.
+    when any condition fails. ``progress(fraction, what)`` is called as the stages begin;
+    ``cancel()`` is asked between stages and polishing iterations, and True raises
+    :class:`RefineCancelled`.
     """
+
+    def check() -> None:
+        if cancel is not None and cancel():
+            raise RefineCancelled("refit cancelled")
+
+    def stage(fraction: float, what: str) -> None:
+        check()
+        if progress is not None:
+            progress(fraction, what)
+
     pl = np.asarray(pts_left, dtype=np.float64).reshape(-1, 2)
     pr = np.asarray(pts_right, dtype=np.float64).reshape(-1, 2)
     if len(pl) != len(pr):
@@ -89,15 +118,19 @@ def refine_relative_pose(rig: StereoRig, pts_left, pts_right, *, threshold_px: f
         return RefineReport(n, inliers, float(b50), float(a50), float(b90), float(a90), rot, turn,
                             hb, ha, ok, reason)
 
+    stage(0.0, "measuring the rig's epipolar error")
     before = rig.pair_errors(pl, pr) if n else np.zeros(0)
     if n < min_pairs:
         return rig, report(0, None, nan, nan, False, f"only {n} pairs, {min_pairs} needed")
-    fitted = _fit_pose(rig, pl, pr, threshold_px)
+    stage(0.05, f"fitting the cameras' relative pose to all {n} pairs")
+    fitted = _fit_pose(rig, pl, pr, threshold_px, check)
     if fitted is None:
         return rig, report(0, None, nan, nan, False, "no essential matrix fits the pairs")
     # The pairs come in time order: a refit of the first two thirds must also explain the last
     # third (other flights, other planes), or the fit is one flight's ambiguity.
-    early = _fit_pose(rig, pl[:split], pr[:split], threshold_px)
+    stage(0.5, "refitting the first two thirds of the pairs to check the last third")
+    early = _fit_pose(rig, pl[:split], pr[:split], threshold_px, check)
+    stage(0.95, "comparing the errors")
     if early is not None:
         held_back = _with_pose(rig, early[1], early[2]).pair_errors(pl[split:], pr[split:])
     inliers, rot, direction, agree = fitted
@@ -107,13 +140,9 @@ def refine_relative_pose(rig: StereoRig, pts_left, pts_right, *, threshold_px: f
     rotation_change = math.degrees(float(np.linalg.norm(cv2.Rodrigues(rot @ rig.R.T)[0])))
     cos_turn = float(np.dot(direction, rig.T / scale)) if scale > 0 else 1.0
     baseline_turn = math.degrees(math.acos(max(-1.0, min(1.0, cos_turn))))
-    w, h = rig.image_size
 
     def spread(points: np.ndarray) -> float:
-        if len(points) < 2:
-            return 0.0
-        lo, hi = np.percentile(points, [5, 95], axis=0)
-        return float(min((hi[0] - lo[0]) / w, (hi[1] - lo[1]) / h))
+        return min(image_spread(points, rig.image_size))
 
     reason = ""
     if not np.median(after) * min_improvement <= np.median(before):
@@ -134,9 +163,22 @@ def refine_relative_pose(rig: StereoRig, pts_left, pts_right, *, threshold_px: f
     return refined, report(int(inliers), after, rotation_change, baseline_turn, True, "")
 
 
-def _fit_pose(rig: StereoRig, pl: np.ndarray, pr: np.ndarray, threshold_px: float):
+def image_spread(points, image_size: tuple[int, int]) -> tuple[float, float]:
+    """The share of the image's width and of its height that the points span (5th to 95th
+    percentile, so a few stray pairs do not count); (0, 0) for fewer than two points."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if len(pts) < 2:
+        return 0.0, 0.0
+    w, h = image_size
+    lo, hi = np.percentile(pts, [5, 95], axis=0)
+    return float((hi[0] - lo[0]) / w), float((hi[1] - lo[1]) / h)
+
+
+def _fit_pose(rig: StereoRig, pl: np.ndarray, pr: np.ndarray, threshold_px: float,
+              check: Callable[[], None] | None = None):
     """(agreeing pairs, R, unit T, agreement mask) of the essential matrix that most pairs agree
-    with (five-point RANSAC on undistorted normalised points), or None."""
+    with (five-point RANSAC on undistorted normalised points), or None. ``check()`` is called
+    between the steps (it raises to cancel)."""
     if len(pl) < 5:
         return None
     nl = rig.undistort(0, pl)
@@ -146,6 +188,8 @@ def _fit_pose(rig: StereoRig, pl: np.ndarray, pr: np.ndarray, threshold_px: floa
                                                    prob=0.999, threshold=threshold_px / focal)
     if essentials is None or inlier_mask is None:
         return None
+    if check is not None:
+        check()
     best = None
     # Few points can leave several solutions stacked (3k × 3): keep the one most pairs agree with.
     for k in range(0, essentials.shape[0] - 2, 3):
@@ -154,21 +198,22 @@ def _fit_pose(rig: StereoRig, pl: np.ndarray, pr: np.ndarray, threshold_px: floa
         if best is None or good > best[0]:
             best = (int(good), rot, trans.ravel(), mask.ravel() > 0)
     good, rot, direction, agree = best
-    rot, direction, cost = _polish(rig, pl[agree], pr[agree], rot, direction, threshold_px)
+    rot, direction, cost = _polish(rig, pl[agree], pr[agree], rot, direction, threshold_px,
+                                   check=check)
     # Pairs near one surface (a few flights) admit two poses; RANSAC may pick the one far from
     # the rig. The rig's own pose, polished on the same pairs, wins unless clearly worse.
     scale = float(np.linalg.norm(rig.T))
     if scale > 0:
         near_rot, near_dir, near_cost = _polish(rig, pl[agree], pr[agree], rig.R, rig.T / scale,
-                                                threshold_px)
+                                                threshold_px, check=check)
         if near_cost <= 1.2 * cost:
             rot, direction = near_rot, near_dir
     return good, rot, direction, agree
 
 
 def _polish(rig: StereoRig, pl: np.ndarray, pr: np.ndarray, rot: np.ndarray,
-            direction: np.ndarray, threshold_px: float, iterations: int = 15
-            ) -> tuple[np.ndarray, np.ndarray, float]:
+            direction: np.ndarray, threshold_px: float, iterations: int = 15,
+            check: Callable[[], None] | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Gauss–Newton on the pairs' Sampson distances (undistorted pixels, Huber-weighted beyond
     ``threshold_px``) over the rotation (3) and the baseline's direction (2).
 
@@ -198,6 +243,8 @@ def _polish(rig: StereoRig, pl: np.ndarray, pr: np.ndarray, rot: np.ndarray,
         return num / np.sqrt(fl[:, 0] ** 2 + fl[:, 1] ** 2 + ftr[:, 0] ** 2 + ftr[:, 1] ** 2)
 
     for _ in range(iterations):
+        if check is not None:
+            check()
         res = residuals(rot, direction)
         scale = np.max(np.abs(res)) + 1e-12
         jac = np.empty((len(res), 5))

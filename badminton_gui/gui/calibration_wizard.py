@@ -56,6 +56,25 @@ GRADE_COLOURS = {"excellent": "#1b8a2e", "acceptable": "#b07800", "poor": "#c039
 PAGE_TITLES = ("Board", "Capture", "Calibrate", "Result", "Court pose")
 
 
+def write_rig(rig: StereoRig, path: Path) -> str | None:
+    """Save and read back; None on success, else a sentence saying why it failed (the wizard
+    and the refine dialog save rigs through this)."""
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if shutil.disk_usage(path.parent).free < 256 * 1024:
+            return f"the disk holding {path.parent} is full"
+        rig.save(path)
+        StereoRig.load(path)          # a full disk can leave a truncated file: check
+    except PermissionError:
+        return f"no permission to write in {path.parent}"
+    except OSError as exc:
+        return f"{exc.strerror or exc} ({path})"
+    except RigError as exc:
+        return f"{exc} (is the disk full or the folder read-only?)"
+    return None
+
+
 # ---- data handed from workers to the GUI ----------------------------------------------------
 @dataclass(frozen=True, slots=True)
 class LiveFrame:
@@ -1074,27 +1093,11 @@ class CalibrationWizard(QDialog):
                 item.setToolTip(rejected[key])
                 item.setForeground(QColor(192, 57, 43))
 
-    def _write_rig(self, rig: StereoRig, path: Path) -> str | None:
-        """Save and read back; None on success, else a sentence saying why it failed."""
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            if shutil.disk_usage(path.parent).free < 256 * 1024:
-                return f"the disk holding {path.parent} is full"
-            rig.save(path)
-            StereoRig.load(path)          # a full disk can leave a truncated file: check
-        except PermissionError:
-            return f"no permission to write in {path.parent}"
-        except OSError as exc:
-            return f"{exc.strerror or exc} ({path})"
-        except RigError as exc:
-            return f"{exc} (is the disk full or the folder read-only?)"
-        return None
-
     def save_rig(self) -> Path | None:
         if self.outcome is None:
             return None
         path = self.save_dir / f"rig_{datetime.now():%Y%m%d_%H%M%S}.yaml"
-        error = self._write_rig(self.outcome.result.to_rig(), path)
+        error = write_rig(self.outcome.result.to_rig(), path)
         if error is not None:
             self.save_label.setText(f"<span style='color:#c0392b'><b>Not saved</b>: "
                                     f"{error}</span>")
@@ -1230,7 +1233,7 @@ class CalibrationWizard(QDialog):
             return None
         self.court_result = result
         path = self.saved_path or (self.save_dir / f"rig_{datetime.now():%Y%m%d_%H%M%S}.yaml")
-        error = self._write_rig(result.rig, Path(path))
+        error = write_rig(result.rig, Path(path))
         if error is not None:
             self.court_status.setText(f"<span style='color:#c0392b'><b>Not saved</b>: "
                                       f"{error}</span>")

@@ -8,6 +8,11 @@ only when what they draw changed): every millisecond of Python on this thread ho
 tracker's threads need (scripts/gui-timing.py measures the cost). Errors from the worker arrive
 as one sentence and are shown in a banner; the window stays usable and another source can be
 chosen.
+
+Calibration ▸ Refine from tracked shuttle… (gui/refine_dialog.py) collects the shuttle's stereo
+pairs through the worker's result tap, on the worker's thread; an applied refit reaches the
+running tracker through ``TrackingWorker.set_rig``, and a saved one becomes the source's rig
+file for the next start, as the calibration wizard's rig does.
 """
 
 from __future__ import annotations
@@ -204,6 +209,9 @@ class MainWindow(QMainWindow):
         self._slow_shown_at = float("-inf")
         self._display_rate = RateMeter()
         self._tuning = None
+        self._refine = None                 # the refine dialog, built when first opened
+        self._opened_with: tuple[SourceOpener, str] | None = None   # the source being tracked
+        self._restart_rig: StereoRig | None = None   # applied by reopening the stopped source
         self._paused = False
         self._pending_start: tuple[SourceOpener, str] | None = None
         self._retiring: list[tuple[TrackingWorker, QThread]] = []
@@ -323,6 +331,13 @@ class MainWindow(QMainWindow):
         self._action(tools, "&Tuning…", self.open_tuning, "Ctrl+T")
         self._action(tools, "&Calibrate…", self.open_calibration)
 
+        calibration = menu.addMenu("&Calibration")
+        self._action(calibration, "&Calibrate with a chessboard…", self.open_calibration)
+        self.refine_action = self._action(calibration, "&Refine from tracked shuttle…",
+                                          self.open_refine)
+        self.refine_action.setToolTip("Refit the cameras' relative pose to the shuttle both "
+                                      "cameras follow, while tracking")
+
         bar = self.addToolBar("Controls")
         bar.setObjectName("controls")
         bar.setMovable(False)
@@ -365,6 +380,7 @@ class MainWindow(QMainWindow):
         for feed in (self.left_feed, self.right_feed):
             feed.set_message(f"Opening {description}…")
         self._pending_start = (opener, description)
+        self._opened_with = (opener, description)
         if self.worker is not None:
             self._retire_worker()
         self._start_pending()
@@ -386,8 +402,12 @@ class MainWindow(QMainWindow):
         worker.error.connect(self._on_error)
         worker.warning.connect(self.banner.show_message)
         worker.ended.connect(self._on_ended)
+        worker.rig_applied.connect(self._on_rig_applied)
         worker.set_paused(self._paused)
         worker.set_link(self.link_panel.link)
+        if self._refine is not None:
+            self._refine.source_changed(keep_result=self._restart_rig is not None)
+            worker.set_result_tap(self._refine.pairs.add)
         self.worker, self.thread = worker, thread
         thread.start()
 
@@ -397,9 +417,11 @@ class MainWindow(QMainWindow):
         self.worker = self.thread = None
         worker.abort()
         worker.set_link(None)
+        worker.set_result_tap(None)
         # Queued signals of the old worker may still arrive; drop them.
         for sig, slot in ((worker.opened, self._on_opened), (worker.error, self._on_error),
-                          (worker.warning, self.banner.show_message), (worker.ended, self._on_ended)):
+                          (worker.warning, self.banner.show_message), (worker.ended, self._on_ended),
+                          (worker.rig_applied, self._on_rig_applied)):
             try:
                 sig.disconnect(slot)
             except (RuntimeError, TypeError):
@@ -431,6 +453,10 @@ class MainWindow(QMainWindow):
 
     def _on_opened(self, name: str, rig: StereoRig) -> None:
         self.rig = rig
+        if self._restart_rig is not None:
+            restarted, self._restart_rig = self._restart_rig is rig, None
+            if restarted:
+                self._on_rig_applied(rig)
         self.setWindowTitle(f"Badminton shuttle tracker — {name}")
         self.status_source.setText(f"{name} — rig {rig.image_size[0]}×{rig.image_size[1]}"
                                    f"{', court pose' if rig.has_court_pose else ', no court pose'}")
@@ -439,6 +465,7 @@ class MainWindow(QMainWindow):
         self.sourceOpened.emit(name)
 
     def _on_error(self, message: str) -> None:
+        self._restart_rig = None          # a reopen with a refined rig failed: nothing applied
         self.banner.show_message(message[:1].upper() + message[1:])
         self.status_source.setText("Stopped — choose a source in the Source menu")
         if self.worker is not None:
@@ -532,6 +559,61 @@ class MainWindow(QMainWindow):
         self.start_spec(spec)
         if saved:
             self.statusBar().showMessage(f"Tracking with the new rig {saved[-1]}", 15000)
+
+    def open_refine(self) -> None:
+        """Calibration ▸ Refine from tracked shuttle…: the dialog, collecting from now on."""
+        from .refine_dialog import RefineCalibrationDialog
+        if self._refine is None:
+            self._refine = RefineCalibrationDialog(
+                lambda: self.worker.rig_in_use if self.worker is not None else None,
+                rig_save_dir, self)
+            self._refine.applyRequested.connect(self.apply_rig)
+            self._refine.rigSaved.connect(self._on_refined_rig_saved)
+            if self.worker is not None:
+                self.worker.set_result_tap(self._refine.pairs.add)
+        self._refine.show()
+        self._refine.raise_()
+        self._refine.activateWindow()
+
+    def apply_rig(self, rig: StereoRig) -> None:
+        """Track with ``rig`` from the next frame pair on (``_on_rig_applied`` follows).
+
+        A source that has stopped (the end of a video pair, typically, where a refit is made
+        after the rally) is reopened with the rig instead.
+        """
+        if self.worker is not None and self.thread is not None and self.thread.isRunning():
+            self.worker.set_rig(rig)
+            return
+        if self._opened_with is None:
+            self.banner.show_message("No source to track with the refined rig: choose one in "
+                                     "the Source menu.")
+            return
+        opener, description = self._opened_with
+        self._restart_rig = rig
+        self.start_opener(lambda: (opener()[0], rig), description)
+
+    def _on_rig_applied(self, rig: StereoRig) -> None:
+        self.rig = rig
+        if self.gl_view is not None:
+            self.gl_view.set_rig(rig)
+        saved = self._refine.saved_path_of(rig) if self._refine is not None else None
+        if saved is not None:
+            self._remember_rig_file(saved)
+        self.statusBar().showMessage(
+            f"Tracking with the refined rig {saved}" if saved is not None else
+            "Tracking with the refined rig (not saved: it lasts until the source restarts)", 15000)
+        if self._refine is not None:
+            self._refine.rig_applied(rig)
+
+    def _on_refined_rig_saved(self, path: str, rig: StereoRig) -> None:
+        if self.worker is not None and self.worker.rig_in_use is rig:
+            self._remember_rig_file(Path(path))
+            self.statusBar().showMessage(f"Tracking with the refined rig {path}", 15000)
+
+    def _remember_rig_file(self, path: Path) -> None:
+        """The source's rig file from now on (a restart, the next session), as after the wizard."""
+        self.spec = dataclasses.replace(self.spec, calib=str(path))
+        st.save_source_spec(self.settings, self.spec)
 
     # ---- display ---------------------------------------------------------------------------
     def _refresh_display(self) -> None:
@@ -634,6 +716,8 @@ class MainWindow(QMainWindow):
     def closeEvent(self, event) -> None:  # noqa: N802 - Qt naming
         self._timer.stop()
         self._late_timer.stop()
+        if self._refine is not None:
+            self._refine.shutdown()
         self.stop_worker()
         if self.link_panel.link is not None:
             self.link_panel.disconnect_link()

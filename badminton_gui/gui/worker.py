@@ -15,6 +15,11 @@ display that shows 30. The GUI asks for the first result finished after a given 
 before its next tick — so it gets a fresh packet and the worker builds about one per tick (fewer
 when the GUI runs late, none with no GUI at all).
 
+Two more hooks serve the refine dialog (gui/refine_dialog.py): a *result tap*, a cheap function
+the worker calls with every result at the tracking rate (the display packets are throttled to
+~30 Hz, far too few for collecting the shuttle's stereo pairs), and :meth:`TrackingWorker.set_rig`,
+which makes the running loop continue with a new rig.
+
 Live cameras get a grabber thread with its own one-slot buffer, so a slow tracker drops old
 camera frames (counted and shown) instead of falling behind; file and demo sources are read
 in step with the tracker and paced to their fps ("as fast as possible" switches that off).
@@ -167,6 +172,7 @@ class TrackingWorker(QObject):
     """Source + tracker loop; move to a QThread and connect ``thread.started`` to ``run``."""
 
     opened = Signal(str, object)      # source name, StereoRig
+    rig_applied = Signal(object)      # the StereoRig set_rig asked for is now tracked with
     error = Signal(str)               # one sentence for the banner; the worker has stopped
     warning = Signal(str)             # one sentence for the banner; the worker goes on
     ended = Signal(str)               # the source ran out (not an error)
@@ -195,6 +201,10 @@ class TrackingWorker(QObject):
         self._link = None
         self._link_lock = threading.Lock()
         self.link_error = ""
+        self._result_tap: Callable[[TrackResult], None] | None = None
+        self._pending_rig: StereoRig | None = None
+        self._rig_in_use: StereoRig | None = None
+        self._tracker: StereoTracker | None = None      # worker thread only
 
     # ---- called from the GUI thread (thread-safe) -----------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -205,6 +215,27 @@ class TrackingWorker(QObject):
     def params_in_use(self) -> TrackerParams:
         """The snapshot the tracker runs with now (tests read this)."""
         return self._params_in_use
+
+    @property
+    def rig_in_use(self) -> StereoRig | None:
+        """The rig the tracker runs with now (None before the source opened)."""
+        return self._rig_in_use
+
+    def set_rig(self, rig: StereoRig) -> None:
+        """Track with this rig from the next frame pair on (``rig_applied`` says when).
+
+        The loop replaces its tracker by a new one built on the rig with the parameters in use:
+        everything a tracker learns depends on the rig (the epipolar gate widened to the old
+        rig's error, the 3D flight), and the background models relearn in a few frames.
+        """
+        with self._lock:
+            self._pending_rig = rig
+
+    def set_result_tap(self, tap: Callable[[TrackResult], None] | None) -> None:
+        """A function the worker thread calls with every result, at the tracking rate (None: no
+        more calls). It must be cheap and thread-safe (the refine dialog's pair collector)."""
+        with self._lock:
+            self._result_tap = tap
 
     def set_paused(self, paused: bool) -> None:
         with self._lock:
@@ -249,7 +280,8 @@ class TrackingWorker(QObject):
         try:
             source, rig = self._open_source()
             rig.check_image_size(*source.image_size, what="the source's frames")
-            tracker = StereoTracker(rig, self._params_in_use)
+            tracker = self._tracker = StereoTracker(rig, self._params_in_use)
+            self._rig_in_use = rig
             self.opened.emit(getattr(source, "name", "source"), rig)
             if source.fps is None:
                 reader = _LiveReader(source)
@@ -265,8 +297,9 @@ class TrackingWorker(QObject):
             if reader is not None:
                 reader.stop_flag.set()
                 reader.join(timeout=2.0)
-            if tracker is not None:
-                tracker.close()
+            if self._tracker is not None:      # the loop's newest tracker (set_rig replaces it)
+                self._tracker.close()
+                self._tracker = None
             if source is not None:
                 try:
                     source.close()
@@ -287,6 +320,8 @@ class TrackingWorker(QObject):
                 params, self._pending_params = self._pending_params, None
                 paused, realtime, show_mask = self._paused, self._realtime, self._show_mask
                 display_box = self._display_box
+                tap = self._result_tap
+                new_rig, self._pending_rig = self._pending_rig, None
                 stepping = paused and self._steps > 0
                 if stepping:
                     self._steps -= 1
@@ -297,6 +332,8 @@ class TrackingWorker(QObject):
                 except USER_ERRORS as exc:   # e.g. a classifier model that is not there
                     tracker.set_params(self._params_in_use)
                     self.warning.emit("Parameters not applied: " + _one_sentence(exc))
+            if new_rig is not None:
+                tracker = self._switch_rig(tracker, new_rig, source)
             if paused and not stepping:
                 # Paused: the display shows the pair the tracker stopped on (so a step shows the
                 # next one), even if the throttle had not asked for it.
@@ -344,6 +381,8 @@ class TrackingWorker(QObject):
                                      frame.index_right)
             t_done = time.perf_counter()
             frames += 1
+            if tap is not None:
+                tap(result)
             rate.tick(t_done)
             speed_meter.append((t_done, frame.t_left))
             with self._link_lock:
@@ -381,6 +420,21 @@ class TrackingWorker(QObject):
             if wanted:
                 self._publish(unshown, trails, tracker)
                 unshown = None
+
+    def _switch_rig(self, tracker: StereoTracker, rig: StereoRig, source: FrameSource) -> StereoTracker:
+        """A new tracker on ``rig`` in place of ``tracker``; the old one when the rig does not fit
+        the source's frames (said in the banner)."""
+        try:
+            rig.check_image_size(*source.image_size, what="the source's frames")
+            new = StereoTracker(rig, self._params_in_use)
+        except USER_ERRORS as exc:
+            self.warning.emit("Rig not applied: " + _one_sentence(exc))
+            return tracker
+        tracker.close()
+        self._tracker = new
+        self._rig_in_use = rig
+        self.rig_applied.emit(rig)
+        return new
 
     def _publish(self, unshown, trails, tracker: StereoTracker) -> None:
         """Build the display packet of (frame, result, stats, show_mask, box) and hand it over."""
