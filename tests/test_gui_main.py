@@ -261,6 +261,23 @@ def test_calibrate_loads_the_saved_rig(main_window, qtbot, tmp_path, monkeypatch
     assert load_source_spec(open_settings()).calib == str(rig_path)
 
 
+def test_every_menu_command_is_offered_once(main_window):
+    """One place per command: the wizard lives under Calibration (it was also under Tools)."""
+    window = main_window()
+    where: dict[str, list[str]] = {}
+    for menu_action in window.menuBar().actions():
+        menu = menu_action.menu()
+        for action in menu.actions():
+            if not action.isSeparator():
+                where.setdefault(action.text().replace("&", ""), []).append(
+                    menu_action.text().replace("&", ""))
+    repeated = {text: menus for text, menus in where.items() if len(menus) > 1}
+    assert not repeated
+    calibration_entries = {text: menus for text, menus in where.items() if "alibrat" in text}
+    assert calibration_entries == {"Calibrate with a chessboard…": ["Calibration"]}
+    assert where["Refine from tracked shuttle…"] == ["Calibration"]
+
+
 def test_tuning_presets_save_load_and_reset(qtbot, tmp_path, monkeypatch):
     from PySide6.QtWidgets import QFileDialog
 

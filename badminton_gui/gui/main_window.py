@@ -329,10 +329,9 @@ class MainWindow(QMainWindow):
 
         tools = menu.addMenu("&Tools")
         self._action(tools, "&Tuning…", self.open_tuning, "Ctrl+T")
-        self._action(tools, "&Calibrate…", self.open_calibration)
 
         calibration = menu.addMenu("&Calibration")
-        self._action(calibration, "&Calibrate with a chessboard…", self.open_calibration)
+        self._action(calibration, "&Calibrate with a chessboard…", self.open_calibration, "Ctrl+K")
         self.refine_action = self._action(calibration, "&Refine from tracked shuttle…",
                                           self.open_refine)
         self.refine_action.setToolTip("Refit the cameras' relative pose to the shuttle both "

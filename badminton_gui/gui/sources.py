@@ -49,7 +49,7 @@ def open_spec(spec: SourceSpec) -> tuple[FrameSource, StereoRig]:
     if spec.kind == "cameras":
         from ..io.cameras import CameraPair
         if not spec.calib:
-            raise RigError("two cameras need their rig file: calibrate first (Tools ▸ Calibrate…)")
+            raise RigError("two cameras need their rig file: calibrate first (Calibration ▸ Calibrate with a chessboard…)")
         rig = StereoRig.load(spec.calib)
         return CameraPair(spec.left, spec.right), rig
     raise SourceError(f"unknown source kind {spec.kind!r}")
