@@ -66,10 +66,32 @@ def test_a_good_rig_is_kept_and_so_is_one_with_too_few_pairs():
     truth = make_rig("binocular")
     left, right = visible_pairs(truth, 300)
     kept, report = refine_relative_pose(truth, left, right)
+    assert kept is truth and not report.accepted and "already fits" in report.reason
+    # Noisier detections (median error over a pixel): the refit is tried, and refused because it
+    # is not clearly better than the true rig.
+    noisy_l, noisy_r = visible_pairs(truth, 300, noise_px=2.0)
+    kept, report = refine_relative_pose(truth, noisy_l, noisy_r)
+    assert report.before_median_px > 1.0
     assert kept is truth and not report.accepted and "better" in report.reason
     wrong = rotated(truth, (0, 1, 0), 3.0)
     kept, report = refine_relative_pose(wrong, left[:50], right[:50])
     assert kept is wrong and not report.accepted and "50 pairs" in report.reason
+
+
+def test_a_rig_within_a_pixel_is_not_refitted_to_the_noise():
+    """Sub-pixel pairs: the refit would 'improve' them by fitting noise; the rig is kept before
+    any fit, and a rig a few pixels off is still refitted from the same pairs."""
+    truth = make_rig("binocular")
+    left, right = visible_pairs(truth, 300, noise_px=0.1)
+    slightly = rotated(truth, (0, 1, 0), 0.02)
+    assert 0.05 < np.median(slightly.pair_errors(left, right)) < 1.0
+    kept, report = refine_relative_pose(slightly, left, right)
+    assert kept is slightly and not report.accepted and "under 1 px" in report.reason
+    assert report.inliers == 0          # refused before fitting anything
+    off = rotated(truth, (0, 1, 0), 3.0)
+    assert np.median(off.pair_errors(left, right)) > 2.0
+    refined, report = refine_relative_pose(off, left, right)
+    assert report.accepted, report.reason
 
 
 def test_a_refit_that_does_not_hold_on_later_pairs_is_refused():
