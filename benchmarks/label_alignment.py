@@ -9,6 +9,11 @@ write time), so a labelling tool that resampled them by time (seek by time, cons
 extraction) numbered the frames differently from a sequential decode. The NYCU rallies do not
 show this (one gap at the very start, then regular), and every other figure stands.
 
+Ninth round: the labelling tool seeked. A seek to index i with OpenCV (CAP_PROP_POS_FRAMES)
+returns decoded frame i + shift with the same steps (``clips.seek_frame_map``), so this script
+prints the seek's shift beside each measured run and how many of the met labels it explains;
+benchmarks/accuracy.py scores such clips through that map (clips.LABELLED_BY_SEEK).
+
 For each labelled-visible frame i it looks for the decoded frame j (i − 20 … i + 40) whose
 detection lies within the protocol's tolerance of label i, and prints the runs of constant shift
 j − i, and how many of the labels it meets lie at a shift of 3 frames or more.
@@ -33,16 +38,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
-from clips import stereo_clips  # noqa: E402
-
-
-def decode_times(video: Path) -> np.ndarray:
-    cap = cv2.VideoCapture(str(video))
-    times = []
-    while cap.grab():
-        times.append(cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0)
-    cap.release()
-    return np.asarray(times)
+from clips import decode_times, seek_frame_map, stereo_clips  # noqa: E402
 
 
 def main() -> int:
@@ -97,9 +93,11 @@ def main() -> int:
             runs[-1][1] = i
         else:
             runs.append([i, i, shifts[i]])
+    seek_shift = seek_frame_map(video) - np.arange(len(times))
     for a, b, s in runs:
         if b - a >= 2:
-            print(f"  {a:4d}–{b:4d}: {s:+d}")
+            seek = sorted(set(seek_shift[a:b + 1].tolist()))
+            print(f"  {a:4d}–{b:4d}: {s:+d}   (a seek to these indices shows frame i {', '.join(f'{k:+d}' for k in seek)})")
     # Shifts of ±1–2 appear on any clip: the label marks the cork while a detection is the blob's
     # centroid, a little behind it along the flight, so the next frame's detection often lies
     # nearer the label. Shifts of 3 frames and more do not come from that.
@@ -107,6 +105,9 @@ def main() -> int:
     large = sum(1 for s in shifts.values() if abs(s) >= 3)
     print(f"of the {len(shifts)} labels met: {small} at a shift of 0–2 frames, {large} "
           f"({100 * large / max(len(shifts), 1):.0f} %) at a shift of 3 frames or more")
+    explained = sum(1 for i, s in shifts.items() if i < len(seek_shift) and abs(s - seek_shift[i]) <= 2)
+    print(f"the seek's shift (±2 frames, as above) explains {explained} of the {len(shifts)} labels met "
+          f"({100 * explained / max(len(shifts), 1):.0f} %)")
     return 0
 
 
