@@ -38,8 +38,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from badminton_gui.core.evaluation import Outcomes, evaluate, tolerance_px  # noqa: E402
 from badminton_gui.core.rig import StereoRig  # noqa: E402
 from badminton_gui.io.labels import read_point_labels  # noqa: E402
-from clips import (LABELLED_BY_SEEK, broadcast_clips, decode_times, nycu_cfgs,  # noqa: E402
-                   seek_frame_map, stereo_clips)
+from clips import (LABELLED_BY_SEEK, broadcast_clips, nycu_cfgs, seek_frame_map,  # noqa: E402
+                   stereo_clips)
 
 CLI = [sys.executable, "-m", "badminton_gui.cli"]
 
@@ -84,17 +84,6 @@ def score(pred: dict, labels_path: Path, width: int, max_frames: int | None,
     return evaluate(pred, labels, tolerance_px(width))
 
 
-def write_decode_times(video: Path, out: Path) -> Path:
-    """``Frame,Timestamp`` of a sequential decode, from the video's own timestamps: how `track`
-    pairs the cameras of a clip whose label files' Timestamp column is only index / fps."""
-    with out.open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["Frame", "Timestamp"])
-        for i, t in enumerate(decode_times(video)):
-            w.writerow([i, f"{t:.6f}"])
-    return out
-
-
 def read_track(path: Path):
     left, right, rows = {}, {}, []
     with path.open() as fh:
@@ -124,16 +113,15 @@ def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path, preset:
 
     seek = clip.labelled_by_seek
 
+    # Such a clip's label files time frame i at i / fps: its cameras pair by the videos' own
+    # frame times instead (track --video-times).
+    pairing = (["--video-times"] if seek else
+               ["--left-times", str(clip.left_labels), "--right-times", str(clip.right_labels)])
+
     def track():
-        if seek:
-            left_times = write_decode_times(clip.left, tmp / f"{clip.name}_left_times.csv")
-            right_times = write_decode_times(clip.right, tmp / f"{clip.name}_right_times.csv")
-        else:
-            left_times, right_times = clip.left_labels, clip.right_labels
         rate, _ = run_cli(["track", "--left", str(clip.left), "--right", str(clip.right),
-                           "--calib", str(rig_path), "-o", str(out_track),
-                           "--left-times", str(left_times),
-                           "--right-times", str(right_times)] + extra + preset_args)
+                           "--calib", str(rig_path), "-o", str(out_track)]
+                          + pairing + extra + preset_args)
         left, right, rows = read_track(out_track)
         rows_out = [Row(clip.name, "left", "track", clip.held_out, "stereo",
                         score(left, clip.left_labels, 2048, max_frames, clip.left if seek else None),

@@ -17,6 +17,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from badminton_gui.io.video import frame_times
+
 DATA_DIR = Path(os.environ.get("BADMINTON_DATA",
                                Path(__file__).resolve().parents[1].parent / "shared" / "data"))
 
@@ -88,16 +90,6 @@ def nycu_cfgs() -> tuple[Path, Path]:
     return rally / "CameraReader_1.cfg", rally / "CameraReader_2.cfg"
 
 
-def decode_times(video: Path) -> np.ndarray:
-    """Presentation time (s) of every frame of a sequential decode, in decode order."""
-    cap = cv2.VideoCapture(str(video))
-    times = []
-    while cap.grab():
-        times.append(cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0)
-    cap.release()
-    return np.array(times)
-
-
 def seek_frame_map(video: Path) -> np.ndarray:
     """For each frame index i, the sequential decode index of the frame that a seek to i returns
     (OpenCV: set CAP_PROP_POS_FRAMES to i, then grab), matched by presentation time; -1 where the
@@ -109,7 +101,7 @@ def seek_frame_map(video: Path) -> np.ndarray:
     cache = Path(tempfile.gettempdir()) / f"badminton-seekmap-{key}.npy"
     if cache.is_file():
         return np.load(cache)
-    times = decode_times(video)
+    times = frame_times(video)
     cap = cv2.VideoCapture(str(video))
     out = np.full(len(times), -1, dtype=int)
     for i in range(len(times)):

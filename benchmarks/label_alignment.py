@@ -38,7 +38,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
-from clips import decode_times, seek_frame_map, stereo_clips  # noqa: E402
+from badminton_gui.io.video import frame_times  # noqa: E402
+from clips import seek_frame_map, stereo_clips  # noqa: E402
 
 
 def main() -> int:
@@ -53,7 +54,7 @@ def main() -> int:
     clip = clips[args.clip]
     video = clip.left if args.camera == 1 else clip.right
     labels_path = clip.left_labels if args.camera == 1 else clip.right_labels
-    times = decode_times(video)
+    times = frame_times(video)
     gaps = np.diff(times)
     print(f"{video.name}: {len(times)} decoded frames; frame intervals median {1000 * np.median(gaps):.1f} ms, "
           f"min {1000 * gaps.min():.1f}, max {1000 * gaps.max():.1f}; "

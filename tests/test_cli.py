@@ -115,6 +115,31 @@ def test_track_pairs_by_timestamps(tmp_path):
     assert int(rows[0]["FrameR"]) == 0
 
 
+def test_track_pairs_by_the_videos_own_frame_times(tmp_path, capsys):
+    """--video-times: the right camera recorded every other frame (15 fps against 30), as a camera
+    that drops frames does; frame i of the left file was taken with right frame i / 2, not i."""
+    frames, _ = moving_dot_frames()
+    write_video(tmp_path / "l.avi", frames, fps=30.0)
+    write_video(tmp_path / "r.avi", frames[::2], fps=15.0)
+    make_rig_for().save(tmp_path / "rig.yaml")
+    out = tmp_path / "track.csv"
+    common = ["track", "--left", str(tmp_path / "l.avi"), "--right", str(tmp_path / "r.avi"),
+              "--calib", str(tmp_path / "rig.yaml"), "-o", str(out), "--quiet"]
+    assert main(common + ["--video-times"]) == 0
+    rows = list(csv.DictReader(out.open()))
+    assert len(rows) == N
+    assert [int(r["FrameR"]) for r in rows[0:12:2]] == [0, 1, 2, 3, 4, 5]
+    assert float(rows[9]["Timestamp"]) == pytest.approx(9 / 30.0, abs=1e-3)
+    # Frame by frame the right file runs out half way and pairs the wrong moments.
+    assert main(common) == 0
+    assert [int(r["FrameR"]) for r in list(csv.DictReader(out.open()))[0:12:2]] == [0, 2, 4, 6, 8, 10]
+    capsys.readouterr()
+    lt = tmp_path / "lt.csv"
+    lt.write_text("Frame,Timestamp\n" + "".join(f"{i},{i / 30}\n" for i in range(N)))
+    assert main(common + ["--video-times", "--left-times", str(lt), "--right-times", str(lt)]) != 0
+    assert "not both" in capsys.readouterr().err
+
+
 def test_import_calib_nycu_style(tmp_path, capsys):
     import json
     k = [[800.0, 0, 1024], [0, 800.0, 768], [0, 0, 1]]

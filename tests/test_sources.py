@@ -66,3 +66,26 @@ def test_camera_that_stops_delivering_says_so(two_videos):
     times = [f.t_left for f in frames]
     assert all(b >= a for a, b in zip(times, times[1:]))
     assert all(abs(f.t_right - f.t_left) < 0.5 for f in frames)
+
+
+def test_the_gui_opens_a_video_pair_by_its_own_frame_times(tmp_path):
+    """The video-pair dialog's 'pair by the videos' own frame times' reaches the source: a right
+    file recorded at half the rate pairs left frame 2k with right frame k."""
+    pytest.importorskip("PySide6")
+    from badminton_gui.gui.settings import SourceSpec
+    from badminton_gui.gui.sources import open_spec
+
+    from .test_cli import make_rig_for
+    frames, _ = moving_dot_frames(12)
+    write_video(tmp_path / "l.avi", frames, fps=30.0)
+    write_video(tmp_path / "r.avi", frames[::2], fps=15.0)
+    make_rig_for().save(tmp_path / "rig.yaml")
+    spec = SourceSpec("video", str(tmp_path / "l.avi"), str(tmp_path / "r.avi"),
+                      str(tmp_path / "rig.yaml"), video_times=True)
+    source, rig = open_spec(spec)
+    try:
+        pairs = [source.read() for _ in range(7)]
+    finally:
+        source.close()
+    assert [round(p.t_right * 15) for p in pairs[0::2]] == [0, 1, 2, 3]
+    assert [p.t_left for p in pairs] == pytest.approx([i / 30 for i in range(7)], abs=1e-3)

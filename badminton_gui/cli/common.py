@@ -104,20 +104,25 @@ def params_from_args(args):
 
 def open_stereo_videos(args):
     """(rig, source, pair count or None) for the commands that read a recorded video pair
-    (`track`, `refine-calib`): ``--left --right --calib [--left-times --right-times]
-    [--max-frames]``; the pairs are decoded on a reader thread (io/prefetch.py)."""
+    (`track`, `refine-calib`): ``--left --right --calib [--left-times --right-times |
+    --video-times] [--max-frames]``; the pairs are decoded on a reader thread (io/prefetch.py)."""
     from ..core.rig import StereoRig
     from ..io.labels import read_timestamps
     from ..io.prefetch import PrefetchingReader
-    from ..io.video import VideoPair
+    from ..io.video import VideoPair, frame_times
     if (args.left_times is None) != (args.right_times is None):
         raise UserError("give --left-times and --right-times together")
+    video_times = getattr(args, "video_times", False)
+    if video_times and args.left_times:
+        raise UserError("give either --left-times/--right-times or --video-times, not both")
     try:
         rig = StereoRig.load(args.calib)
         lt = rt = None
         if args.left_times:
             lt = read_timestamps(args.left_times)[1]
             rt = read_timestamps(args.right_times)[1]
+        elif video_times:
+            lt, rt = frame_times(args.left), frame_times(args.right)
         source = VideoPair(args.left, args.right, lt, rt)
         rig.check_image_size(*source.image_size, what="the videos")
     except INPUT_ERRORS as exc:

@@ -29,6 +29,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, help="refined rig file to write (.yaml)")
     p.add_argument("--left-times", help="CSV with Frame,Timestamp for the left video")
     p.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
+    p.add_argument("--video-times", action="store_true",
+                   help="pair the cameras by the videos' own frame timestamps (recordings whose "
+                        "cameras dropped frames; without this and without timestamp files, frame i "
+                        "pairs with frame i)")
     p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_preset_argument(p)

@@ -26,6 +26,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, help="output CSV")
     p.add_argument("--left-times", help="CSV with Frame,Timestamp for the left video")
     p.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
+    p.add_argument("--video-times", action="store_true",
+                   help="pair the cameras by the videos' own frame timestamps (recordings whose "
+                        "cameras dropped frames; without this and without timestamp files, frame i "
+                        "pairs with frame i)")
     add_preset_argument(p)
     add_lookahead_argument(p)
     p.add_argument("--robot", metavar="PORT", help="also stream results to the robot on this "

@@ -30,6 +30,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--calib", help="rig file (OpenCV FileStorage YAML)")
     p.add_argument("--left-times", help="CSV with Frame,Timestamp for the left video")
     p.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
+    p.add_argument("--video-times", action="store_true",
+                   help="pair a video pair by the files' own frame timestamps (cameras that dropped frames)")
     p.add_argument("--preset", help="parameter preset name or .json file")
     p.add_argument("--fast", action="store_true", help="process files as fast as possible (no real-time pacing)")
     p.add_argument("--screenshot", metavar="PATH", help="save a screenshot of the window before quitting")
@@ -74,7 +76,8 @@ def main(argv: list[str] | None = None) -> int:
     spec = None
     if args.source:
         spec = st.SourceSpec(args.source, args.left or "", args.right or "", args.calib or "",
-                             args.left_times or "", args.right_times or "", not args.fast)
+                             args.left_times or "", args.right_times or "", not args.fast,
+                             video_times=args.video_times)
     elif args.fast:
         spec = st.SourceSpec(realtime=False)
     window = MainWindow(params=params, spec=spec)

@@ -38,6 +38,7 @@ class SourceSpec:
     left_times: str = ""               # optional timestamp CSVs of a video pair
     right_times: str = ""
     realtime: bool = True              # pace file / demo sources to their fps
+    video_times: bool = False          # pair a video pair by the files' own frame timestamps
 
     def describe(self) -> str:
         if self.kind == "demo":

@@ -11,7 +11,7 @@ import threading
 from pathlib import Path
 
 from PySide6.QtCore import QObject, Signal
-from PySide6.QtWidgets import (QComboBox, QDialog, QDialogButtonBox, QFileDialog,
+from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDialogButtonBox, QFileDialog,
                                QFormLayout, QHBoxLayout, QLabel, QLineEdit, QPushButton,
                                QVBoxLayout, QWidget)
 
@@ -32,7 +32,7 @@ def open_spec(spec: SourceSpec) -> tuple[FrameSource, StereoRig]:
         return scene, rig
     if spec.kind == "video":
         from ..io.labels import CsvFormatError, read_timestamps
-        from ..io.video import VideoPair
+        from ..io.video import VideoPair, frame_times
         if not spec.calib:
             raise RigError("a video pair needs its rig file (Source ▸ Stereo video pair…)")
         rig = StereoRig.load(spec.calib)
@@ -45,6 +45,8 @@ def open_spec(spec: SourceSpec) -> tuple[FrameSource, StereoRig]:
                 rt = read_timestamps(spec.right_times)[1]
             except CsvFormatError as exc:
                 raise SourceError(str(exc)) from None
+        elif spec.video_times:
+            lt, rt = frame_times(spec.left), frame_times(spec.right)
         return VideoPair(spec.left, spec.right, lt, rt), rig
     if spec.kind == "cameras":
         from ..io.cameras import CameraPair
@@ -93,6 +95,12 @@ class VideoPairDialog(QDialog):
         csvs = "CSV (*.csv);;All files (*)"
         form.addRow("Left timestamps (optional)", _file_row(self, self.left_times, "Left timestamps", csvs))
         form.addRow("Right timestamps (optional)", _file_row(self, self.right_times, "Right timestamps", csvs))
+        self.video_times = QCheckBox("Without timestamp files, pair by the videos' own frame times")
+        self.video_times.setToolTip("For recordings whose cameras dropped frames: frame i of one file was "
+                                    "then not taken with frame i of the other. Costs one decoding pass "
+                                    "when the pair opens.")
+        self.video_times.setChecked(prev.video_times)
+        form.addRow("", self.video_times)
         buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Open | QDialogButtonBox.StandardButton.Cancel)
         buttons.accepted.connect(self.accept)
         buttons.rejected.connect(self.reject)
@@ -103,7 +111,8 @@ class VideoPairDialog(QDialog):
     def spec(self, realtime: bool) -> SourceSpec:
         return SourceSpec("video", self.left.text().strip(), self.right.text().strip(),
                           self.calib.text().strip(), self.left_times.text().strip(),
-                          self.right_times.text().strip(), realtime)
+                          self.right_times.text().strip(), realtime,
+                          video_times=self.video_times.isChecked())
 
 
 class _CameraScan(QObject):
