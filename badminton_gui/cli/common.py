@@ -102,6 +102,20 @@ def params_from_args(args):
         raise UserError(str(exc)) from None
 
 
+def add_video_pair_arguments(parser, calib_help: str) -> None:
+    """The recorded video pair's options, read back by :func:`open_stereo_videos`: the two videos,
+    their rig, and how their frames pair (timestamp files, the videos' own times, or index)."""
+    parser.add_argument("--left", required=True, help="left camera video")
+    parser.add_argument("--right", required=True, help="right camera video")
+    parser.add_argument("--calib", required=True, help=calib_help)
+    parser.add_argument("--left-times", help="CSV with Frame,Timestamp for the left video")
+    parser.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
+    parser.add_argument("--video-times", action="store_true",
+                        help="pair the cameras by the videos' own frame timestamps (recordings whose "
+                             "cameras dropped frames; without this and without timestamp files, "
+                             "frame i pairs with frame i)")
+
+
 def open_stereo_videos(args):
     """(rig, source, pair count or None) for the commands that read a recorded video pair
     (`track`, `refine-calib`): ``--left --right --calib [--left-times --right-times |
@@ -112,7 +126,7 @@ def open_stereo_videos(args):
     from ..io.video import VideoPair, frame_times
     if (args.left_times is None) != (args.right_times is None):
         raise UserError("give --left-times and --right-times together")
-    video_times = getattr(args, "video_times", False)
+    video_times = args.video_times
     if video_times and args.left_times:
         raise UserError("give either --left-times/--right-times or --video-times, not both")
     try:

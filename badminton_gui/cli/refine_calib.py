@@ -14,8 +14,8 @@ import argparse
 
 from ..core.rig_refine import PairCollector, refine_relative_pose
 from ..core.tracker import StereoTracker, configure_opencv_threads
-from .common import (INPUT_ERRORS, Progress, UserError, add_preset_argument, open_stereo_videos,
-                     params_from_args)
+from .common import (INPUT_ERRORS, Progress, UserError, add_preset_argument,
+                     add_video_pair_arguments, open_stereo_videos, params_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -23,16 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Track a recorded rally, keep the shuttle's pairs of detections "
                                    "and refit the cameras' relative pose to them (self-calibration; "
                                    "intrinsics, baseline length and the court pose are kept).")
-    p.add_argument("--left", required=True, help="left camera video")
-    p.add_argument("--right", required=True, help="right camera video")
-    p.add_argument("--calib", required=True, help="rig file to start from (.yaml)")
+    add_video_pair_arguments(p, "rig file to start from (.yaml)")
     p.add_argument("-o", "--output", required=True, help="refined rig file to write (.yaml)")
-    p.add_argument("--left-times", help="CSV with Frame,Timestamp for the left video")
-    p.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
-    p.add_argument("--video-times", action="store_true",
-                   help="pair the cameras by the videos' own frame timestamps (recordings whose "
-                        "cameras dropped frames; without this and without timestamp files, frame i "
-                        "pairs with frame i)")
     p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_preset_argument(p)

@@ -11,7 +11,7 @@ from ..core.lookahead import StereoLookahead
 from ..core.tracker import StereoTracker, configure_opencv_threads
 from ..io.labels import TRACK_COLUMNS, track_row
 from .common import (Progress, UserError, add_lookahead_argument, add_preset_argument,
-                     open_stereo_videos, params_from_args)
+                     add_video_pair_arguments, open_stereo_videos, params_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,16 +20,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "left frame with both 2D detections, the 3D point (court frame "
                                    "when the rig has a court pose, else left-camera frame), "
                                    "distance, speed and the predicted landing point.")
-    p.add_argument("--left", required=True, help="left camera video")
-    p.add_argument("--right", required=True, help="right camera video")
-    p.add_argument("--calib", required=True, help="rig file (OpenCV FileStorage YAML)")
+    add_video_pair_arguments(p, "rig file (OpenCV FileStorage YAML)")
     p.add_argument("-o", "--output", required=True, help="output CSV")
-    p.add_argument("--left-times", help="CSV with Frame,Timestamp for the left video")
-    p.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
-    p.add_argument("--video-times", action="store_true",
-                   help="pair the cameras by the videos' own frame timestamps (recordings whose "
-                        "cameras dropped frames; without this and without timestamp files, frame i "
-                        "pairs with frame i)")
     add_preset_argument(p)
     add_lookahead_argument(p)
     p.add_argument("--robot", metavar="PORT", help="also stream results to the robot on this "
