@@ -2,7 +2,9 @@
 
 Why this file exists: every figure about detection quality in the README must be regenerable
 by one command. For each clip it runs the real CLI (`track` with both cameras of a stereo clip,
-paired by the label files' timestamps; `detect` on each camera alone; `detect --preset
+paired by the label files' timestamps, or by the videos' own times for a clip labelled through
+seeks, whose labels it compares with the image each was drawn on: clips.LABELLED_BY_SEEK;
+`detect` on each camera alone; `detect --preset
 broadcast` on the TV clips), scores the output with the five-outcome protocol (TP, TN, FP1,
 FP2, FN at 4 px @ 512 px width), and prints one row per clip and camera, marked tuned-on or
 held-out, with the processing speed of the run. On the NYCU rallies it also triangulates the
