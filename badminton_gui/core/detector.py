@@ -867,8 +867,8 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     # (the excess where the grown mask is set, +0.0 elsewhere, as np.where(support, excess, 0)
     # gave: a masked AND of the float image with itself into zeros — a masked OpenCV call
     # leaves dst untouched where the mask is 0 —, 4x faster than the comparison and np.where)
-    blob_excess = np.zeros_like(excess)
-    cv2.bitwise_and(excess, excess, dst=blob_excess, mask=cv2.dilate(inside, _GROW))
+    blob_excess = cv2.bitwise_and(excess, excess, dst=np.zeros_like(excess),
+                                  mask=cv2.dilate(inside, _GROW))
     blob_peak = np.maximum(window_max(blob_excess), 0)
     # No support, or nothing on it above the background: the whole window's excess instead.
     whole = blob_peak <= 0
@@ -970,8 +970,8 @@ def _measure_one(frame: np.ndarray, mask: np.ndarray, box, window: tuple[int, in
     features = np.array([[peak, background, math.log1p(n_bright), spill, whiteness, saturation,
                           math.log1p(n_inside), peak_sat, window_std]], dtype=np.float32)
 
-    blob_excess = np.zeros_like(excess)   # (as in measure_blobs)
-    cv2.bitwise_and(excess, excess, dst=blob_excess, mask=cv2.dilate(inside, _GROW))
+    blob_excess = cv2.bitwise_and(excess, excess, dst=np.zeros_like(excess),   # (as in measure_blobs)
+                                  mask=cv2.dilate(inside, _GROW))
     blob_peak = max(blob_excess.max(), 0)
     if blob_peak <= 0:
         blob_excess = np.maximum(excess, 0)
