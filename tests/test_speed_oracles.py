@@ -8,6 +8,7 @@ compared byte for byte before and after such a change.
 
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -152,3 +153,20 @@ def test_propagate_with_kept_steps_is_the_plain_loop_bit_for_bit():
                                or (math.isnan(a) and math.isnan(b)) for a, b in zip(got, want)), (n, d)
                     checked += 1
     assert checked > 3000 and len(trajectory._CHAINS) <= trajectory._CHAINS_MAX
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_masked_and_of_floats_is_numpys_where(seed):
+    """measure_blobs' blob excess: a masked AND of the float image with itself into zeros is
+    np.where(grown mask > 0, excess, float32(0)) bit for bit, -inf padding and -0.0 included."""
+    rng = np.random.default_rng(seed)
+    excess = rng.normal(0, 30, (37, 23)).astype(np.float32)
+    excess[rng.random(excess.shape) < 0.1] = -np.inf
+    excess[rng.random(excess.shape) < 0.05] = -0.0
+    inside = np.where(rng.random(excess.shape) < 0.2, 255, 0).astype(np.uint8)
+    grown = cv2.dilate(inside, np.ones((3, 3), np.uint8))
+    fast = np.zeros_like(excess)
+    cv2.bitwise_and(excess, excess, dst=fast, mask=grown)
+    plain = np.where(grown > 0, excess, np.float32(0))
+    assert fast.dtype == plain.dtype
+    assert np.array_equal(fast.view(np.uint32), plain.view(np.uint32))

@@ -804,8 +804,10 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     white_sum = window_sum(row_sums(cv2.bitwise_and(cmin, inside), cv2.CV_32S))
     sat_sum = window_sum(row_sums(cv2.bitwise_and(cv2.subtract(cmax, cmin), inside), cv2.CV_32S))
     has_inside = n_inside > 0
-    whiteness[blobs] = np.where(has_inside, white_sum / np.maximum(n_inside, 1), 0.0)
-    saturation[blobs] = np.where(has_inside, sat_sum / np.maximum(n_inside, 1), 255.0)
+    whiteness_m = np.where(has_inside, white_sum / np.maximum(n_inside, 1), 0.0)
+    saturation_m = np.where(has_inside, sat_sum / np.maximum(n_inside, 1), 255.0)
+    whiteness[blobs] = whiteness_m
+    saturation[blobs] = saturation_m
     # mean(B, G, R) in float32: the integer sum is exact, then one float32 division.
     gray = cv2.add(blue, green, dtype=cv2.CV_32F)
     cv2.add(gray, red, dst=gray, dtype=cv2.CV_32F)
@@ -850,16 +852,23 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     mean = window_sum(row_sums(gray, cv2.CV_64F)) / n_pixels
     mean_square = window_sum(row_sums(cv2.multiply(gray, gray, dtype=cv2.CV_64F), cv2.CV_64F)) / n_pixels
     window_std = np.sqrt(np.maximum(mean_square - mean * mean, 0.0))
-    features[blobs] = np.stack([peak, background, np.log1p(n_bright), spill, whiteness[blobs],
-                                saturation[blobs], np.log1p(n_inside), peak_sat, window_std],
-                               axis=1)
+    # One row per feature, cast to float32 as it is written (what assigning np.stack's
+    # float64 rows did, without np.stack's ~10 µs of Python wrappers).
+    appearance = np.empty((N_APPEARANCE, m), np.float32)
+    for row, values in enumerate((peak, background, np.log1p(n_bright), spill, whiteness_m,
+                                  saturation_m, np.log1p(n_inside), peak_sat, window_std)):
+        appearance[row] = values
+    features[blobs] = appearance.T
 
     # The position is measured on the blob's own pixels only (its mask, grown by one
     # full-resolution pixel for the blur fringe): a light or a court line inside the window is
     # brighter than the shuttle and used to drag the centroid towards itself. Off the support
     # the excess counts as 0 (so a blob's peak is at least 0); padding stays -inf or 0.
-    support = cv2.dilate(inside, _GROW) > 0
-    blob_excess = np.where(support, excess, np.float32(0))
+    # (the excess where the grown mask is set, +0.0 elsewhere, as np.where(support, excess, 0)
+    # gave: a masked AND of the float image with itself into zeros — a masked OpenCV call
+    # leaves dst untouched where the mask is 0 —, 4x faster than the comparison and np.where)
+    blob_excess = cv2.bitwise_and(excess, excess, dst=np.zeros_like(excess),
+                                  mask=cv2.dilate(inside, _GROW))
     blob_peak = np.maximum(window_max(blob_excess), 0)
     # No support, or nothing on it above the background: the whole window's excess instead.
     whole = blob_peak <= 0
@@ -961,8 +970,8 @@ def _measure_one(frame: np.ndarray, mask: np.ndarray, box, window: tuple[int, in
     features = np.array([[peak, background, math.log1p(n_bright), spill, whiteness, saturation,
                           math.log1p(n_inside), peak_sat, window_std]], dtype=np.float32)
 
-    support = cv2.dilate(inside, _GROW) > 0
-    blob_excess = np.where(support, excess, np.float32(0))
+    blob_excess = cv2.bitwise_and(excess, excess, dst=np.zeros_like(excess),   # (as in measure_blobs)
+                                  mask=cv2.dilate(inside, _GROW))
     blob_peak = max(blob_excess.max(), 0)
     if blob_peak <= 0:
         blob_excess = np.maximum(excess, 0)
