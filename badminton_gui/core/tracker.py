@@ -82,6 +82,10 @@ LANDED_RECENT = 1.0
 # px at 1280 px width: how far a held landed shuttle's candidate may move from one frame to the
 # next (it slides or rolls a little; a hand picking it up moves more).
 LANDED_STEP = 4.0
+# s: how long ago the held track may last have been reported with a 3D point above the floor
+# (``_flown_recently``): a landed shuttle slides and lies still for up to ~1.5 s before the hold
+# starts; a shoe walked along the floor after the rally was never seen in the air.
+FLOWN_MEMORY = 5.0
 
 
 class StereoTracker:
@@ -123,6 +127,9 @@ class StereoTracker:
         self._held = ([-1, 0, 0.0, 0.0, False], [-1, 0, 0.0, 0.0, False])
         self._held_now = [False, False]
         self._last_point: tuple[float, float] | None = None
+        # Per camera, for ``stereo.landed_frames``: tracklet -> time of its last report with a
+        # 3D point above ``landed_max_height`` (within ``FLOWN_MEMORY`` s).
+        self._flown: tuple[dict[int, float], dict[int, float]] = ({}, {})
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -147,6 +154,7 @@ class StereoTracker:
         self._held = ([-1, 0, 0.0, 0.0, False], [-1, 0, 0.0, 0.0, False])
         self._held_now = [False, False]
         self._last_point = None
+        self._flown = ({}, {})
 
     def epipolar_tolerance(self) -> float:
         """The epipolar gate in use: the configured one, widened to the rig's measured error."""
@@ -356,6 +364,9 @@ class StereoTracker:
         for cam, det in ((0, det_left), (1, det_right)):
             if not self._held_now[cam]:
                 self._held[cam][4] = det is not None and point_out is not None
+            if (det is not None and not det.predicted and point_out is not None
+                    and float(point_out[2]) > self.params.stereo.landed_max_height):
+                self._note_flown(cam, det.tracklet, timestamp)
         res_left, res_right = self._limit_alone(res_left, res_right, point_out is not None)
         distance = predicted_distance = None
         if point_out is not None:
@@ -380,8 +391,10 @@ class StereoTracker:
         The association reports a still track only for ``association.pause_frames`` after it
         flew; a shuttle that has just landed lies there longer, and the NYCU labels mark it
         visible for another ≈ 0.3–0.8 s. When this camera's report stops, its last report had a
-        3D point, the 3D flight's last point (within ``LANDED_RECENT`` s) lay near the floor and
-        the track it followed still has
+        3D point, the 3D flight's last point (within ``LANDED_RECENT`` s) lay near the floor, the
+        track it followed was reported with a 3D point above the floor (``_flown_recently``: on
+        the NYCU rallies a player's shoe paired across the cameras after the rally was held
+        otherwise) and still has
         a candidate where the last report was (within ``LANDED_STEP`` px a frame), that candidate
         is reported, for at most ``landed_frames`` frames. A shuttle held before the serve has
         no low 3D point before it; one picked up moves off.
@@ -396,7 +409,8 @@ class StereoTracker:
             return result, det
         if state[0] < 0:
             return result, None
-        if state[1] >= sp.landed_frames or (state[1] == 0 and not (state[4] and self._landed(t))):
+        if state[1] >= sp.landed_frames or (state[1] == 0 and not (state[4] and self._landed(t)
+                                                                   and self._flown_recently(cam, state[0], t))):
             state[0] = -1
             return result, None
         step = LANDED_STEP * result.image_size[0] / 1280.0
@@ -411,6 +425,20 @@ class StereoTracker:
                                                                     for k in result.candidates)), held
         state[0] = -1
         return result, None
+
+    def _note_flown(self, cam: int, tracklet: int, t: float) -> None:
+        """This camera reported ``tracklet`` with a 3D point above the floor at ``t``."""
+        flown = self._flown[cam]
+        flown[tracklet] = t
+        for k in [k for k, when in flown.items() if t - when > FLOWN_MEMORY]:
+            del flown[k]
+
+    def _flown_recently(self, cam: int, tracklet: int, t: float) -> bool:
+        """This camera reported ``tracklet`` with a 3D point above the floor within
+        ``FLOWN_MEMORY`` s: the track carried a flight down, it is not one that only ever moved
+        along the floor (a shoe paired with the other camera's shoe after the rally)."""
+        when = self._flown[cam].get(tracklet)
+        return when is not None and t - when <= FLOWN_MEMORY
 
     def _landed(self, t: float) -> bool:
         """The 3D flight's last point, within ``LANDED_RECENT`` s, lay near the floor."""
