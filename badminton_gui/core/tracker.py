@@ -73,6 +73,10 @@ STEREO_LOOK_AGE = 0.03
 # px² at 1280 px width: the largest spot ``_stereo_look`` takes (a shuttle near the rig is
 # ~10 px across; a player's white shirt is larger).
 STEREO_LOOK_MAX_AREA = 150.0
+# px/s at 1280 px width: how fast both tracks of a vouched pair must move in the image for the
+# gate widened to the rig's error (``stereo.vouch_rig_factor``): 2 px a frame at 119 fps; a
+# shuttle lying on the floor, a light, a still shoe move less.
+VOUCH_WIDE_IMAGE_SPEED = 250.0
 # m/s: the fastest 3D motion a vouched pair may show (smashes leave the racket at ≤ ~157 m/s).
 VOUCH_MAX_SPEED = 160.0
 # s: how recent the flight's last low 3D point must be when a camera's followed track stops
@@ -535,7 +539,9 @@ class StereoTracker:
         shuttle from clutter: a serve's or a hit's first frames, a shuttle coming back slowly into
         view from the top after a clear, are lost (about half the demo court's online errors).
         The other camera is evidence that camera lacks: a partner on the epipolar line (a tight
-        fixed tolerance, ``stereo.vouch_max_epipolar``) whose track moves the same way — the two
+        fixed tolerance, ``stereo.vouch_max_epipolar``, widened to ``vouch_rig_factor`` × the
+        rig's measured error for two tracks that both move in the image: on the roughly
+        calibrated NYCU rig sure pairs miss by ~30 px and the fixed gate never fired) whose track moves the same way — the two
         image velocities, followed back ``VOUCH_DT``, meet their epipolar lines too and
         triangulate to a 3D velocity of at least ``vouch_min_speed`` (a light, a shuttle at rest
         do not move; two unrelated blobs rarely move consistently). Only a camera with no
@@ -572,6 +578,15 @@ class StereoTracker:
                     if picks[cam] is not None:
                         results[cam] = self._pass_vouched(cam, results[cam], picks[cam][cam])
         return results[0], results[1]
+
+    def _vouch_tolerance(self) -> float:
+        """The vouch's epipolar gate: ``stereo.vouch_max_epipolar``, widened to
+        ``vouch_rig_factor`` × the rig's measured median epipolar error of sure pairs."""
+        sp = self.params.stereo
+        tol = float(sp.vouch_max_epipolar)
+        if sp.vouch_rig_factor > 0 and len(self._epipolar_samples) >= 20:
+            tol = max(tol, sp.vouch_rig_factor * self._epipolar_median())
+        return tol
 
     def _pass_vouched(self, cam: int, result: CameraResult, pick: Candidate) -> CameraResult:
         """``result`` with the held-back ``pick`` let through (it keeps its own score)."""
@@ -611,7 +626,9 @@ class StereoTracker:
         left, right = pools
         now_l = np.array([[e[0].x, e[0].y] for e in left])
         now_r = np.array([[e[0].x, e[0].y] for e in right])
-        tol = float(sp.vouch_max_epipolar)
+        tol = self._vouch_tolerance()
+        fixed = float(sp.vouch_max_epipolar)
+        wide_speed = VOUCH_WIDE_IMAGE_SPEED * results[0].image_size[0] / 1280.0
         epi = self.rig.epipolar_errors(now_l, now_r)
         if not (epi <= tol).any():
             return None
@@ -628,6 +645,12 @@ class StereoTracker:
                 if not (left[i][2] and right[j][2]):
                     continue
                 moving = False      # two shuttle-like blobs: by position alone
+            if epi[i, j] > fixed and not (moving and min(math.hypot(*left[i][1]), math.hypot(*right[j][1]))
+                                           >= wide_speed):
+                # Beyond the fixed gate only two tracks that both move in the image: on a
+                # roughly calibrated rig the widened gate lets chance alignments through (a
+                # lying shuttle beside a shoe, a noisy 3D speed from still blobs).
+                continue
             pts = self.rig.triangulate(np.stack([now_l[i], back_l[i]]), np.stack([now_r[j], back_r[j]]))
             dist = float(np.linalg.norm(pts[0]))
             if pts[0][2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
@@ -733,7 +756,7 @@ class StereoTracker:
             return None
         x, y, contrast, area = spot
         pair = ([[other.x, other.y]], [[x, y]]) if camera == 1 else ([[x, y]], [[other.x, other.y]])
-        if float(self.rig.epipolar_errors(*pair)[0, 0]) > sp.vouch_max_epipolar:
+        if float(self.rig.epipolar_errors(*pair)[0, 0]) > self._vouch_tolerance():
             return None
         return Candidate(x=x, y=y, length=float("nan"), short_side=float("nan"), whiteness=contrast,
                          area=area, motion=math.hypot(x - u, y - v), score=0.0)
