@@ -138,25 +138,3 @@ def test_only_a_track_seen_in_the_air_is_held():
     t._note_flown(0, 5, 0.9)
     assert _hold(t, xs, flown_at=None) == [100, None, None]
 
-
-
-# ---- stereo.floor_needs_flight ----------------------------------------------------------------
-
-def test_a_floor_point_outside_a_flight_needs_a_track_seen_in_the_air():
-    """A 3D point on the floor while no flight is followed (a shoe paired across the cameras
-    after the rally) is withheld unless one camera's track was reported above the floor."""
-    t = _tracker()
-    shoe = Candidate(600.0, 300.0, 30.0, 6.0, 200.0, 20.0, 1.0, 3.0, None, tracklet=11)
-    other = dataclasses.replace(shoe, tracklet=12)
-    floor, air = (1.0, 2.0, 0.05), (1.0, 2.0, 1.5)
-    assert t._floor_only(floor, False, (shoe, other), 3.0)
-    assert not t._floor_only(air, False, (shoe, other), 3.0)
-    assert not t._floor_only(floor, True, (shoe, other), 3.0)        # inside a flight
-    assert not t._floor_only(None, False, (shoe, other), 3.0)
-    t._note_flown(1, 12, 2.5)                                          # the right track flew
-    assert not t._floor_only(floor, False, (shoe, other), 3.0)
-    assert t._floor_only(floor, False, (shoe, other), 2.5 + FLOWN_MEMORY + 0.1)
-    t.close()
-    off = _tracker(floor_needs_flight=False)
-    assert not off._floor_only(floor, False, (shoe, other), 3.0)
-    off.close()

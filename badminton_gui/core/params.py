@@ -455,10 +455,6 @@ class StereoParams(ParamGroup):
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and
     # ~1.0 cm above the cork centre. It lies along its flight: cork ahead.
-    floor_needs_flight: bool = flag(True, label="Nothing new along the floor",
-                                    help="Outside a flight, a 3D point at most landed_max_height above the court "
-                                         "is reported only on a track either camera saw in the air (a shoe paired "
-                                         "across the cameras is not the shuttle)")
     rest_cork_ahead: float = param(0.031, 0.0, 0.1, step=0.001, unit="m", label="Lying: cork ahead",
                                    help="A shuttle lying where the last flight landed: its cork is this far "
                                         "ahead of the blob's 3D point along the landing direction (0 = off)")

@@ -363,10 +363,6 @@ class StereoTracker:
             point_out = None
         elif measured is not None and self.rig.has_court_pose:
             point_out = self._resting_cork(measured)
-        if self._floor_only(point_out, flight.in_flight, (det_left, det_right), timestamp):
-            res_left, res_right = (self._withhold(r) for r in (res_left, res_right))
-            det_left = det_right = None
-            point_out = None
         if point_out is not None:
             self._last_point = (timestamp, float(point_out[2]))
         for cam, det in ((0, det_left), (1, det_right)):
@@ -453,33 +449,6 @@ class StereoTracker:
         last = self._last_point
         return (last is not None and t - last[0] <= LANDED_RECENT
                 and last[1] <= self.params.stereo.landed_max_height)
-
-    def _floor_only(self, point: tuple | None, in_flight: bool, dets: tuple, t: float) -> bool:
-        """A 3D point on the floor outside any flight whose tracks neither camera saw in the air
-        (``stereo.floor_needs_flight``): the readout is withheld in both cameras.
-
-        After a rally the players walk off, and a white shoe seen by both cameras pairs on its
-        epipolar line at floor height (rally_11-48-00: both cameras, ≈ 20 frames). A shuttle on
-        the floor got there by a flight, on a track seen above ``landed_max_height``
-        (``_flown_recently``); a new shot from near the floor rises above it within a few frames.
-        """
-        sp = self.params.stereo
-        if (point is None or not sp.floor_needs_flight or not self.rig.has_court_pose or in_flight
-                or float(point[2]) > sp.landed_max_height):
-            return False
-        return not any(det is not None and not det.predicted and self._flown_recently(cam, det.tracklet, t)
-                       for cam, det in enumerate(dets))
-
-    @staticmethod
-    def _withhold(result: CameraResult) -> CameraResult:
-        """``result`` with its detection withheld from the readout (marked ``REJECT_STEREO``)."""
-        det = result.detection
-        if det is None:
-            return result
-        return dataclasses.replace(
-            result, detection=None,
-            candidates=tuple(dataclasses.replace(c, rejected_by=REJECT_STEREO) if c is det else c
-                             for c in result.candidates))
 
     def _limit_alone(self, res_left: CameraResult, res_right: CameraResult, has_point: bool
                      ) -> tuple[CameraResult, CameraResult]:
