@@ -326,3 +326,38 @@ def test_the_image_path_and_the_flight_say_when_the_shuttle_is_out_of_view(track
     K = rig.M1
     cam = np.array([(-50.0 - K[0, 2]) * 4.0 / K[0, 0], (300.0 - K[1, 2]) * 4.0 / K[1, 1], 4.0])
     assert tracker._out_of_view(0, frame, np.asarray(rig.to_output(cam[None]))[0])
+
+
+def _measured_rig_error(tracker, median_px):
+    for _ in range(40):
+        tracker._add_epipolar_sample(median_px)
+
+
+def test_the_gate_widens_to_the_rigs_error_only_for_pairs_moving_in_both_images(tracker):
+    """``stereo.vouch_rig_factor``: on a rig whose sure pairs miss their epipolar lines by
+    ~10 px (the NYCU rig's rough calibration: ~30 px), a pair 8 px off passes when both tracks
+    move fast enough in the image; a slower pair, or first sightings (by position alone), only
+    within the fixed gate."""
+    fast = {"velocity_3d": (0.0, 6.0, 2.0), "right_offset": (0.0, 8.0)}     # ≈ 390 px/s
+    slow = {"velocity_3d": (0.0, 3.0, 1.0), "right_offset": (0.0, 8.0)}     # ≈ 195 px/s
+    left, right = tracker._vouch(*_scene(tracker, **fast))
+    assert not _passed(left) and not _passed(right)           # nothing measured yet: fixed gate
+    _measured_rig_error(tracker, 10.0)
+    left, right = tracker._vouch(*_scene(tracker, **fast))
+    assert len(_passed(left)) == 1 and len(_passed(right)) == 1
+    left, right = tracker._vouch(*_scene(tracker, **slow))
+    assert not _passed(left) and not _passed(right)
+    left, right = tracker._vouch(*_scene(tracker, (0.0, 3.0, 1.0)))  # on the line: fixed gate
+    assert len(_passed(left)) == 1 and len(_passed(right)) == 1
+    left, right = tracker._vouch(*_scene(tracker, first=True, score=0.9, **fast))
+    assert not _passed(left) and not _passed(right)           # first sightings: by position
+
+
+def test_the_widened_gate_is_off_at_factor_zero():
+    p = TrackerParams()
+    p = dataclasses.replace(p, stereo=dataclasses.replace(p.stereo, vouch_rig_factor=0.0))
+    t = StereoTracker(make_rig("binocular", (1280, 720)), p, parallel=False)
+    _measured_rig_error(t, 10.0)
+    left, right = t._vouch(*_scene(t, (0.0, 6.0, 2.0), right_offset=(0.0, 8.0)))
+    assert not _passed(left) and not _passed(right)
+    t.close()

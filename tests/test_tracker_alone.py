@@ -13,7 +13,7 @@ import dataclasses
 import pytest
 
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.core.tracker import StereoTracker
+from badminton_gui.core.tracker import FLOWN_MEMORY, StereoTracker
 from badminton_gui.core.types import REJECT_STEREO, CameraResult, Candidate
 from badminton_gui.io.demo_scene import make_rig
 
@@ -78,10 +78,13 @@ def _cand(x, rejected=None):
     return Candidate(float(x), 500.0, 30.0, 6.0, 200.0, 20.0, 1.0, 0.5, rejected, tracklet=4)
 
 
-def _hold(tracker, xs, last_z=0.0, t0=1.0, dt=0.01, paired=True):
+def _hold(tracker, xs, last_z=0.0, t0=1.0, dt=0.01, paired=True, flown_at=0.5):
     """The first x is reported by the detector; the others are the same track's candidate held
-    back by the association. Returns the x reported per frame (None: nothing)."""
+    back by the association. ``flown_at``: when the track was last reported with a 3D point
+    above the floor (None: never). Returns the x reported per frame (None: nothing)."""
     out = []
+    if flown_at is not None:
+        tracker._note_flown(0, 4, flown_at)
     for k, x in enumerate(xs):
         t = t0 + k * dt
         if k == 0:
@@ -111,6 +114,7 @@ def test_no_hold_above_the_floor_when_the_flight_is_old_or_the_candidate_moves_o
     # a track reported without a 3D point (clutter after the rally) is not held
     assert _hold(_tracker(landed_frames=10), xs, paired=False) == [100, None, None]
     t = _tracker(landed_frames=10)
+    t._note_flown(0, 4, -5.5)
     t._last_point = (-5.0, 0.0)
     c = _cand(100)
     t._hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, 0.0)
@@ -119,3 +123,18 @@ def test_no_hold_above_the_floor_when_the_flight_is_old_or_the_candidate_moves_o
     assert t._hold_landed(0, CameraResult(None, (m,), image_size=(1280, 720)), None, 0.01)[1] is None
     t.close()
     assert _hold(_tracker(landed_frames=10), [100, 101, 120, 121]) == [100, 101, None, None]
+
+
+def test_only_a_track_seen_in_the_air_is_held():
+    """A track paired at floor height that was never reported with a 3D point above the floor
+    (a player's shoe seen by both cameras after the rally) is not held; one that carried the
+    flight down is, unless that was longer than ``FLOWN_MEMORY`` ago."""
+    xs = [100, 101, 101]
+    assert _hold(_tracker(landed_frames=10), xs, flown_at=0.5) == [100, 101, 101]
+    assert _hold(_tracker(landed_frames=10), xs, flown_at=None) == [100, None, None]
+    assert _hold(_tracker(landed_frames=10), xs, flown_at=1.0 - FLOWN_MEMORY - 0.1) == [100, None, None]
+    # another tracklet seen in the air does not vouch for this one
+    t = _tracker(landed_frames=10)
+    t._note_flown(0, 5, 0.9)
+    assert _hold(t, xs, flown_at=None) == [100, None, None]
+

@@ -382,8 +382,12 @@ class StereoParams(ParamGroup):
                                    "coming back slowly into view")
     vouch_max_epipolar: float = param(3.0, 0.1, 100.0, step=0.1, unit="px", label="... within epipolar",
                                       help="Largest epipolar error of such a pair, now and one velocity step back "
-                                           "(fixed: never widened to a learnt tolerance, so a rig calibrated "
-                                           "roughly does not vouch for chance alignments)")
+                                           "(not the learnt pairing tolerance, so a rig calibrated roughly does "
+                                           "not vouch for chance alignments; see the next setting)")
+    vouch_rig_factor: float = param(1.5, 0.0, 10.0, step=0.1, label="... or × the rig's error",
+                                    help="Widen that gate to this many times the median epipolar error of "
+                                         "sure pairs measured on this rig, for two tracks both moving ≥ 2 px a "
+                                         "frame; also the stereo look's gate (0 = the fixed gate only)")
     vouch_min_quality: float = param(0.1, 0.0, 1.0, step=0.01, label="... track quality ≥",
                                      help="Running quality the held-back candidate's track needs")
     vouch_first_quality: float = param(0.4, 0.0, 1.0, step=0.01, label="... first sighting from quality",

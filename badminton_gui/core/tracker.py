@@ -73,6 +73,10 @@ STEREO_LOOK_AGE = 0.03
 # px² at 1280 px width: the largest spot ``_stereo_look`` takes (a shuttle near the rig is
 # ~10 px across; a player's white shirt is larger).
 STEREO_LOOK_MAX_AREA = 150.0
+# px/s at 1280 px width: how fast both tracks of a vouched pair must move in the image for the
+# gate widened to the rig's error (``stereo.vouch_rig_factor``): 2 px a frame at 119 fps; a
+# shuttle lying on the floor, a light, a still shoe move less.
+VOUCH_WIDE_IMAGE_SPEED = 250.0
 # m/s: the fastest 3D motion a vouched pair may show (smashes leave the racket at ≤ ~157 m/s).
 VOUCH_MAX_SPEED = 160.0
 # s: how recent the flight's last low 3D point must be when a camera's followed track stops
@@ -82,6 +86,10 @@ LANDED_RECENT = 1.0
 # px at 1280 px width: how far a held landed shuttle's candidate may move from one frame to the
 # next (it slides or rolls a little; a hand picking it up moves more).
 LANDED_STEP = 4.0
+# s: how long ago the held track may last have been reported with a 3D point above the floor
+# (``_flown_recently``): a landed shuttle slides and lies still for up to ~1.5 s before the hold
+# starts; a shoe walked along the floor after the rally was never seen in the air.
+FLOWN_MEMORY = 5.0
 
 
 class StereoTracker:
@@ -123,6 +131,9 @@ class StereoTracker:
         self._held = ([-1, 0, 0.0, 0.0, False], [-1, 0, 0.0, 0.0, False])
         self._held_now = [False, False]
         self._last_point: tuple[float, float] | None = None
+        # Per camera, for ``stereo.landed_frames``: tracklet -> time of its last report with a
+        # 3D point above ``landed_max_height`` (within ``FLOWN_MEMORY`` s).
+        self._flown: tuple[dict[int, float], dict[int, float]] = ({}, {})
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -147,6 +158,7 @@ class StereoTracker:
         self._held = ([-1, 0, 0.0, 0.0, False], [-1, 0, 0.0, 0.0, False])
         self._held_now = [False, False]
         self._last_point = None
+        self._flown = ({}, {})
 
     def epipolar_tolerance(self) -> float:
         """The epipolar gate in use: the configured one, widened to the rig's measured error."""
@@ -356,6 +368,9 @@ class StereoTracker:
         for cam, det in ((0, det_left), (1, det_right)):
             if not self._held_now[cam]:
                 self._held[cam][4] = det is not None and point_out is not None
+            if (det is not None and not det.predicted and point_out is not None
+                    and float(point_out[2]) > self.params.stereo.landed_max_height):
+                self._note_flown(cam, det.tracklet, timestamp)
         res_left, res_right = self._limit_alone(res_left, res_right, point_out is not None)
         distance = predicted_distance = None
         if point_out is not None:
@@ -380,8 +395,10 @@ class StereoTracker:
         The association reports a still track only for ``association.pause_frames`` after it
         flew; a shuttle that has just landed lies there longer, and the NYCU labels mark it
         visible for another ≈ 0.3–0.8 s. When this camera's report stops, its last report had a
-        3D point, the 3D flight's last point (within ``LANDED_RECENT`` s) lay near the floor and
-        the track it followed still has
+        3D point, the 3D flight's last point (within ``LANDED_RECENT`` s) lay near the floor, the
+        track it followed was reported with a 3D point above the floor (``_flown_recently``: on
+        the NYCU rallies a player's shoe paired across the cameras after the rally was held
+        otherwise) and still has
         a candidate where the last report was (within ``LANDED_STEP`` px a frame), that candidate
         is reported, for at most ``landed_frames`` frames. A shuttle held before the serve has
         no low 3D point before it; one picked up moves off.
@@ -396,7 +413,8 @@ class StereoTracker:
             return result, det
         if state[0] < 0:
             return result, None
-        if state[1] >= sp.landed_frames or (state[1] == 0 and not (state[4] and self._landed(t))):
+        if state[1] >= sp.landed_frames or (state[1] == 0 and not (state[4] and self._landed(t)
+                                                                   and self._flown_recently(cam, state[0], t))):
             state[0] = -1
             return result, None
         step = LANDED_STEP * result.image_size[0] / 1280.0
@@ -411,6 +429,20 @@ class StereoTracker:
                                                                     for k in result.candidates)), held
         state[0] = -1
         return result, None
+
+    def _note_flown(self, cam: int, tracklet: int, t: float) -> None:
+        """This camera reported ``tracklet`` with a 3D point above the floor at ``t``."""
+        flown = self._flown[cam]
+        flown[tracklet] = t
+        for k in [k for k, when in flown.items() if t - when > FLOWN_MEMORY]:
+            del flown[k]
+
+    def _flown_recently(self, cam: int, tracklet: int, t: float) -> bool:
+        """This camera reported ``tracklet`` with a 3D point above the floor within
+        ``FLOWN_MEMORY`` s: the track carried a flight down, it is not one that only ever moved
+        along the floor (a shoe paired with the other camera's shoe after the rally)."""
+        when = self._flown[cam].get(tracklet)
+        return when is not None and t - when <= FLOWN_MEMORY
 
     def _landed(self, t: float) -> bool:
         """The 3D flight's last point, within ``LANDED_RECENT`` s, lay near the floor."""
@@ -476,7 +508,9 @@ class StereoTracker:
         shuttle from clutter: a serve's or a hit's first frames, a shuttle coming back slowly into
         view from the top after a clear, are lost (about half the demo court's online errors).
         The other camera is evidence that camera lacks: a partner on the epipolar line (a tight
-        fixed tolerance, ``stereo.vouch_max_epipolar``) whose track moves the same way — the two
+        fixed tolerance, ``stereo.vouch_max_epipolar``, widened to ``vouch_rig_factor`` × the
+        rig's measured error for two tracks that both move in the image: on the roughly
+        calibrated NYCU rig sure pairs miss by ~30 px and the fixed gate never fired) whose track moves the same way — the two
         image velocities, followed back ``VOUCH_DT``, meet their epipolar lines too and
         triangulate to a 3D velocity of at least ``vouch_min_speed`` (a light, a shuttle at rest
         do not move; two unrelated blobs rarely move consistently). Only a camera with no
@@ -513,6 +547,15 @@ class StereoTracker:
                     if picks[cam] is not None:
                         results[cam] = self._pass_vouched(cam, results[cam], picks[cam][cam])
         return results[0], results[1]
+
+    def _vouch_tolerance(self) -> float:
+        """The vouch's epipolar gate: ``stereo.vouch_max_epipolar``, widened to
+        ``vouch_rig_factor`` × the rig's measured median epipolar error of sure pairs."""
+        sp = self.params.stereo
+        tol = float(sp.vouch_max_epipolar)
+        if sp.vouch_rig_factor > 0 and len(self._epipolar_samples) >= 20:
+            tol = max(tol, sp.vouch_rig_factor * self._epipolar_median())
+        return tol
 
     def _pass_vouched(self, cam: int, result: CameraResult, pick: Candidate) -> CameraResult:
         """``result`` with the held-back ``pick`` let through (it keeps its own score)."""
@@ -552,7 +595,9 @@ class StereoTracker:
         left, right = pools
         now_l = np.array([[e[0].x, e[0].y] for e in left])
         now_r = np.array([[e[0].x, e[0].y] for e in right])
-        tol = float(sp.vouch_max_epipolar)
+        tol = self._vouch_tolerance()
+        fixed = float(sp.vouch_max_epipolar)
+        wide_speed = VOUCH_WIDE_IMAGE_SPEED * results[0].image_size[0] / 1280.0
         epi = self.rig.epipolar_errors(now_l, now_r)
         if not (epi <= tol).any():
             return None
@@ -569,6 +614,12 @@ class StereoTracker:
                 if not (left[i][2] and right[j][2]):
                     continue
                 moving = False      # two shuttle-like blobs: by position alone
+            if epi[i, j] > fixed and not (moving and min(math.hypot(*left[i][1]), math.hypot(*right[j][1]))
+                                           >= wide_speed):
+                # Beyond the fixed gate only two tracks that both move in the image: on a
+                # roughly calibrated rig the widened gate lets chance alignments through (a
+                # lying shuttle beside a shoe, a noisy 3D speed from still blobs).
+                continue
             pts = self.rig.triangulate(np.stack([now_l[i], back_l[i]]), np.stack([now_r[j], back_r[j]]))
             dist = float(np.linalg.norm(pts[0]))
             if pts[0][2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
@@ -674,7 +725,7 @@ class StereoTracker:
             return None
         x, y, contrast, area = spot
         pair = ([[other.x, other.y]], [[x, y]]) if camera == 1 else ([[x, y]], [[other.x, other.y]])
-        if float(self.rig.epipolar_errors(*pair)[0, 0]) > sp.vouch_max_epipolar:
+        if float(self.rig.epipolar_errors(*pair)[0, 0]) > self._vouch_tolerance():
             return None
         return Candidate(x=x, y=y, length=float("nan"), short_side=float("nan"), whiteness=contrast,
                          area=area, motion=math.hypot(x - u, y - v), score=0.0)
