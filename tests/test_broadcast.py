@@ -141,3 +141,43 @@ def test_broadcast_preset_lets_a_short_blob_through_where_the_followed_shuttle_i
             far = [c for c in res.candidates if math.hypot(c.x - 301, c.y - 501) <= 3]
             assert far and all(c.rejected_by == "length" for c in far)
     assert all(hits) if guided is None else not any(hits)
+
+
+def _player_leaves(n=70, stand=range(10, 25)):
+    """A bright court (grey 150) where a dark player (a 40 × 80 px block, grey 40) stands for
+    half a second (``stand``), then is gone: the court he uncovers is brighter than an average
+    that learnt him. Grey frames at 1280 × 720 (the broadcast preset's processing scale is 1)."""
+    rng = np.random.default_rng(5)
+    frames = []
+    for i in range(n):
+        img = np.clip(rng.normal(150, 2, (720, 1280)), 0, 255).astype(np.uint8)
+        if i in stand:
+            img[300:380, 600:640] = 40
+        frames.append(img)
+    return frames
+
+
+@pytest.mark.parametrize("dark", [0, 30])
+def test_a_dark_player_who_leaves_leaves_no_bright_ghost(dark):
+    """With background.dark_threshold the pixels darker than the average learn slowly (like the
+    foreground), so the running average never learns the player and the court he uncovers is
+    not foreground; without it (the default) it floods the mask where he stood."""
+    from badminton_gui.core.background import BackgroundModel
+    p = load_preset("broadcast").with_value("background.dark_threshold", dark)
+    model = BackgroundModel(p.background, p.binarize)
+    ghost = []
+    for i, img in enumerate(_player_leaves()):
+        mask = model.apply(img)
+        if i >= 25:
+            ghost.append(np.count_nonzero(mask[300:380, 600:640]) / (80 * 40))
+    if dark:
+        assert max(ghost) < 0.05
+    else:
+        # the 45 frames after he left: still most of the patch
+        assert min(ghost) > 0.5
+
+
+def test_dark_threshold_is_off_by_default_and_on_in_the_broadcast_preset():
+    assert TrackerParams().background.dark_threshold == 0
+    assert load_preset("default").background.dark_threshold == 0
+    assert load_preset("broadcast").background.dark_threshold == 30
