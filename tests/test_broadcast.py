@@ -4,6 +4,7 @@ The default preset (the two-camera rig) must not change: every switch here defau
 the tests check both that the switch does what it says and that it is off by default.
 """
 
+import math
 from pathlib import Path
 
 import cv2
@@ -96,3 +97,87 @@ def test_only_the_followed_tracklet_gets_the_long_pause():
 
 def test_followed_pause_is_off_by_default():
     assert TrackerParams().association.followed_pause_frames == 0
+
+
+def _far_court_flight(n=50, small=range(25, 29)):
+    """A TV-sized dot flight (1280×720 at 30 fps, 12 px a frame) that shrinks to a 3 × 3 px
+    dot in the ``small`` frames (the far-court shuttle: a blob of 14–19 px contour length, below
+    filter 1's 20 px); a static 3 × 3 dot far from the path is there in those frames too."""
+    rng = np.random.default_rng(3)
+    frames, truth = [], []
+    for i in range(n):
+        img = np.clip(rng.normal(60, 2, (720, 1280, 3)), 0, 255).astype(np.uint8)
+        x, y = 200 + 12 * i, 300
+        if i in small:
+            img[y - 1:y + 2, x - 1:x + 2] = 240
+            img[500:503, 300:303] = 240
+        else:
+            cv2.circle(img, (x, y), 3, (240, 240, 240), -1)
+        frames.append(img)
+        truth.append((x, y))
+    return frames, truth
+
+
+@pytest.mark.parametrize("guided", [0.0, None])
+def test_broadcast_preset_lets_a_short_blob_through_where_the_followed_shuttle_is_predicted(guided):
+    """The broadcast preset uses the default's guided exception to filter 1 (14 px within 12 px
+    of the followed shuttle's prediction; measured on the tuned-on TV clips 77.75 -> 79.00 %):
+    the far-court shuttle shrinks below the 20 px minimum for a frame or two. Elsewhere a blob
+    that short stays rejected. ``guided=0`` is the preset before (the exception off)."""
+    p = load_preset("broadcast")
+    assert p.contour_length.guided_min_length == 14.0 and p.contour_length.guided_radius == 12.0
+    if guided is not None:
+        p = p.with_value("contour_length.guided_min_length", guided)
+    frames, truth = _far_court_flight()
+    det = CameraDetector(p)
+    hits = []
+    for i, img in enumerate(frames):
+        res = det.process(img, i / FPS, keep_mask=False)
+        if i in range(25, 29):
+            short = [c for c in res.candidates if abs(c.x - truth[i][0]) <= 3 and abs(c.y - truth[i][1]) <= 3]
+            assert short and all(14.0 <= c.length < 20.0 for c in short)
+            d = res.detection
+            hits.append(d is not None and math.hypot(d.x - truth[i][0], d.y - truth[i][1]) <= 3)
+            far = [c for c in res.candidates if math.hypot(c.x - 301, c.y - 501) <= 3]
+            assert far and all(c.rejected_by == "length" for c in far)
+    assert all(hits) if guided is None else not any(hits)
+
+
+def _player_leaves(n=70, stand=range(10, 25)):
+    """A bright court (grey 150) where a dark player (a 40 × 80 px block, grey 40) stands for
+    half a second (``stand``), then is gone: the court he uncovers is brighter than an average
+    that learnt him. Grey frames at 1280 × 720 (the broadcast preset's processing scale is 1)."""
+    rng = np.random.default_rng(5)
+    frames = []
+    for i in range(n):
+        img = np.clip(rng.normal(150, 2, (720, 1280)), 0, 255).astype(np.uint8)
+        if i in stand:
+            img[300:380, 600:640] = 40
+        frames.append(img)
+    return frames
+
+
+@pytest.mark.parametrize("dark", [0, 30])
+def test_a_dark_player_who_leaves_leaves_no_bright_ghost(dark):
+    """With background.dark_threshold the pixels darker than the average learn slowly (like the
+    foreground), so the running average never learns the player and the court he uncovers is
+    not foreground; without it (the default) it floods the mask where he stood."""
+    from badminton_gui.core.background import BackgroundModel
+    p = load_preset("broadcast").with_value("background.dark_threshold", dark)
+    model = BackgroundModel(p.background, p.binarize)
+    ghost = []
+    for i, img in enumerate(_player_leaves()):
+        mask = model.apply(img)
+        if i >= 25:
+            ghost.append(np.count_nonzero(mask[300:380, 600:640]) / (80 * 40))
+    if dark:
+        assert max(ghost) < 0.05
+    else:
+        # the 45 frames after he left: still most of the patch
+        assert min(ghost) > 0.5
+
+
+def test_dark_threshold_is_off_by_default_and_on_in_the_broadcast_preset():
+    assert TrackerParams().background.dark_threshold == 0
+    assert load_preset("default").background.dark_threshold == 0
+    assert load_preset("broadcast").background.dark_threshold == 30

@@ -152,8 +152,9 @@ class BackgroundModel:
             self.last_unlit = self._unlit
         alpha = float(self._bg.learning_rate)
         if alpha > 0:
-            cv2.accumulateWeighted(gray, avg, alpha, mask=cv2.bitwise_not(mask))
-            cv2.accumulateWeighted(gray, avg, alpha * 0.1, mask=mask)
+            slow = self._slow_learners(mask, diff, self._dark[rows, cols])
+            cv2.accumulateWeighted(gray, avg, alpha, mask=cv2.bitwise_not(slow))
+            cv2.accumulateWeighted(gray, avg, alpha * 0.1, mask=slow)
         return self._clean(mask)
 
     def is_blind(self, x: float, y: float) -> bool:
@@ -173,6 +174,22 @@ class BackgroundModel:
         k = int(self._bg.shake_tolerance) + 1
         window = avg[max(yi - k, 0):yi + k + 1, max(xi - k, 0):xi + k + 1]
         return bool(window.max() >= float(self._bin.max_background))
+
+    def _slow_learners(self, mask: np.ndarray, diff: np.ndarray, dst: np.ndarray) -> np.ndarray:
+        """The pixels (255) whose average learns at α/10: the foreground, and with
+        ``background.dark_threshold`` also those darker than the reference by more than it.
+
+        A dark player who stands for a second would otherwise be learnt at α and leave a bright
+        ghost of the court behind when he moves (the ghost is foreground, so it learns at α/10
+        and lasts ~200 frames). Darker pixels are never foreground here, so the mask is the
+        same this frame; only what the average remembers changes. ``diff`` is the frame minus
+        the (shake-dilated, gain-corrected) reference, as thresholded for the mask.
+        """
+        dark = int(self._bg.dark_threshold)
+        if dark <= 0:
+            return mask
+        darker = cv2.compare(diff, -float(dark), cv2.CMP_LT, dst=dst)
+        return cv2.bitwise_or(darker, mask, dst=darker)
 
     def _brighter_than_average(self, gray: np.ndarray) -> np.ndarray:
         """Pixels brighter than a running average of the scene by more than the threshold.
@@ -195,6 +212,7 @@ class BackgroundModel:
             self._unlit = np.empty(gray.shape, np.uint8)
             self._raw_mask = np.empty(gray.shape, np.uint8)
             self._still = np.empty(gray.shape, np.uint8)
+            self._dark = np.empty(gray.shape, np.uint8)
             return np.zeros_like(gray)
         # Lights flicker (mains frequency seen by a 119 fps camera) and the hall's exposure
         # drifts: the whole scene brightens or darkens by a common *gain*. Estimated robustly
@@ -236,11 +254,12 @@ class BackgroundModel:
             self.last_unlit = unlit
         alpha = float(self._bg.learning_rate)
         if alpha > 0:
+            slow = self._slow_learners(mask, diff, self._dark)
             cv2.accumulateWeighted(gray, self._average, alpha,
-                                   mask=cv2.bitwise_not(mask, dst=self._still))
+                                   mask=cv2.bitwise_not(slow, dst=self._still))
             # Slow leak under the foreground too, so a change that stays (a light switched on)
             # is absorbed eventually.
-            cv2.accumulateWeighted(gray, self._average, alpha * 0.1, mask=mask)
+            cv2.accumulateWeighted(gray, self._average, alpha * 0.1, mask=slow)
             if self._catch_up is not None and self._catch_up[0].shape == gray.shape:
                 missed, extra = self._catch_up
                 cv2.accumulateWeighted(gray, self._average, extra,

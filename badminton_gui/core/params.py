@@ -83,6 +83,14 @@ class BackgroundParams(ParamGroup):
     compensate_gain: bool = flag(True, label="Compensate flicker",
                                  help="Divide out a common brightness gain (light flicker, exposure drift) "
                                       "before the brighter-than-average difference")
+    # TV footage: a player in dark or saturated clothes is darker than the bright court. At α the
+    # running average learns him within ~20 frames where he stands; when he leaves, the court he
+    # uncovers is brighter than that average and floods the mask (the shuttle merges into it)
+    # for ~200 frames, kept by the slow learning under the foreground (α/10).
+    dark_threshold: int = param(0, 0, 254, step=1, label="Darker learns slowly from",
+                                help="Brighter-than-average: pixels darker than the average by more than this "
+                                     "(a player, a shadow) learn at α/10 like the foreground, so a player "
+                                     "who leaves leaves no bright ghost behind; 0 = off (they learn at α)")
     shake_tolerance: int = param(1, 0, 5, step=1, unit="px", label="Shake tolerance",
                                  help="Brighter-than-average: compare with the brightest average pixel within "
                                       "this radius (processing-scale px), so a shaking camera's edges stay quiet")

@@ -1,0 +1,155 @@
+"""Error census of `detect` on the broadcast clips: why each wrong frame is wrong.
+
+Why this file exists: the accuracy totals say how many frames are wrong, not what to attack.
+This runs the one-camera detector in-process (the same chain and look-ahead as `detect`, so the
+counts equal accuracy.py's) and gives each FP1 / FP2 / FN frame a cause read from that frame's
+candidates and mask at the label:
+
+* ``refused by <filter>``: a candidate lies within the tolerance of the label and a filter
+  refused it — ``length`` / ``short_side`` (filters 1, 2), ``whiteness`` (filter 3, or not among
+  the blobs measured), ``motion`` (the association: no confirmed, travelling tracklet),
+  ``score`` (passed, but another candidate scored higher);
+* ``inside a large blob``: the label is foreground of a blob too large for a shuttle (a player,
+  or the brighter-than-average mask flooding the court a player left);
+* ``not in mask``: nothing brightened at the label (the first frame, a shuttle absorbed);
+* ``in mask, no candidate``: foreground there, but no candidate near it;
+* FP2: reported while the label says not visible.
+
+    .venv/bin/python benchmarks/broadcast_census.py                       # tuned-on clips, look-ahead 4
+    .venv/bin/python benchmarks/broadcast_census.py --lookahead 0 --frames  # online, one line per error
+
+Held-out clips are refused unless --held-out is given (they are for the final measurement only).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import math
+import re
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from badminton_gui.core.detector import CameraDetector  # noqa: E402
+from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
+from badminton_gui.core.lookahead import CameraLookahead  # noqa: E402
+from badminton_gui.io.labels import read_point_labels  # noqa: E402
+from badminton_gui.io.presets import load_preset  # noqa: E402
+from badminton_gui.io.video import VideoFile  # noqa: E402
+from clips import broadcast_clips  # noqa: E402
+
+# px² of mask: a connected foreground region at the label larger than this is "a large blob"
+# (a shuttle at 1280 px is at most ~15 × 15 px with the mask's dilation).
+LARGE_AREA = 400
+
+
+def label_cause(det: CameraDetector, result, x: float, y: float, tol: float) -> str:
+    """Why the shuttle labelled at (x, y) was not the detection (see the module docstring)."""
+    near = [c for c in result.candidates if not c.predicted and math.hypot(c.x - x, c.y - y) <= tol]
+    if near:
+        # The candidate that came closest to being the detection.
+        order = {None: 0, "score": 1, "motion": 2, "whiteness": 3, "short_side": 4, "length": 5}
+        best = min(near, key=lambda c: order.get(c.rejected_by, 6))
+        return f"refused by {best.rejected_by}" if best.rejected_by else "passed, not reported"
+    mask = result.mask
+    xi, yi = int(round(x * result.mask_scale)), int(round(y * result.mask_scale))
+    h, w = mask.shape
+    window = mask[max(yi - 2, 0):yi + 3, max(xi - 2, 0):xi + 3]
+    if not (window > 0).any():
+        return "not in mask"
+    if det.is_merged(x, y):
+        return "inside a large blob"
+    r = 60
+    y0, x0 = max(yi - r, 0), max(xi - r, 0)
+    _, lab, stats, _ = cv2.connectedComponentsWithStats(mask[y0:yi + r + 1, x0:xi + r + 1], connectivity=8)
+    ids = np.unique(lab[max(yi - 2, 0) - y0:yi + 3 - y0, max(xi - 2, 0) - x0:xi + 3 - x0])
+    area = max((int(stats[k, cv2.CC_STAT_AREA]) for k in ids if k > 0), default=0)
+    return "inside a large blob" if area > LARGE_AREA else "in mask, no candidate"
+
+
+def census(clip, preset: str, lookahead: int, frames_out: list[str] | None) -> collections.Counter:
+    params = load_preset(preset).with_value("lookahead.frames", lookahead)
+    det, la = CameraDetector(params), CameraLookahead(params)
+    labels = read_point_labels(clip.labels).as_dict()
+    video = VideoFile(clip.video)
+    tol = tolerance_px(1280)
+    causes: dict[int, str] = {}
+    decided = []
+    i = 0
+    while (frame := video.read()) is not None:
+        res = det.process(frame, i / video.fps, keep_mask=True)
+        visible, x, y = labels.get(i, (False, 0.0, 0.0))
+        if visible:
+            causes[i] = label_cause(det, res, x, y, tol)
+        decided += la.push(dataclass_without_mask(res), i / video.fps)
+        i += 1
+    decided += la.flush()
+    video.close()
+    out = collections.Counter()
+    for f, (visible, x, y) in sorted(labels.items()):
+        d = decided[f].detection if f < len(decided) else None
+        if d is None:
+            outcome = "FN" if visible else "TN"
+        elif not visible:
+            outcome = "FP2"
+        else:
+            outcome = "TP" if math.hypot(d.x - x, d.y - y) <= tol else "FP1"
+        out[outcome] += 1
+        if outcome in ("TP", "TN"):
+            continue
+        cause = causes[f] if visible else "not labelled visible"
+        out[(outcome, cause)] += 1
+        if frames_out is not None:
+            shown = f"({d.x:.0f}, {d.y:.0f})" if d is not None else "-"
+            label = f"({x:.0f}, {y:.0f})" if visible else "-"
+            frames_out.append(f"{clip.name:10s} {f:4d} {outcome:3s} label {label:12s} "
+                              f"detection {shown:12s} {cause}")
+    return out
+
+
+def dataclass_without_mask(result):
+    """The look-ahead keeps results for K frames: drop the mask (not needed there)."""
+    import dataclasses
+    return dataclasses.replace(result, mask=None)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description="why each wrong broadcast frame is wrong")
+    ap.add_argument("--only", default=None, help="regex on clip names (default: the tuned-on clips)")
+    ap.add_argument("--held-out", action="store_true", help="allow held-out clips (final measurement only)")
+    ap.add_argument("--preset", default="broadcast", help="preset name or .json")
+    ap.add_argument("--lookahead", type=int, default=4, help="frames of look-ahead (0 = online)")
+    ap.add_argument("--frames", action="store_true", help="also print one line per wrong frame")
+    args = ap.parse_args()
+    clips = [c for c in broadcast_clips() if args.held_out or not c.held_out]
+    if args.only:
+        clips = [c for c in clips if re.search(args.only, c.name)]
+    if not clips:
+        print("no clips (held-out clips need --held-out)")
+        return 1
+    total = collections.Counter()
+    lines: list[str] | None = [] if args.frames else None
+    for clip in clips:
+        total += census(clip, args.preset, args.lookahead, lines)
+    if lines:
+        print("\n".join(lines))
+        print()
+    n = sum(total[k] for k in ("TP", "TN", "FP1", "FP2", "FN"))
+    print(f"{', '.join(c.name for c in clips)}: {n} frames, accuracy "
+          f"{(total['TP'] + total['TN']) / n:.4f}  (TP {total['TP']} TN {total['TN']} FP1 {total['FP1']} "
+          f"FP2 {total['FP2']} FN {total['FN']})")
+    rows = sorted(((k, v) for k, v in total.items() if isinstance(k, tuple)), key=lambda kv: -kv[1])
+    for (outcome, cause), count in rows:
+        print(f"  {count:4d}  {outcome:3s}  {cause}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
