@@ -138,3 +138,23 @@ def test_only_a_track_seen_in_the_air_is_held():
     t._note_flown(0, 5, 0.9)
     assert _hold(t, xs, flown_at=None) == [100, None, None]
 
+
+
+def test_the_other_camera_holding_keeps_this_cameras_anchor():
+    """The left camera's landed shuttle is held (no pair, no 3D point); the right camera still
+    reports the same shuttle a few frames: its report stays anchored, so its own hold can start
+    when its report stops. Without a hold on the other side, no 3D point drops the anchor."""
+    t = _tracker(landed_frames=10)
+    c = _cand(100)
+    t._note_anchor(1, c, True)
+    t._held_now = [True, False]
+    t._note_anchor(1, c, False)
+    assert t._held[1][4]
+    t._held_now = [False, False]
+    t._note_anchor(1, c, False)
+    assert not t._held[1][4]
+    # a camera that was never anchored is not anchored by the other camera's hold
+    t._held_now = [True, False]
+    t._note_anchor(1, c, False)
+    assert not t._held[1][4]
+    t.close()

@@ -366,8 +366,7 @@ class StereoTracker:
         if point_out is not None:
             self._last_point = (timestamp, float(point_out[2]))
         for cam, det in ((0, det_left), (1, det_right)):
-            if not self._held_now[cam]:
-                self._held[cam][4] = det is not None and point_out is not None
+            self._note_anchor(cam, det, point_out is not None)
             if (det is not None and not det.predicted and point_out is not None
                     and float(point_out[2]) > self.params.stereo.landed_max_height):
                 self._note_flown(cam, det.tracklet, timestamp)
@@ -429,6 +428,17 @@ class StereoTracker:
                                                                     for k in result.candidates)), held
         state[0] = -1
         return result, None
+
+    def _note_anchor(self, cam: int, det: Candidate | None, has_point: bool) -> None:
+        """Whether this camera's report, if it stops next, may start a landed hold: it had a 3D
+        point — or the other camera is holding its landed shuttle now, which leaves the frame
+        without a pair and so without a 3D point, and this camera's report was anchored before.
+        Without the second case the camera whose report stops last is never held (rally_11-46-22
+        right 1623–1670, rally_11-47-21 right 987–1020)."""
+        if self._held_now[cam]:
+            return
+        state = self._held[cam]
+        state[4] = det is not None and (has_point or (self._held_now[1 - cam] and state[4]))
 
     def _note_flown(self, cam: int, tracklet: int, t: float) -> None:
         """This camera reported ``tracklet`` with a 3D point above the floor at ``t``."""
