@@ -431,3 +431,36 @@ def test_a_coasted_position_is_drawn_dashed_and_captioned(qtbot):
     assert seen_caption.endswith("shuttle found")
     assert predicted_caption.endswith("shuttle predicted (hidden)")
     assert 0 < predicted_red < 0.75 * seen_red         # dashed and thinner: clearly fewer red pixels
+
+
+def test_a_long_opening_step_is_shown_and_stop_gives_it_up(main_window, qtbot):
+    """A source whose opening takes long (the scan of a video pair's frame times) says how far
+    it is in the feeds and the status bar, and Source ▸ Stop ends it at once: the worker
+    thread finishes, the window says it stopped, and another source can be started."""
+    from badminton_gui.io.sources import OpeningCancelled
+
+    seen_cancel = []
+
+    def slow_opener(context):
+        step = 0
+        while not context.cancelled:
+            context.report(f"reading the left video's frame times: {step % 100} %")
+            step += 1
+            import time
+            time.sleep(0.02)
+        seen_cancel.append(True)
+        raise OpeningCancelled("cancelled")
+
+    window = main_window()
+    window.start_opener(slow_opener, "a long recording")
+    qtbot.waitUntil(lambda: "frame times" in window.status_source.text(), timeout=WAIT_MS)
+    assert window.status_source.text().startswith("Opening a long recording… reading the left video")
+    assert "frame times" in window.left_feed._message
+    thread = window.thread
+    window.stop_action.trigger()
+    qtbot.waitUntil(lambda: bool(seen_cancel) and thread.isFinished(), timeout=5000)
+    assert window.worker is None
+    assert window.status_source.text().startswith("Stopped")
+    assert not window.banner.isVisible()          # a cancellation is not an error
+    window.start_opener(_demo_opener, "demo")     # and the operator goes on
+    qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)

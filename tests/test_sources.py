@@ -89,3 +89,46 @@ def test_the_gui_opens_a_video_pair_by_its_own_frame_times(tmp_path):
         source.close()
     assert [round(p.t_right * 15) for p in pairs[0::2]] == [0, 1, 2, 3]
     assert [p.t_left for p in pairs] == pytest.approx([i / 30 for i in range(7)], abs=1e-3)
+
+
+def test_the_frame_time_scan_reports_progress_and_can_be_given_up(tmp_path):
+    """``frame_times`` reports rising fractions up to the file's end, and stops with
+    OpeningCancelled as soon as it is asked to; ``open_spec`` passes the worker's context on."""
+    from badminton_gui.io.sources import OpeningCancelled
+    from badminton_gui.io.video import frame_times
+
+    frames, _ = moving_dot_frames(100)
+    write_video(tmp_path / "l.avi", frames, fps=30.0)
+    fractions = []
+    times = frame_times(tmp_path / "l.avi", progress=fractions.append)
+    assert len(times) == 100
+    assert len(fractions) == 3 and fractions == sorted(fractions) and fractions[-1] == pytest.approx(0.96)
+    asked = []
+
+    def stop_on_second_ask():
+        asked.append(True)
+        return len(asked) >= 2
+
+    with pytest.raises(OpeningCancelled, match="l.avi"):
+        frame_times(tmp_path / "l.avi", should_stop=stop_on_second_ask)
+    assert len(asked) == 2
+
+    pytest.importorskip("PySide6")
+    import threading
+
+    from badminton_gui.gui.settings import SourceSpec
+    from badminton_gui.gui.sources import open_spec
+    from badminton_gui.gui.worker import OpeningContext
+
+    from .test_cli import make_rig_for
+    write_video(tmp_path / "r.avi", frames, fps=30.0)
+    make_rig_for().save(tmp_path / "rig.yaml")
+    spec = SourceSpec("video", str(tmp_path / "l.avi"), str(tmp_path / "r.avi"),
+                      str(tmp_path / "rig.yaml"), video_times=True)
+    abort, reports = threading.Event(), []
+    source, _ = open_spec(spec, OpeningContext(abort, reports.append))
+    source.close()
+    assert reports and reports[0].startswith("reading the left video's frame times: ")
+    abort.set()
+    with pytest.raises(OpeningCancelled):
+        open_spec(spec, OpeningContext(abort, reports.append))

@@ -309,6 +309,9 @@ class MainWindow(QMainWindow):
         self._action(src, "Stereo &video pair…", self.choose_videos, "Ctrl+O")
         src.addSeparator()
         self._action(src, "&Restart source", lambda: self.start_spec(self.spec), "Ctrl+R")
+        self.stop_action = self._action(src, "S&top", self.stop_source, "Ctrl+.")
+        self.stop_action.setToolTip("Stop tracking and release the cameras or files (also gives up "
+                                    "opening a source that takes long)")
         src.addSeparator()
         self._action(src, "&Quit", self.close, QKeySequence.StandardKey.Quit)
 
@@ -364,7 +367,7 @@ class MainWindow(QMainWindow):
         self.spec = dataclasses.replace(spec, realtime=self.realtime_action.isChecked()
                                         if hasattr(self, "realtime_action") else spec.realtime)
         st.save_source_spec(self.settings, self.spec)
-        self.start_opener(lambda spec=self.spec: open_spec(spec), self.spec.describe())
+        self.start_opener(lambda context, spec=self.spec: open_spec(spec, context), self.spec.describe())
 
     def start_opener(self, opener: SourceOpener, description: str) -> None:
         """Track a new source (tests pass stand-in openers here).
@@ -399,6 +402,7 @@ class MainWindow(QMainWindow):
         worker.finished.connect(thread.quit)
         worker.opened.connect(self._on_opened)
         worker.error.connect(self._on_error)
+        worker.opening.connect(self._on_opening)
         worker.warning.connect(self.banner.show_message)
         worker.ended.connect(self._on_ended)
         worker.rig_applied.connect(self._on_rig_applied)
@@ -419,6 +423,7 @@ class MainWindow(QMainWindow):
         worker.set_result_tap(None)
         # Queued signals of the old worker may still arrive; drop them.
         for sig, slot in ((worker.opened, self._on_opened), (worker.error, self._on_error),
+                          (worker.opening, self._on_opening),
                           (worker.warning, self.banner.show_message), (worker.ended, self._on_ended),
                           (worker.rig_applied, self._on_rig_applied)):
             try:
@@ -438,6 +443,17 @@ class MainWindow(QMainWindow):
                 thread.deleteLater()
         self._start_pending()
 
+    def stop_source(self) -> None:
+        """Source ▸ Stop: the worker is told to stop (an opening step gives up at once) and
+        retires on its own; the GUI thread does not wait for it."""
+        self._pending_start = None
+        if self.worker is not None:
+            self._retire_worker()
+        text = "Stopped — choose a source in the Source menu"
+        self.status_source.setText(text)
+        for feed in (self.left_feed, self.right_feed):
+            feed.set_message(text)
+
     def stop_worker(self) -> None:
         """Cooperative stop, waited for: abort flag, the loop returns, QThread.wait()."""
         self._pending_start = None
@@ -449,6 +465,16 @@ class MainWindow(QMainWindow):
                 self.banner.show_message("The tracking thread did not stop within 5 s (a camera may hang).")
                 self._retiring.remove((worker, thread))   # leave it; never delete a running thread
         self._reap_retired()
+
+    def _on_opening(self, step: str) -> None:
+        """A long step of opening the source (the frame-time scan), shown where the feeds will be."""
+        if self.worker is None or self.sender() not in (None, self.worker):
+            return     # queued before that worker was stopped or replaced
+        description = self._opened_with[1] if self._opened_with is not None else "the source"
+        text = f"Opening {description}… {step}"
+        self.status_source.setText(text)
+        for feed in (self.left_feed, self.right_feed):
+            feed.set_message(text)
 
     def _on_opened(self, name: str, rig: StereoRig) -> None:
         self.rig = rig

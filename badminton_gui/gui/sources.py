@@ -18,10 +18,15 @@ from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDialogButtonBox, 
 from ..core.rig import RigError, StereoRig
 from ..io.sources import FrameSource, SourceError
 from .settings import SourceSpec
+from .worker import OpeningContext
 
 
-def open_spec(spec: SourceSpec) -> tuple[FrameSource, StereoRig]:
-    """Open what the spec names; raises SourceError / RigError / OSError with one sentence."""
+def open_spec(spec: SourceSpec, context: OpeningContext | None = None) -> tuple[FrameSource, StereoRig]:
+    """Open what the spec names; raises SourceError / RigError / OSError with one sentence.
+
+    ``context`` (the worker's, when it opens the source) hears how a long step is going (the
+    scan of a video pair's frame times) and says when the user asked for something else: the
+    step then ends with ``OpeningCancelled``."""
     if spec.kind == "demo":
         try:
             from ..io.demo_scene import DemoScene
@@ -46,7 +51,9 @@ def open_spec(spec: SourceSpec) -> tuple[FrameSource, StereoRig]:
             except CsvFormatError as exc:
                 raise SourceError(str(exc)) from None
         elif spec.video_times:
-            lt, rt = frame_times(spec.left), frame_times(spec.right)
+            lt, rt = (frame_times(path, *(() if context is None else context.for_step(
+                          f"reading the {side} video's frame times", k, 2)))
+                      for k, (side, path) in enumerate((("left", spec.left), ("right", spec.right))))
         return VideoPair(spec.left, spec.right, lt, rt), rig
     if spec.kind == "cameras":
         from ..io.cameras import CameraPair

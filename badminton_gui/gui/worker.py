@@ -28,6 +28,7 @@ in step with the tracker and paced to their fps ("as fast as possible" switches 
 from __future__ import annotations
 
 import collections
+import inspect
 import logging
 import threading
 import time
@@ -134,7 +135,49 @@ class DisplayPacket:
     stats: WorkerStats
 
 
-SourceOpener = Callable[[], tuple[FrameSource, StereoRig]]
+SourceOpener = Callable[..., tuple[FrameSource, StereoRig]]
+
+
+class OpeningContext:
+    """What an opener may use while it opens a source on the worker thread.
+
+    Opening can take seconds (a camera; the scan of a video pair's frame times): ``report``
+    shows how a long step is going (the feeds and the status bar say it, at most ten times a
+    second) and ``cancelled`` turns true when the user chose another source, stopped, or closed
+    the window meanwhile, so the step can give up at once instead of holding the thread.
+    """
+
+    def __init__(self, abort: threading.Event, emit: Callable[[str], None]) -> None:
+        self._abort = abort
+        self._emit = emit
+        self._last = -1.0
+
+    @property
+    def cancelled(self) -> bool:
+        return self._abort.is_set()
+
+    def report(self, text: str) -> None:
+        now = time.perf_counter()
+        if now - self._last >= 0.1:
+            self._last = now
+            self._emit(text)
+
+    def for_step(self, what: str, index: int, count: int
+                 ) -> tuple[Callable[[float], None], Callable[[], bool]]:
+        """(progress, should_stop) for step ``index`` of ``count`` equal steps of one job:
+        ``progress(fraction of this step)`` reports the whole job's percentage."""
+        def progress(fraction: float) -> None:
+            self.report(f"{what}: {100.0 * (index + fraction) / count:.0f} %")
+        return progress, lambda: self._abort.is_set()
+
+
+def _call_opener(opener: SourceOpener, context: OpeningContext) -> tuple[FrameSource, StereoRig]:
+    """``opener(context)`` when it takes an argument, else ``opener()`` (stand-ins in tests)."""
+    try:
+        takes_context = bool(inspect.signature(opener).parameters)
+    except (TypeError, ValueError):
+        takes_context = False
+    return opener(context) if takes_context else opener()
 
 
 class _LiveReader(threading.Thread):
@@ -174,6 +217,7 @@ class TrackingWorker(QObject):
     opened = Signal(str, object)      # source name, StereoRig
     rig_applied = Signal(object)      # the StereoRig set_rig asked for is now tracked with
     error = Signal(str)               # one sentence for the banner; the worker has stopped
+    opening = Signal(str)             # how a long step of opening the source is going
     warning = Signal(str)             # one sentence for the banner; the worker goes on
     ended = Signal(str)               # the source ran out (not an error)
     finished = Signal()
@@ -278,7 +322,8 @@ class TrackingWorker(QObject):
     def run(self) -> None:
         source = reader = tracker = None
         try:
-            source, rig = self._open_source()
+            source, rig = _call_opener(self._open_source,
+                                       OpeningContext(self._abort, self.opening.emit))
             rig.check_image_size(*source.image_size, what="the source's frames")
             tracker = self._tracker = StereoTracker(rig, self._params_in_use)
             self._rig_in_use = rig

@@ -16,6 +16,10 @@ class SourceError(RuntimeError):
     """A source that cannot open or stopped delivering; the message is shown to the user."""
 
 
+class OpeningCancelled(SourceError):
+    """Opening a source was given up because the user asked for something else meanwhile."""
+
+
 @runtime_checkable
 class FrameSource(Protocol):
     """What the tracker worker reads from."""

@@ -8,12 +8,17 @@ from each camera's timestamp file is what `track --left-times/--right-times` doe
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Callable
 
 import cv2
 import numpy as np
 
 from ..core.types import StereoFrame
-from .sources import SourceError
+from .sources import OpeningCancelled, SourceError
+
+# How often (frames) ``frame_times`` reports progress and looks whether it should stop: about
+# every 0.1 s of decoding at 2048×1536.
+_SCAN_REPORT_EVERY = 32
 
 
 def open_video(path: str | Path) -> cv2.VideoCapture:
@@ -36,7 +41,8 @@ def open_video(path: str | Path) -> cv2.VideoCapture:
     return cap
 
 
-def frame_times(path: str | Path) -> np.ndarray:
+def frame_times(path: str | Path, progress: Callable[[float], None] | None = None,
+                should_stop: Callable[[], bool] | None = None) -> np.ndarray:
     """Presentation time (s) of every frame of a video, in decode order, from its container.
 
     A camera that drops frames writes a video whose frames are not evenly spaced
@@ -44,12 +50,22 @@ def frame_times(path: str | Path) -> np.ndarray:
     is not at i / fps and the other camera's frame i was not taken at the same moment: pairing
     by these times (``VideoPair``'s timestamps) is what such a recording needs when it comes
     without timestamp files. One decoding pass (grab, no colour conversion): ≈ 3 ms a frame at
-    2048×1536."""
+    2048×1536, so seconds for a long recording: ``progress(fraction)`` is called as it goes
+    (fraction of the container's frame count, when it has one) and ``should_stop()`` is asked
+    as often; when it says yes the scan ends with ``OpeningCancelled``."""
     cap = open_video(path)
+    total = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
     times = []
-    while cap.grab():
-        times.append(cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0)
-    cap.release()
+    try:
+        while cap.grab():
+            times.append(cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0)
+            if len(times) % _SCAN_REPORT_EVERY == 0:
+                if should_stop is not None and should_stop():
+                    raise OpeningCancelled(f"reading the frame times of {Path(path).name} was cancelled")
+                if progress is not None and total > 0:
+                    progress(min(len(times) / total, 1.0))
+    finally:
+        cap.release()
     out = np.asarray(times, dtype=float)
     if len(out) == 0:
         raise SourceError(f"cannot read {path}: no frame could be decoded")
