@@ -132,3 +132,32 @@ def test_the_frame_time_scan_reports_progress_and_can_be_given_up(tmp_path):
     abort.set()
     with pytest.raises(OpeningCancelled):
         open_spec(spec, OpeningContext(abort, reports.append))
+
+
+def test_a_video_seek_lands_on_the_frame_a_sequential_decode_gives(tmp_path):
+    """VideoFile.seek(i) then read() is decoded frame i, forward and back; on the real
+    launcher-stereo video (irregular timestamps, where OpenCV's index seek to 100 / 200 / 300
+    lands on decoded frame 105 / 212 / 317) too, when the data is there."""
+    import hashlib
+    from pathlib import Path
+
+    from badminton_gui.io.video import VideoFile
+
+    frames, _ = moving_dot_frames(40)
+    write_video(tmp_path / "v.avi", frames, fps=30.0)
+    cases = [(tmp_path / "v.avi", (30, 35, 3, 0, 20))]
+    real = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "launcher-stereo" / \
+        "2024-09-19_10-26-01_1.mp4"
+    if real.exists():
+        cases.append((real, (300, 100, 5, 0, 212)))
+    for path, indices in cases:
+        video = VideoFile(path)
+        decoded = [hashlib.md5(video.read().tobytes()).hexdigest() for _ in range(max(indices) + 1)]
+        video.close()
+        video = VideoFile(path)
+        for i in indices:
+            video.seek(i)
+            frame = video.read()
+            assert hashlib.md5(frame.tobytes()).hexdigest() == decoded[i], (path.name, i)
+            assert video.next_index == i + 1
+        video.close()

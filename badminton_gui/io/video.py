@@ -96,8 +96,22 @@ class VideoFile:
         return frame
 
     def seek(self, index: int) -> None:
-        self._cap.set(cv2.CAP_PROP_POS_FRAMES, int(index))
-        self.next_index = int(index)
+        """Make ``read`` return decoded frame ``index`` next, exactly.
+
+        OpenCV's own seek (``CAP_PROP_POS_FRAMES``) turns the index into a time at the nominal
+        rate, so on a file whose frames are not evenly spaced it lands on another frame
+        (launcher-stereo: index i gave decoded frame i + 0 … 17, benchmarks/clips.py). Here a
+        seek forward decodes its way there (``grab``: no colour conversion, ≈ 3 ms a frame at
+        2048×1536) and a seek back starts again from the first frame, the one place a seek is
+        exact on every file."""
+        index = max(int(index), 0)
+        if index < self.next_index:
+            self._cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
+            self.next_index = 0
+        while self.next_index < index:
+            if not self._cap.grab():
+                break                     # past the end: the next read says so
+            self.next_index += 1
 
     def close(self) -> None:
         self._cap.release()
@@ -161,8 +175,8 @@ class VideoPair:
     def _right_frame(self, j: int) -> np.ndarray | None:
         if j in self._right_cache:
             return self._right_cache[j]
-        if j < self.right_file.next_index - 1 or j > self.right_file.next_index + 240:
-            self.right_file.seek(j)  # far jump: seek instead of decoding every frame between
+        if j < self.right_file.next_index - 1 or j > self.right_file.next_index + 2:
+            self.right_file.seek(j)  # a jump: skip the frames between without converting them
         frame = None
         while self.right_file.next_index <= j:
             frame = self.right_file.read()
