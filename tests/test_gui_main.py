@@ -464,3 +464,52 @@ def test_a_long_opening_step_is_shown_and_stop_gives_it_up(main_window, qtbot):
     assert not window.banner.isVisible()          # a cancellation is not an error
     window.start_opener(_demo_opener, "demo")     # and the operator goes on
     qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)
+
+
+def test_recording_the_session_and_a_disk_that_fills_up(main_window, qtbot, tmp_path):
+    """Source ▸ Record track writes the tracked rows in `track`'s columns and the status bar
+    counts them; when the disk fills up the banner says so, the rows saved stay in the file, and
+    tracking goes on. A file that cannot be made is refused with one sentence."""
+    import csv
+
+    from badminton_gui.io.labels import TRACK_COLUMNS
+
+    from .test_track_log import _DiskFillsUp
+
+    window = main_window()
+    window.realtime_action.setChecked(False)
+    window.start_opener(_demo_opener, "demo")
+    qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)
+    path = tmp_path / "session.csv"
+    assert window.start_recording(path)
+    assert window.record_action.isChecked()
+    qtbot.waitUntil(lambda: window._recorder.rows >= 60, timeout=WAIT_MS)
+    qtbot.waitUntil(lambda: "● REC session.csv" in window.status_record.text(), timeout=5000)
+    window.record_action.trigger()                        # the operator stops it
+    assert not window.record_action.isChecked() and window._recorder is None
+    assert window.status_record.text().startswith("recorded ") and "session.csv" in window.status_record.text()
+    with path.open(newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert tuple(rows[0]) == TRACK_COLUMNS and len(rows) > 60
+    frames = [int(r[0]) for r in rows[1:]]
+    assert frames == sorted(frames) and len(set(frames)) == len(frames)   # every result once, in order
+    assert any(r[9] == "1" for r in rows[1:])                             # 3D points recorded
+
+    # The disk fills up while recording.
+    assert window.start_recording(tmp_path / "second.csv")
+    recorder = window._recorder
+    recorder._fh = _DiskFillsUp(recorder._fh, room=4000)
+    recorder._writer = csv.writer(recorder._fh)
+    qtbot.waitUntil(lambda: window._recorder is None, timeout=WAIT_MS)
+    assert not window.record_action.isChecked()
+    assert window.banner.isVisible()
+    assert "Recording stopped: the disk is full writing" in window.banner.text
+    assert "tracking goes on" in window.banner.text
+    seen = window.results_seen
+    qtbot.waitUntil(lambda: window.results_seen > seen + 5, timeout=WAIT_MS)   # it does
+
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    assert not window.start_recording(blocker / "x.csv")
+    assert not window.record_action.isChecked()
+    assert window.banner.text.startswith("Cannot record: ")

@@ -24,12 +24,13 @@ from typing import Callable
 
 from PySide6.QtCore import QPoint, QStandardPaths, Qt, QThread, QTimer, Signal
 from PySide6.QtGui import QAction, QFont, QFontMetrics, QKeySequence, QPainter, QPixmap
-from PySide6.QtWidgets import (QDockWidget, QFrame, QGridLayout, QHBoxLayout, QLabel,
-                               QMainWindow, QMessageBox, QPushButton, QSizePolicy, QSplitter,
-                               QVBoxLayout, QWidget)
+from PySide6.QtWidgets import (QDockWidget, QFileDialog, QFrame, QGridLayout, QHBoxLayout,
+                               QLabel, QMainWindow, QMessageBox, QPushButton, QSizePolicy,
+                               QSplitter, QVBoxLayout, QWidget)
 
 from ..core.params import TrackerParams
 from ..core.rig import StereoRig
+from ..io.track_log import RecordingError, TrackRecorder
 from . import settings as st
 from .court_views import CourtGLView, CourtPlanView, SideView, gl_unavailable_reason
 from .feed_view import FeedView
@@ -215,6 +216,7 @@ class MainWindow(QMainWindow):
         self._paused = False
         self._pending_start: tuple[SourceOpener, str] | None = None
         self._retiring: list[tuple[TrackingWorker, QThread]] = []
+        self._recorder: TrackRecorder | None = None   # Source ▸ Record track, while on
         self._build_ui()
         self._build_actions()
         self._timer = QTimer(self)
@@ -225,6 +227,8 @@ class MainWindow(QMainWindow):
         self._late_timer.setSingleShot(True)
         self._late_timer.setTimerType(Qt.TimerType.PreciseTimer)
         self._late_timer.timeout.connect(self._late_poll)
+        self._record_timer = QTimer(self)     # the recording's row count and health, 2 Hz
+        self._record_timer.timeout.connect(self._update_recording)
         geometry = self.settings.value("window/geometry")
         if geometry is not None:
             self.restoreGeometry(geometry)
@@ -293,6 +297,8 @@ class MainWindow(QMainWindow):
         self.link_dock.hide()
         self.status_source = QLabel("")
         self.statusBar().addWidget(self.status_source, 1)
+        self.status_record = QLabel("")
+        self.statusBar().addPermanentWidget(self.status_record)
         self.status_state = QLabel("")
         self.statusBar().addPermanentWidget(self.status_state)
         if self.gl_reason:
@@ -312,6 +318,11 @@ class MainWindow(QMainWindow):
         self.stop_action = self._action(src, "S&top", self.stop_source, "Ctrl+.")
         self.stop_action.setToolTip("Stop tracking and release the cameras or files (also gives up "
                                     "opening a source that takes long)")
+        self.record_action = self._action(src, "Re&cord track to CSV…", self.toggle_recording,
+                                          "Ctrl+Shift+R", checkable=True)
+        self.record_action.setToolTip("Write every tracked frame pair (2D, 3D, distance, speed, landing: "
+                                      "what the robot gets) to a CSV file, in the columns of "
+                                      "'badminton-track track'; again to stop")
         src.addSeparator()
         self._action(src, "&Quit", self.close, QKeySequence.StandardKey.Quit)
 
@@ -343,7 +354,7 @@ class MainWindow(QMainWindow):
         bar = self.addToolBar("Controls")
         bar.setObjectName("controls")
         bar.setMovable(False)
-        for a in (self.pause_action, self.step_action, self.realtime_action, None,
+        for a in (self.pause_action, self.step_action, self.realtime_action, self.record_action, None,
                   self.mask_action, self.rejected_action, None):
             if a is None:
                 bar.addSeparator()
@@ -411,6 +422,8 @@ class MainWindow(QMainWindow):
         if self._refine is not None:
             self._refine.source_changed(keep_result=self._restart_rig is not None)
             worker.set_result_tap(self._refine.pairs.add)
+        if self._recorder is not None:          # a recording goes on across sources
+            worker.set_result_tap(self._recorder.add, key="record")
         self.worker, self.thread = worker, thread
         thread.start()
 
@@ -421,6 +434,7 @@ class MainWindow(QMainWindow):
         worker.abort()
         worker.set_link(None)
         worker.set_result_tap(None)
+        worker.set_result_tap(None, key="record")
         # Queued signals of the old worker may still arrive; drop them.
         for sig, slot in ((worker.opened, self._on_opened), (worker.error, self._on_error),
                           (worker.opening, self._on_opening),
@@ -442,6 +456,72 @@ class MainWindow(QMainWindow):
                 worker.deleteLater()
                 thread.deleteLater()
         self._start_pending()
+
+    # ---- recording the session -----------------------------------------------------------
+    def toggle_recording(self) -> None:
+        if self.record_action.isChecked():
+            self.start_recording()
+        else:
+            self.stop_recording()
+
+    def start_recording(self, path: str | Path | None = None) -> bool:
+        """Record every result from now on to ``path`` (asked for when None); False when the
+        user cancelled or the file cannot be made (the banner says why)."""
+        self.stop_recording()
+        if path is None:
+            folder = str(self.settings.value("record/folder", "") or Path.home())
+            name = f"track-{time.strftime('%Y%m%d-%H%M%S')}.csv"
+            path, _ = QFileDialog.getSaveFileName(self, "Record the track to", str(Path(folder) / name),
+                                                  "CSV (*.csv);;All files (*)")
+            if not path:
+                self.record_action.setChecked(False)
+                return False
+        try:
+            recorder = TrackRecorder(path)
+        except RecordingError as exc:
+            self.record_action.setChecked(False)
+            message = str(exc)
+            self.banner.show_message(message[:1].upper() + message[1:])
+            return False
+        self.settings.setValue("record/folder", str(recorder.path.parent))
+        self._recorder = recorder
+        self.record_action.setChecked(True)
+        if self.worker is not None:
+            self.worker.set_result_tap(recorder.add, key="record")
+        self._record_timer.start(500)
+        self._update_recording()
+        return True
+
+    def stop_recording(self) -> None:
+        """End the recording (the file keeps every row); the status bar says where it went."""
+        recorder, self._recorder = self._recorder, None
+        self.record_action.setChecked(False)
+        self._record_timer.stop()
+        if recorder is None:
+            return
+        for worker in [self.worker] + [w for w, _ in self._retiring]:
+            if worker is not None:
+                worker.set_result_tap(None, key="record")
+        recorder.close()
+        self.status_record.setStyleSheet("")
+        if recorder.error:
+            self.banner.show_message(f"Recording stopped: {recorder.error}. {recorder.rows_saved} rows "
+                                     f"were saved in {recorder.path}; tracking goes on.")
+            self.status_record.setText(f"recording stopped ({recorder.rows_saved} rows saved)")
+        else:
+            self.status_record.setText(f"recorded {recorder.rows_saved} rows to {recorder.path.name}")
+        self.status_record.setToolTip(str(recorder.path))
+
+    def _update_recording(self) -> None:
+        recorder = self._recorder
+        if recorder is None:
+            return
+        if recorder.error:
+            self.stop_recording()
+            return
+        self.status_record.setStyleSheet("color: #c0392b; font-weight: bold;")
+        self.status_record.setText(f"● REC {recorder.path.name} — {recorder.rows} rows")
+        self.status_record.setToolTip(str(recorder.path))
 
     def stop_source(self) -> None:
         """Source ▸ Stop: the worker is told to stop (an opening step gives up at once) and
@@ -744,6 +824,7 @@ class MainWindow(QMainWindow):
         if self._refine is not None:
             self._refine.shutdown()
         self.stop_worker()
+        self.stop_recording()
         if self.link_panel.link is not None:
             self.link_panel.disconnect_link()
         self.settings.setValue("window/geometry", self.saveGeometry())

@@ -15,10 +15,11 @@ display that shows 30. The GUI asks for the first result finished after a given 
 before its next tick — so it gets a fresh packet and the worker builds about one per tick (fewer
 when the GUI runs late, none with no GUI at all).
 
-Two more hooks serve the refine dialog (gui/refine_dialog.py): a *result tap*, a cheap function
+Two more hooks serve the refine dialog (gui/refine_dialog.py): *result taps*, cheap functions
 the worker calls with every result at the tracking rate (the display packets are throttled to
-~30 Hz, far too few for collecting the shuttle's stereo pairs), and :meth:`TrackingWorker.set_rig`,
-which makes the running loop continue with a new rig.
+~30 Hz, far too few for collecting the shuttle's stereo pairs; the session recorder of
+io/track_log.py is the other tap), and :meth:`TrackingWorker.set_rig`, which makes the running
+loop continue with a new rig.
 
 Live cameras get a grabber thread with its own one-slot buffer, so a slow tracker drops old
 camera frames (counted and shown) instead of falling behind; file and demo sources are read
@@ -245,7 +246,7 @@ class TrackingWorker(QObject):
         self._link = None
         self._link_lock = threading.Lock()
         self.link_error = ""
-        self._result_tap: Callable[[TrackResult], None] | None = None
+        self._result_taps: dict[str, Callable[[TrackResult], None]] = {}
         self._pending_rig: StereoRig | None = None
         self._rig_in_use: StereoRig | None = None
         self._tracker: StereoTracker | None = None      # worker thread only
@@ -275,11 +276,15 @@ class TrackingWorker(QObject):
         with self._lock:
             self._pending_rig = rig
 
-    def set_result_tap(self, tap: Callable[[TrackResult], None] | None) -> None:
+    def set_result_tap(self, tap: Callable[[TrackResult], None] | None, key: str = "refine") -> None:
         """A function the worker thread calls with every result, at the tracking rate (None: no
-        more calls). It must be cheap and thread-safe (the refine dialog's pair collector)."""
+        more calls); one per ``key`` ("refine": the refine dialog's pair collector, "record":
+        the session recorder). It must be cheap and thread-safe."""
         with self._lock:
-            self._result_tap = tap
+            if tap is None:
+                self._result_taps.pop(key, None)
+            else:
+                self._result_taps[key] = tap
 
     def set_paused(self, paused: bool) -> None:
         with self._lock:
@@ -365,7 +370,7 @@ class TrackingWorker(QObject):
                 params, self._pending_params = self._pending_params, None
                 paused, realtime, show_mask = self._paused, self._realtime, self._show_mask
                 display_box = self._display_box
-                tap = self._result_tap
+                taps = tuple(self._result_taps.values())
                 new_rig, self._pending_rig = self._pending_rig, None
                 stepping = paused and self._steps > 0
                 if stepping:
@@ -426,7 +431,7 @@ class TrackingWorker(QObject):
                                      frame.index_right)
             t_done = time.perf_counter()
             frames += 1
-            if tap is not None:
+            for tap in taps:
                 tap(result)
             rate.tick(t_done)
             speed_meter.append((t_done, frame.t_left))
