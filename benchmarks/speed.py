@@ -15,8 +15,9 @@ and 640×480) it prints:
     same 16 px there), decoded once and fed to one tracker per resolution.
 Then the file processing figures (`track` on a NYCU rally, decoding included: pairs/s and the
 share of time spent decoding vs tracking), resident memory after 1000 and after ``--long`` pairs
-(current RSS, and the peak since the long run began: the kernel's peak is reset first, so the
-frames held in memory by the timing runs do not hide growth), and
+of the NYCU rallies decoded at full resolution one after another into one tracker, as a camera
+would deliver them (current RSS, and the peak since the long run began: the kernel's peak is
+reset first, so the frames held in memory by the timing runs do not hide growth), and
 with ``--profile`` a cProfile summary of where the tracker's time goes. The tracker runs with one
 OpenCV thread, as ``track`` and the GUI run it (``--cv-threads 0``: OpenCV's own pool; the plain
 chain always keeps OpenCV's default): the two camera threads already use both cores, and OpenCV's
@@ -228,6 +229,44 @@ def file_processing(rig: StereoRig, params: TrackerParams, n: int) -> tuple[floa
         src.close()
         tracker.close()
     return count / (decode + track), decode / (decode + track)
+
+
+def long_run(rig: StereoRig, params: TrackerParams, n: int) -> tuple[dict[int, tuple[float, float]], int, bool]:
+    """Resident memory over a long run as the cameras would give it: the NYCU rallies at full
+    resolution decoded one after another into one tracker (each rally's times shifted to start
+    a second after the last one ended: a pause between rallies), again from the first when they
+    run out, until ``n`` pairs. Returns {pairs: (RSS MB now, peak MB since the start)} after
+    1 000 pairs and after ``n``, the number of rallies started, and whether the kernel's peak
+    mark could be reset (else the peak is the process's, frames of earlier runs included)."""
+    rallies = sorted(p for p in DATA.iterdir() if (p / "CameraReader_1.mp4").exists())
+    tracker = StereoTracker(rig, params)
+    reset = reset_peak_rss()
+    rss: dict[int, tuple[float, float]] = {}
+    count, offset, started = 0, 0.0, 0
+    try:
+        while count < n:
+            d = rallies[started % len(rallies)]
+            started += 1
+            lt = read_timestamps(d / "CameraReader_1.csv")[1]
+            rt = read_timestamps(d / "CameraReader_2.csv")[1]
+            src = VideoPair(d / "CameraReader_1.mp4", d / "CameraReader_2.mp4", lt, rt)
+            last = offset
+            try:
+                while count < n:
+                    f = src.read()
+                    if f is None:
+                        break
+                    last = offset + f.t_left
+                    tracker.process(f.left, f.right, last, keep_masks=False)
+                    count += 1
+                    if count in (1000, n):
+                        rss[count] = (_status_mb("VmRSS"), _status_mb("VmHWM"))
+            finally:
+                src.close()
+            offset = last + 1.0
+    finally:
+        tracker.close()
+    return rss, started, reset
 
 
 F1_RALLIES = ("rally_11-46-04", "rally_11-49-21")   # one tuned-on, one held-out (benchmarks/clips.py)
@@ -603,7 +642,8 @@ def trees_ab(trees: list[str], preset: str | None, n: int, skip: int, rounds: in
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pairs", type=int, default=300, help="frame pairs held in memory per resolution")
-    ap.add_argument("--long", type=int, default=10000, help="pairs for the memory run (0: skip)")
+    ap.add_argument("--long", type=int, default=10000,
+                    help="pairs for the memory run: the NYCU rallies at full resolution, decoded in turn (0: skip)")
     ap.add_argument("--preset", default=None)
     ap.add_argument("--profile", action="store_true")
     ap.add_argument("--cv-threads", type=int, default=1,
@@ -685,20 +725,10 @@ def main() -> None:
     print(f"file processing ({RALLY}, decoding included): {rate:.1f} pairs/s, "
           f"decoding {100 * decode_share:.0f} % / tracking {100 - 100 * decode_share:.0f} % of the time")
     if args.long:
-        pairs = load_pairs(100, (640, 480))
-        rig = scaled_rig(full_rig, (640, 480))
-        tracker = StereoTracker(rig, params)
-        reset = reset_peak_rss()
-        rss = {}
         with tracker_threads:
-            for i in range(args.long):
-                lf, rf, _ = pairs[i % len(pairs)]
-                tracker.process(lf, rf, i / 119.0, keep_masks=False)
-                if i + 1 in (1000, args.long):
-                    rss[i + 1] = (_status_mb("VmRSS"), _status_mb("VmHWM"))
-        tracker.close()
+            rss, started, reset = long_run(full_rig, params, args.long)
         peak = "peak since start" if reset else "process peak (reset refused)"
-        print("memory (640x480 loop): " + "; ".join(
+        print(f"memory (2048x1536, the NYCU rallies decoded in turn, {started} rallies): " + "; ".join(
             f"after {k} pairs RSS {now:.0f} MB, {peak} {hwm:.0f} MB" for k, (now, hwm) in rss.items()))
     if args.profile:
         print("\nprofile (2048x1536, one thread, top functions by own time):")
