@@ -1,0 +1,91 @@
+"""Tracking a recorded video pair into a CSV file: the one loop behind `badminton-track track`
+and the GUI's *Tools ▸ Process a recording…*.
+
+Why this file exists: the command line and the desktop tool must give the same rows for the
+same recording, so they share this loop (GUIDE §2: the GUI and the CLI drive the same core).
+It adds what a long job needs in either: progress (pairs done, of how many), cancellation
+between two pairs — the rows decided so far are written and the file stays a valid CSV —, and
+one-sentence errors for a file that cannot be written (a full disk). No Qt here.
+"""
+
+from __future__ import annotations
+
+import csv
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from ..core.lookahead import StereoLookahead
+from ..core.params import TrackerParams
+from ..core.rig import StereoRig
+from ..core.tracker import StereoTracker
+from .labels import TRACK_COLUMNS, track_row
+from .track_log import describe_os_error
+
+
+class TrackFileError(OSError):
+    """The output cannot be written; the message is one sentence for the user."""
+
+
+@dataclass(frozen=True)
+class TrackFileSummary:
+    pairs: int              # frame pairs tracked
+    points_3d: int          # rows with a 3D point
+    seconds: float          # wall time, decoding included
+    output: Path
+    cancelled: bool         # stopped by ``should_stop`` (the rows so far are in the file)
+
+    @property
+    def pairs_per_second(self) -> float:
+        return self.pairs / self.seconds if self.seconds > 0 else 0.0
+
+
+def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Path, *,
+                 max_frames: int | None = None, link=None,
+                 progress: Callable[[int], None] | None = None,
+                 should_stop: Callable[[], bool] | None = None) -> TrackFileSummary:
+    """Track every pair ``source.read()`` gives (a ``FrameSource``: a ``VideoPair``, possibly
+    behind a ``PrefetchingReader``) and write one row per left frame to ``output``.
+
+    The rows are re-decided with ``params.lookahead.frames`` frames of look-ahead (the robot,
+    when ``link`` is given, gets the live results at once). ``progress(pairs done)`` is called
+    after every pair and ``should_stop()`` asked before each: when it says yes the look-ahead's
+    pending rows are written and the summary says ``cancelled``. The source is not closed here.
+    """
+    out_path = Path(output)
+    tracker = StereoTracker(rig, params)
+    lookahead = StereoLookahead(rig, params, tracker.epipolar_tolerance)
+    n = hits3d = 0
+    cancelled = False
+    start = time.perf_counter()
+    try:
+        out_path.parent.mkdir(parents=True, exist_ok=True)
+        with out_path.open("w", newline="") as fh:
+            writer = csv.writer(fh)
+            writer.writerow(TRACK_COLUMNS)
+            while max_frames is None or n < max_frames:
+                if should_stop is not None and should_stop():
+                    cancelled = True
+                    break
+                frame = source.read()
+                if frame is None:
+                    break
+                result = tracker.process(frame.left, frame.right, frame.t_left, frame.index,
+                                         frame.index_right, keep_masks=False)
+                for decided in lookahead.push(result):
+                    writer.writerow(track_row(decided))
+                    hits3d += decided.point is not None
+                if link is not None:
+                    link.send_result(result)
+                n += 1
+                if progress is not None:
+                    progress(n)
+            for decided in lookahead.flush():
+                writer.writerow(track_row(decided))
+                hits3d += decided.point is not None
+    except OSError as exc:
+        raise TrackFileError(f"cannot write the track: {describe_os_error(exc, out_path)}") from None
+    finally:
+        tracker.close()
+    return TrackFileSummary(n, hits3d, time.perf_counter() - start, out_path, cancelled)

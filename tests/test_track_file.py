@@ -1,0 +1,64 @@
+"""io/track_file.py: the loop `track` and the GUI's Process-a-recording run — the same rows for
+the same recording, cancellation that leaves a valid CSV, and a full disk said in one sentence."""
+
+from __future__ import annotations
+
+import csv
+import os
+
+import pytest
+
+from badminton_gui.cli import main
+from badminton_gui.core.params import TrackerParams
+from badminton_gui.io.labels import TRACK_COLUMNS
+from badminton_gui.io.track_file import TrackFileError, track_to_csv
+from badminton_gui.io.video import VideoPair
+
+from .test_cli import make_rig_for, moving_dot_frames, write_video
+
+
+@pytest.fixture
+def pair(tmp_path):
+    frames_l, _ = moving_dot_frames(60)
+    frames_r, _ = moving_dot_frames(60, offset=-12.0)
+    write_video(tmp_path / "l.avi", frames_l)
+    write_video(tmp_path / "r.avi", frames_r)
+    make_rig_for().save(tmp_path / "rig.yaml")
+    return tmp_path
+
+
+def _rows(path):
+    with open(path, newline="") as fh:
+        return list(csv.reader(fh))
+
+
+def test_the_same_rows_as_the_track_command(pair):
+    assert main(["track", "--left", str(pair / "l.avi"), "--right", str(pair / "r.avi"),
+                 "--calib", str(pair / "rig.yaml"), "-o", str(pair / "cli.csv"), "--quiet"]) == 0
+    done = []
+    source = VideoPair(pair / "l.avi", pair / "r.avi")
+    summary = track_to_csv(source, make_rig_for(), TrackerParams(), pair / "gui.csv", progress=done.append)
+    source.close()
+    assert _rows(pair / "gui.csv") == _rows(pair / "cli.csv")
+    assert summary.pairs == 60 and done == list(range(1, 61)) and not summary.cancelled
+    assert summary.points_3d == sum(r[9] == "1" for r in _rows(pair / "gui.csv")[1:]) > 0
+
+
+def test_cancelling_keeps_a_valid_csv_of_the_pairs_done(pair):
+    done = []
+    source = VideoPair(pair / "l.avi", pair / "r.avi")
+    summary = track_to_csv(source, make_rig_for(), TrackerParams(), pair / "part.csv",
+                           progress=done.append, should_stop=lambda: len(done) >= 25)
+    source.close()
+    assert summary.cancelled and summary.pairs == 25
+    rows = _rows(pair / "part.csv")
+    assert tuple(rows[0]) == TRACK_COLUMNS
+    assert [int(r[0]) for r in rows[1:]] == list(range(25))   # the look-ahead's pending rows too
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs Linux's /dev/full")
+def test_a_full_disk_is_one_sentence(pair):
+    source = VideoPair(pair / "l.avi", pair / "r.avi")
+    with pytest.raises(TrackFileError, match="^cannot write the track: the disk is full writing /dev/full$"):
+        track_to_csv(source, make_rig_for(), TrackerParams(), "/dev/full")
+    source.close()
