@@ -8,6 +8,7 @@ import time
 from ..core.params import ParamError
 from ..core.rig import RigError
 from ..io.sources import SourceError
+from ..io.track_file import FILE_LOOKAHEAD
 
 
 class UserError(Exception):
@@ -77,11 +78,6 @@ def add_preset_argument(parser) -> None:
                         help="parameter preset name (see `badminton-track presets`) or a .json file")
 
 
-# Frames of look-ahead of the file commands (`detect`, `track`): a file has its future, so the
-# readout is re-decided 4 frames later (core/lookahead.py). Chosen on the tuned-on clips
-# (benchmarks/lookahead_study.py): 4 frames beat 8 and 15, whose earlier back-fills and later
-# handovers take more wrong candidates than right ones.
-FILE_LOOKAHEAD = 4
 
 
 def add_lookahead_argument(parser) -> None:

@@ -217,6 +217,7 @@ class MainWindow(QMainWindow):
         self._pending_start: tuple[SourceOpener, str] | None = None
         self._retiring: list[tuple[TrackingWorker, QThread]] = []
         self._recorder: TrackRecorder | None = None   # Source ▸ Record track, while on
+        self._process = None                # Tools ▸ Process a recording, built when first opened
         self._build_ui()
         self._build_actions()
         self._timer = QTimer(self)
@@ -343,6 +344,7 @@ class MainWindow(QMainWindow):
 
         tools = menu.addMenu("&Tools")
         self._action(tools, "&Tuning…", self.open_tuning, "Ctrl+T")
+        self._action(tools, "&Process a recording…", self.open_process, "Ctrl+P")
 
         calibration = menu.addMenu("&Calibration")
         self._action(calibration, "&Calibrate with a chessboard…", self.open_calibration, "Ctrl+K")
@@ -456,6 +458,17 @@ class MainWindow(QMainWindow):
                 worker.deleteLater()
                 thread.deleteLater()
         self._start_pending()
+
+    def open_process(self) -> None:
+        """Tools ▸ Process a recording…: a video pair tracked into a CSV, off the GUI thread, with
+        the parameters in use now (gui/process_dialog.py). Tracking here goes on meanwhile."""
+        from .process_dialog import ProcessDialog
+        if self._process is None:
+            self._process = ProcessDialog(self.spec, self.params, self)
+        else:
+            self._process.params = self.params
+        self._process.show()
+        self._process.raise_()
 
     # ---- recording the session -----------------------------------------------------------
     def toggle_recording(self) -> None:
@@ -626,6 +639,8 @@ class MainWindow(QMainWindow):
         self.params = params
         if self.worker is not None:
             self.worker.set_params(params)
+        if self._process is not None:       # its next job tracks with them too
+            self._process.params = params
         st.save_params(self.settings, params)
 
     def _set_link(self, link) -> None:
@@ -823,6 +838,8 @@ class MainWindow(QMainWindow):
         self._late_timer.stop()
         if self._refine is not None:
             self._refine.shutdown()
+        if self._process is not None:
+            self._process.close()           # cancels and waits for a running job
         self.stop_worker()
         self.stop_recording()
         if self.link_panel.link is not None:

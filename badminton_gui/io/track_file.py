@@ -24,6 +24,13 @@ from .labels import TRACK_COLUMNS, track_row
 from .track_log import describe_os_error
 
 
+# Frames of look-ahead of the file commands (`detect`, `track`, the GUI's Process a recording): a
+# file has its future, so the readout is re-decided 4 frames later (core/lookahead.py). Chosen on
+# the tuned-on clips (benchmarks/lookahead_study.py): 4 frames beat 8 and 15, whose earlier
+# back-fills and later handovers take more wrong candidates than right ones.
+FILE_LOOKAHEAD = 4
+
+
 class TrackFileError(OSError):
     """The output cannot be written; the message is one sentence for the user."""
 

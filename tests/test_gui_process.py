@@ -1,0 +1,112 @@
+"""Tools ▸ Process a recording (gui/process_dialog.py): the rows `track` writes, progress,
+Cancel that keeps a valid CSV, and bad input said in one sentence (pytest-qt, under Xvfb)."""
+
+from __future__ import annotations
+
+import csv
+import os
+
+import pytest
+
+pytest.importorskip("pytestqt")
+pytest.importorskip("PySide6")
+
+pytestmark = [pytest.mark.gui,
+              pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (run under Xvfb)")]
+
+from badminton_gui.cli import main  # noqa: E402
+from badminton_gui.core.params import TrackerParams  # noqa: E402
+from badminton_gui.gui.process_dialog import ProcessDialog  # noqa: E402
+from badminton_gui.gui.settings import SourceSpec  # noqa: E402
+
+from .test_cli import make_rig_for, moving_dot_frames, write_video  # noqa: E402
+
+
+@pytest.fixture
+def recording(tmp_path):
+    frames_l, _ = moving_dot_frames(240)
+    frames_r, _ = moving_dot_frames(240, offset=-12.0)
+    write_video(tmp_path / "l.avi", frames_l)
+    write_video(tmp_path / "r.avi", frames_r)
+    make_rig_for().save(tmp_path / "rig.yaml")
+    return SourceSpec("video", str(tmp_path / "l.avi"), str(tmp_path / "r.avi"), str(tmp_path / "rig.yaml"))
+
+
+@pytest.fixture
+def slow_tracking(monkeypatch):
+    """Each pair takes ≥ 10 ms, so a job is surely still running when the test cancels it."""
+    import time
+
+    from badminton_gui.core.tracker import StereoTracker
+    real = StereoTracker.process
+
+    def slow(self, *args, **kwargs):
+        time.sleep(0.01)
+        return real(self, *args, **kwargs)
+    monkeypatch.setattr(StereoTracker, "process", slow)
+
+
+def _rows(path):
+    with open(path, newline="") as fh:
+        return list(csv.reader(fh))
+
+
+def test_processing_gives_the_rows_of_track_with_progress(qtbot, recording, tmp_path):
+    dialog = ProcessDialog(recording, TrackerParams())
+    qtbot.addWidget(dialog)
+    assert dialog.output.text().endswith("l_track.csv")            # beside the left video
+    dialog.output.setText(str(tmp_path / "gui.csv"))
+    seen = []
+    dialog.start()
+    dialog.job.progress.connect(lambda done, total, text: seen.append((done, total)))
+    qtbot.waitUntil(lambda: not dialog.running, timeout=60_000)
+    assert dialog.last_error == "" and dialog.last_summary.pairs == 240
+    assert dialog.status.text().startswith("Done: 240 pairs, 3D point in ")
+    assert dialog.bar.value() == 1000
+    assert seen and seen[-1] == (240, 240)
+    assert main(["track", "--left", recording.left, "--right", recording.right, "--calib", recording.calib,
+                 "-o", str(tmp_path / "cli.csv"), "--quiet"]) == 0
+    assert _rows(tmp_path / "gui.csv") == _rows(tmp_path / "cli.csv")
+
+
+def test_cancel_keeps_the_rows_done_and_bad_input_is_one_sentence(qtbot, recording, tmp_path, slow_tracking):
+    dialog = ProcessDialog(recording, TrackerParams())
+    qtbot.addWidget(dialog)
+    dialog.output.setText(str(tmp_path / "part.csv"))
+    dialog.start()
+    qtbot.waitUntil(lambda: "pairs tracked" in dialog.status.text(), timeout=60_000)
+    dialog.cancel_button.click()
+    qtbot.waitUntil(lambda: not dialog.running, timeout=60_000)
+    summary = dialog.last_summary
+    assert summary.cancelled and 0 < summary.pairs < 240
+    assert dialog.status.text().startswith(f"Cancelled after {summary.pairs:,} pairs: their rows are in")
+    rows = _rows(tmp_path / "part.csv")
+    assert [int(r[0]) for r in rows[1:]] == list(range(summary.pairs))
+    assert dialog.start_button.isEnabled() and not dialog.cancel_button.isEnabled()
+
+    # A rig for another resolution: said, nothing else happens, the dialog stays usable.
+    make_rig_for((640, 480)).save(tmp_path / "big.yaml")
+    dialog.spec = SourceSpec("video", recording.left, recording.right, str(tmp_path / "big.yaml"))
+    dialog.start()
+    qtbot.waitUntil(lambda: not dialog.running, timeout=60_000)
+    assert dialog.last_summary is None and "640" in dialog.last_error and "320" in dialog.last_error
+    assert dialog.status.text() == dialog.last_error[:1].upper() + dialog.last_error[1:]
+    # A missing video.
+    dialog.spec = SourceSpec("video", str(tmp_path / "gone.avi"), recording.right, recording.calib)
+    dialog.start()
+    qtbot.waitUntil(lambda: not dialog.running, timeout=60_000)
+    assert "video not found" in dialog.last_error
+
+
+def test_closing_the_dialog_mid_job_cancels_it_cleanly(qtbot, recording, tmp_path, slow_tracking):
+    dialog = ProcessDialog(recording, TrackerParams())
+    qtbot.addWidget(dialog)
+    dialog.output.setText(str(tmp_path / "closed.csv"))
+    dialog.show()
+    dialog.start()
+    thread = dialog.thread
+    qtbot.waitUntil(lambda: "pairs tracked" in dialog.status.text(), timeout=60_000)
+    dialog.reject()                                       # Close / Esc / the window's ✕
+    assert thread.isFinished()
+    qtbot.waitUntil(lambda: not dialog.running, timeout=10_000)
+    assert _rows(tmp_path / "closed.csv")[0][0] == "Frame"   # a valid CSV of what was done
