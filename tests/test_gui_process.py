@@ -19,16 +19,13 @@ from badminton_gui.core.params import TrackerParams  # noqa: E402
 from badminton_gui.gui.process_dialog import ProcessDialog  # noqa: E402
 from badminton_gui.gui.settings import SourceSpec  # noqa: E402
 
-from .test_cli import make_rig_for, moving_dot_frames, write_video  # noqa: E402
+from .test_cli import make_rig_for  # noqa: E402
+from .test_track_file import write_pair  # noqa: E402
 
 
 @pytest.fixture
 def recording(tmp_path):
-    frames_l, _ = moving_dot_frames(240)
-    frames_r, _ = moving_dot_frames(240, offset=-12.0)
-    write_video(tmp_path / "l.avi", frames_l)
-    write_video(tmp_path / "r.avi", frames_r)
-    make_rig_for().save(tmp_path / "rig.yaml")
+    write_pair(tmp_path, 240)
     return SourceSpec("video", str(tmp_path / "l.avi"), str(tmp_path / "r.avi"), str(tmp_path / "rig.yaml"))
 
 

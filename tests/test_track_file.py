@@ -17,14 +17,19 @@ from badminton_gui.io.video import VideoPair
 from .test_cli import make_rig_for, moving_dot_frames, write_video
 
 
+def write_pair(folder, n):
+    """l.avi, r.avi (the dot seen by two cameras, ``n`` frames) and their rig.yaml in ``folder``."""
+    frames_l, _ = moving_dot_frames(n)
+    frames_r, _ = moving_dot_frames(n, offset=-12.0)
+    write_video(folder / "l.avi", frames_l)
+    write_video(folder / "r.avi", frames_r)
+    make_rig_for().save(folder / "rig.yaml")
+    return folder
+
+
 @pytest.fixture
 def pair(tmp_path):
-    frames_l, _ = moving_dot_frames(60)
-    frames_r, _ = moving_dot_frames(60, offset=-12.0)
-    write_video(tmp_path / "l.avi", frames_l)
-    write_video(tmp_path / "r.avi", frames_r)
-    make_rig_for().save(tmp_path / "rig.yaml")
-    return tmp_path
+    return write_pair(tmp_path, 60)
 
 
 def _rows(path):
