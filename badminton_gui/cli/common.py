@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 import time
+from pathlib import Path
 
 from ..core.params import ParamError
 from ..core.rig import RigError
@@ -132,7 +133,16 @@ def open_stereo_videos(args):
             lt = read_timestamps(args.left_times)[1]
             rt = read_timestamps(args.right_times)[1]
         elif video_times:
-            lt, rt = frame_times(args.left), frame_times(args.right)
+            # One decoding pass per video (seconds at 2048 px): shown as its own progress line.
+            scans = []
+            for path in (args.left, args.right):
+                scan = Progress(100, f"frame times of {Path(path).name} (%)")
+                try:
+                    scans.append(frame_times(path, progress=lambda f, s=scan: s.update(round(100 * f))))
+                finally:
+                    if scan.count:
+                        scan.close()
+            lt, rt = scans
         source = VideoPair(args.left, args.right, lt, rt)
         rig.check_image_size(*source.image_size, what="the videos")
     except INPUT_ERRORS as exc:
