@@ -269,3 +269,32 @@ def test_the_result_says_which_box_was_processed():
             assert not outside.any()
         seen.add(res.window is None)
     assert seen == {True, False}
+
+
+def test_no_window_while_the_followed_tracklet_looks_poor():
+    """``window.min_quality``: a frame is windowed only when the followed tracklet's running
+    quality reaches it (a clutter track followed before the serve keeps the frames whole, so the
+    serve is seen at once); 1.0 never windows, 0.0 windows as before."""
+    frames, _ = _scene(120)
+    qualities = []
+    for min_quality in (0.0, 1.0):
+        det = CameraDetector(_params(window__full_every=8, window__min_quality=min_quality))
+        windowed = 0
+        for i, img in enumerate(frames):
+            det.process(img, i / FPS, keep_mask=False)
+            windowed += det._window.last_window is not None
+            tr = followed_tracklet(det._associator)
+            if tr is not None and min_quality == 0.0:
+                qualities.append(tr.quality)
+        assert (windowed > 40) if min_quality == 0.0 else (windowed == 0)
+    threshold = float(np.median(qualities))
+    det = CameraDetector(_params(window__full_every=8, window__min_quality=threshold))
+    seen = set()
+    for i, img in enumerate(frames):
+        tr = followed_tracklet(det._associator)
+        before = None if tr is None else tr.quality
+        det.process(img, i / FPS, keep_mask=False)
+        if det._window.last_window is not None:
+            assert before is not None and before >= threshold
+        seen.add(det._window.last_window is not None)
+    assert seen == {True, False}

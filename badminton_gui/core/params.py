@@ -573,6 +573,10 @@ class WindowParams(ParamGroup):
                                  help="After a whole frame, the next one is whole too while a tracklet outside "
                                       "the window was seen with at least this running quality and is not "
                                       "confirmed yet (a new serve gets its confirming frames; 1 = never)")
+    min_quality: float = param(0.0, 0.0, 1.0, step=0.01, label="Window a track of quality",
+                               help="Track in a window only while the followed tracklet's running quality "
+                                    "(the classifier's mean score of its candidates) is at least this: a "
+                                    "clutter track followed before the serve keeps the frames whole")
 
 
 @dataclass(frozen=True, slots=True)
