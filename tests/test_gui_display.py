@@ -284,3 +284,25 @@ def test_mask_preview_greys_what_the_window_left_out():
     assert (shaded[25:75, 50:150, :3][shaded[25:75, 50:150, 0] != 255] == 0).all()   # inside: as it was
     assert (shaded[:25, :, :3] == 56).all() and (shaded[:, 150:, :3] == 56).all()    # outside: grey
     assert (shaded[..., 3] == 255).all()
+
+
+@pytest.mark.parametrize("size, box", [((2048, 1536), (476, 357)), ((1280, 720), (634, 357)),
+                                       ((4096, 3072), (300, 225)), ((640, 480), (634, 357))])
+def test_the_display_shrink_is_close_to_an_area_average(size, box):
+    """_shrink (the worker's display path; cheap tricks for large reductions) gives the size
+    asked for and stays within a couple of grey levels of OpenCV's INTER_AREA on a textured
+    frame with court-like lines."""
+    import cv2
+    import numpy as np
+
+    from badminton_gui.gui.worker import _shrink
+    w, h = size
+    rng = np.random.default_rng(0)
+    img = cv2.GaussianBlur(rng.integers(0, 255, (h, w, 3), dtype=np.uint8), (0, 0), 3)
+    for k in range(0, w, 97):
+        cv2.line(img, (k, 0), (w - 1 - k, h - 1), (255, 255, 255), 3)
+    out = _shrink(img, *box)
+    assert out.shape == (box[1], box[0], 3)
+    if box[0] < w:
+        ref = cv2.resize(img, box, interpolation=cv2.INTER_AREA)
+        assert np.abs(out.astype(int) - ref.astype(int)).mean() < 3.0

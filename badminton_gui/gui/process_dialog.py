@@ -23,7 +23,6 @@ from PySide6.QtWidgets import (QDialog, QDialogButtonBox, QFileDialog, QFormLayo
                                QVBoxLayout, QWidget)
 
 from ..core.params import TrackerParams
-from ..io.prefetch import PrefetchingReader
 from ..io.sources import OpeningCancelled
 from ..io.track_file import FILE_LOOKAHEAD, TrackFileSummary, track_to_csv
 from .settings import SourceSpec
@@ -46,7 +45,8 @@ def default_output(spec: SourceSpec) -> str:
 
 
 class ProcessJob(QObject):
-    """Opens the pair and tracks it into the CSV; lives on its own QThread."""
+    """Opens the pair (decoded ahead on a reader thread, gui/sources.py) and tracks it into the
+    CSV; lives on its own QThread."""
 
     progress = Signal(int, int, str)     # pairs done, pairs in all (0: unknown), what is happening
     done = Signal(object, str)           # TrackFileSummary or None, error sentence ('' if none)
@@ -68,7 +68,6 @@ class ProcessJob(QObject):
             try:
                 rig.check_image_size(*source.image_size, what="the videos")
                 total = max(int(getattr(source, "frame_count", 0) or 0), 0)
-                reader = PrefetchingReader(source)
                 start, last = time.perf_counter(), 0.0
 
                 def report(n: int) -> None:
@@ -78,7 +77,7 @@ class ProcessJob(QObject):
                         last = now
                         self.progress.emit(n, total, _rate_text(n, total, now - start))
 
-                summary = track_to_csv(reader, rig, self.params, self.output, progress=report,
+                summary = track_to_csv(source, rig, self.params, self.output, progress=report,
                                        should_stop=self._cancel.is_set)
             finally:
                 source.close()

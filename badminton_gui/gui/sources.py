@@ -54,7 +54,10 @@ def open_spec(spec: SourceSpec, context: OpeningContext | None = None) -> tuple[
             lt, rt = (frame_times(path, *(() if context is None else context.for_step(
                           f"reading the {side} video's frame times", k, 2)))
                       for k, (side, path) in enumerate((("left", spec.left), ("right", spec.right))))
-        return VideoPair(spec.left, spec.right, lt, rt), rig
+        # Decoded on a reader thread a few pairs ahead (io/prefetch.py), as `track` does: FFmpeg
+        # releases the GIL, so decoding overlaps tracking instead of taking turns with it.
+        from ..io.prefetch import PrefetchingReader
+        return PrefetchingReader(VideoPair(spec.left, spec.right, lt, rt)), rig
     if spec.kind == "cameras":
         from ..io.cameras import CameraPair
         if not spec.calib:

@@ -538,8 +538,16 @@ def _shrink(img: np.ndarray, width: int, height: int) -> np.ndarray:
     most of what the window cost the tracking rate), by 2 then INTER_LINEAR to the last few
     pixels 1.1 ms (mean difference to INTER_AREA 2 grey levels; INTER_LINEAR alone aliases
     court lines on larger reductions).
+
+    A frame four times the box or more (2048×1536 cameras in a feed of ~476×357) first reads
+    only every other row, averaged 2×2 by the area fast path (the model grey image's trick in
+    core/detector.py): 2048×1536 → 476×357 took 5.1 ms a frame, 10 ms a packet on the tracker's
+    thread, and takes 1.3 ms (mean difference to INTER_AREA 0.36 grey levels, 0.37 before).
     """
     h, w = img.shape[:2]
+    if w >= 4 * width and h >= 4 * height and w % 2 == 0 and h % 4 == 0:
+        img = cv2.resize(img[::2], (w // 2, h // 4), interpolation=cv2.INTER_AREA)
+        h, w = img.shape[:2]
     k = max(1, min(w // width, h // height))
     if k > 1:
         img = cv2.resize(img, (w // k, h // k), interpolation=cv2.INTER_AREA)
