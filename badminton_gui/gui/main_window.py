@@ -321,6 +321,7 @@ class MainWindow(QMainWindow):
                                     "opening a source that takes long)")
         self.record_action = self._action(src, "Re&cord track to CSV…", self.toggle_recording,
                                           "Ctrl+Shift+R", checkable=True)
+        self.record_action.setIconText("Record")      # the toolbar's label
         self.record_action.setToolTip("Write every tracked frame pair (2D, 3D, distance, speed, landing: "
                                       "what the robot gets) to a CSV file, in the columns of "
                                       "'badminton-track track'; again to stop")
