@@ -39,6 +39,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import deque
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -68,6 +69,16 @@ APPEARANCE_NAMES = ("contrast", "background", "log_bright_area", "spill", "white
 N_APPEARANCE = len(APPEARANCE_NAMES)
 # Shape features from the contour, then the appearance features: the classifier's input.
 FEATURE_NAMES = ("log_length", "log_short_side", "log_area", "aspect") + APPEARANCE_NAMES
+
+
+class Segmented(NamedTuple):
+    """What ``CameraDetector.segment`` hands to ``candidates_from`` for one frame."""
+
+    gray: np.ndarray          # the model's grey image (the window's, when windowed)
+    mask: np.ndarray          # foreground mask at the processing scale
+    contours: tuple           # the mask's external contours
+    window: tuple | None      # the window (full-resolution x0, y0, x1, y1), or None: whole frame
+    windowed: bool
 
 
 class CameraDetector:
@@ -151,6 +162,18 @@ class CameraDetector:
     # ---- steps, so the stereo tracker can choose with both cameras --------------------------
     def find_candidates(self, frame_bgr: np.ndarray, t: float, keep_mask: bool = True) -> CameraResult:
         """Candidates with filters 1–4 applied (no choice made yet)."""
+        return self.candidates_from(frame_bgr, t, self.segment(frame_bgr, t), keep_mask)
+
+    def segment(self, frame_bgr: np.ndarray, t: float) -> Segmented:
+        """The image half of ``find_candidates``: the background model's mask and its contours,
+        in this frame's window or on the whole frame.
+
+        It is nearly all OpenCV on whole images, which releases the GIL, so the stereo tracker
+        runs the two cameras' ``segment`` side by side; ``candidates_from`` (many small calls,
+        mostly Python) then runs for one camera after the other on one thread. Run side by side,
+        the small calls of two threads hand the GIL to each other at every call and each waits
+        for it back (the two threads were only 1.1–1.25× one; README Speed).
+        """
         p = self.params
         h, w = frame_bgr.shape[:2]
         scale = model_scale(p.background, w)
@@ -173,6 +196,14 @@ class CameraDetector:
             contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         else:
             gray, mask, contours = windowed
+        return Segmented(gray, mask, contours, window, windowed is not None)
+
+    def candidates_from(self, frame_bgr: np.ndarray, t: float, segmented: Segmented,
+                        keep_mask: bool = True) -> CameraResult:
+        """The measuring half of ``find_candidates``: filters 1–4 on ``segment``'s contours."""
+        p = self.params
+        h, w = frame_bgr.shape[:2]
+        gray, mask, contours, window = segmented.gray, segmented.mask, segmented.contours, segmented.window
         sx = w / mask.shape[1]
         sy = h / mask.shape[0]
         self._mask_scale = mask.shape[1] / w
@@ -265,7 +296,7 @@ class CameraDetector:
         measured = []
         pos_x, pos_y, whiteness_all, saturation_all, appearance_all = measure_blobs(
             frame_bgr, mask, [g[4] for g in geometric], sx, sy, p.colour.head_fraction)
-        split = self._split_merged(gray, mask, contours, length_all, t, w, sx, sy, windowed is None)
+        split = self._split_merged(gray, mask, contours, length_all, t, w, sx, sy, not segmented.windowed)
         self.last_split = len(split[1]) if split is not None else 0
         if split is not None:
             # Parts split off merged blobs, measured on their own pixels (``_split_merged``).

@@ -238,9 +238,13 @@ class StereoTracker:
         in_turn = (self.left.plan_window(left_bgr, timestamp)
                    & self.right.plan_window(right_bgr, timestamp))
         if self._pool is not None and not in_turn:
-            fut = self._pool.submit(self.right.find_candidates, right_bgr, timestamp, keep_masks)
-            res_left = self.left.find_candidates(left_bgr, timestamp, keep_masks)
-            res_right = fut.result()
+            # Only the image half runs side by side (CameraDetector.segment); the measuring
+            # half, many small calls each of which hands the GIL over, runs on this thread,
+            # the left camera's while the right camera's image half may still be running.
+            fut = self._pool.submit(self.right.segment, right_bgr, timestamp)
+            res_left = self.left.candidates_from(left_bgr, timestamp,
+                                                 self.left.segment(left_bgr, timestamp), keep_masks)
+            res_right = self.right.candidates_from(right_bgr, timestamp, fut.result(), keep_masks)
         else:
             res_left = self.left.find_candidates(left_bgr, timestamp, keep_masks)
             res_right = self.right.find_candidates(right_bgr, timestamp, keep_masks)
