@@ -30,10 +30,12 @@ from PySide6.QtWidgets import (QDockWidget, QFileDialog, QFrame, QGridLayout, QH
 
 from ..core.params import TrackerParams
 from ..core.rig import StereoRig
+from ..io.presets import load_preset
 from ..io.track_log import RecordingError, TrackRecorder
 from . import settings as st
 from .court_views import CourtGLView, CourtPlanView, SideView, gl_unavailable_reason
 from .feed_view import FeedView
+from .keep_up import FAST_PRESET, KeepUpWatch
 from .robot_panel import RobotLinkPanel
 from .sources import CameraPairDialog, VideoPairDialog, open_spec
 from .worker import DisplayPacket, RateMeter, SourceOpener, TrackingWorker
@@ -71,16 +73,25 @@ def _on_screen(widget: QWidget) -> bool:
 
 
 class Banner(QFrame):
-    """A one-sentence error line across the top of the window, with a close button."""
+    """A one-sentence line across the top of the window, with a close button: an error (red), or
+    advice (blue) that may offer one action, e.g. switching to the preset it names."""
+
+    STYLES = {
+        "error": "#banner { background: #a8322d; border-radius: 4px; }",
+        "advice": "#banner { background: #2d5f9a; border-radius: 4px; }",
+    }
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.setObjectName("banner")
-        self.setStyleSheet("#banner { background: #a8322d; border-radius: 4px; }"
-                           "#banner QLabel { color: white; font-weight: bold; }")
+        self.kind = "error"
         self.label = QLabel("", self)
         self.label.setWordWrap(True)
         self.label.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.action_button = QPushButton("", self)
+        self.action_button.hide()
+        self.action_button.clicked.connect(self._run_action)
+        self._action: Callable[[], None] | None = None
         close = QPushButton("✕", self)
         close.setFlat(True)
         close.setFixedWidth(28)
@@ -89,12 +100,31 @@ class Banner(QFrame):
         lay = QHBoxLayout(self)
         lay.setContentsMargins(10, 4, 4, 4)
         lay.addWidget(self.label, 1)
+        lay.addWidget(self.action_button)
         lay.addWidget(close)
+        self._set_kind("error")
         self.hide()
 
-    def show_message(self, text: str) -> None:
+    def _set_kind(self, kind: str) -> None:
+        self.kind = kind
+        self.setStyleSheet(self.STYLES[kind] + "#banner QLabel { color: white; font-weight: bold; }")
+
+    def show_message(self, text: str, kind: str = "error",
+                     action: tuple[str, Callable[[], None]] | None = None) -> None:
+        """Show ``text``; ``action`` (button label, callable) adds a button that runs it and
+        closes the line."""
+        self._set_kind(kind)
         self.label.setText(text)
+        self._action = action[1] if action else None
+        self.action_button.setText(action[0] if action else "")
+        self.action_button.setVisible(action is not None)
         self.show()
+
+    def _run_action(self) -> None:
+        action, self._action = self._action, None
+        self.hide()
+        if action is not None:
+            action()
 
     @property
     def text(self) -> str:
@@ -218,6 +248,7 @@ class MainWindow(QMainWindow):
         self._retiring: list[tuple[TrackingWorker, QThread]] = []
         self._recorder: TrackRecorder | None = None   # Source ▸ Record track, while on
         self._process = None                # Tools ▸ Process a recording, built when first opened
+        self._keep_up = KeepUpWatch()       # advice when tracking falls behind (gui/keep_up.py)
         self._build_ui()
         self._build_actions()
         self._timer = QTimer(self)
@@ -572,6 +603,7 @@ class MainWindow(QMainWindow):
 
     def _on_opened(self, name: str, rig: StereoRig) -> None:
         self.rig = rig
+        self._keep_up.reset()
         if self._restart_rig is not None:
             restarted, self._restart_rig = self._restart_rig is rig, None
             if restarted:
@@ -638,6 +670,7 @@ class MainWindow(QMainWindow):
     def set_params(self, params: TrackerParams) -> None:
         """A new parameter snapshot from the tuning dialog: to the worker, and remembered."""
         self.params = params
+        self._keep_up.reset()
         if self.worker is not None:
             self.worker.set_params(params)
         if self._process is not None:       # its next job tracks with them too
@@ -818,6 +851,30 @@ class MainWindow(QMainWindow):
             show(packet)
         if self.worker is not None and self.worker.link_error:
             self.link_panel.status.setText(self.worker.link_error)
+        self._check_keep_up(now, packet)
+
+    def _check_keep_up(self, now: float, packet: DisplayPacket) -> None:
+        """Advise the faster preset when tracking has been behind the source for a while."""
+        stats = packet.stats
+        advice = self._keep_up.update(now, stats, live=stats.live, paced=stats.paced,
+                                      paused=self._paused, params=self.params,
+                                      image_size=packet.result.left.image_size)
+        if advice is not None and not self.banner.isVisible():   # an error is not covered up
+            self.banner.show_message(advice, kind="advice",
+                                     action=(f"Use {FAST_PRESET}", lambda: self.use_preset(FAST_PRESET)))
+
+    def use_preset(self, name: str) -> None:
+        """Track with a shipped preset from now on (as choosing it in the Tuning dialog does)."""
+        try:
+            params = load_preset(name)
+        except (OSError, ValueError) as exc:
+            self.banner.show_message(f"The {name} preset could not be loaded: {exc}")
+            return
+        if self._tuning is not None:
+            self._tuning.set_params(params)      # shows it, and sends it here
+        else:
+            self.set_params(params)
+        self.statusBar().showMessage(f"Tracking with the {name} preset", 8000)
 
     @property
     def display_rate(self) -> float:

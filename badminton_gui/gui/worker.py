@@ -119,6 +119,8 @@ class WorkerStats:
     latency_ms: float = 0.0          # frame available → result ready
     processing_ms: float = 0.0       # tracker time for this pair
     playback_speed: float = 1.0      # source seconds per wall second (file/demo sources)
+    live: bool = False               # a camera pair: newest frame wins, drops counted
+    paced: bool = False              # a file or the demo played in real time
 
 
 @dataclass(frozen=True, slots=True)
@@ -459,7 +461,8 @@ class TrackingWorker(QObject):
             stats = WorkerStats(frames=frames, processing_fps=rate.rate(), capture_fps_left=cap_l,
                                 capture_fps_right=cap_r, dropped=dropped,
                                 latency_ms=(t_done - t_available) * 1000.0,
-                                processing_ms=result.processing_ms, playback_speed=playback)
+                                processing_ms=result.processing_ms, playback_speed=playback,
+                                live=reader is not None, paced=reader is None and realtime and not stepping)
             self.latest_stats = stats
             with self._lock:
                 due = self._display_due

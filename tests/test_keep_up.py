@@ -1,0 +1,102 @@
+"""The advice to use the faster preset when tracking falls behind its source (gui/keep_up.py).
+
+The watch itself is plain Python (tested without Qt); the last test drives the window's banner
+and its button under Xvfb.
+"""
+
+from __future__ import annotations
+
+import os
+from types import SimpleNamespace
+
+import pytest
+
+from badminton_gui.core.params import TrackerParams
+from badminton_gui.gui.keep_up import KeepUpWatch, has_faster_preset
+from badminton_gui.io.presets import load_preset
+
+WIDE = (2048, 1536)
+
+
+def stats(frames=0, dropped=0, fps=80.0, capture=119.0, playback=1.0):
+    return SimpleNamespace(frames=frames, dropped=dropped, processing_fps=fps,
+                           capture_fps_left=capture, playback_speed=playback)
+
+
+def feed(watch, samples, *, live=False, paced=True, paused=False, params=None, size=WIDE, hz=15):
+    """Feed ``samples`` (stats per tick, at ``hz``); the list of (time, advice) given."""
+    params = params or TrackerParams()
+    given = []
+    for k, s in enumerate(samples):
+        now = k / hz
+        advice = watch.update(now, s, live=live, paced=paced, paused=paused, params=params, image_size=size)
+        if advice is not None:
+            given.append((now, advice))
+    return given
+
+
+def test_only_wide_frames_without_the_coarse_setup_have_a_faster_preset():
+    assert has_faster_preset(TrackerParams(), 2048)
+    assert not has_faster_preset(load_preset("coarse"), 2048)
+    assert not has_faster_preset(TrackerParams(), 1280)
+    assert not has_faster_preset(load_preset("broadcast"), 1280)
+
+
+def test_a_recording_played_slowly_gets_the_advice_once_after_five_seconds():
+    """Not judged in the first 2 s (cold rate meters: here 20 pairs/s), then 5 s behind; the
+    figures are the period's medians."""
+    watch = KeepUpWatch()
+    cold = [stats(fps=20.0, playback=0.18)] * 30
+    given = feed(watch, cold + [stats(fps=82.0, playback=0.69), stats(fps=84.0, playback=0.71),
+                                stats(fps=83.0, playback=0.70)] * (5 * 20))
+    assert len(given) == 1
+    when, text = given[0]
+    assert 7.0 <= when < 7.3
+    assert text.startswith("Tracking keeps up with 83 of the 119 frame pairs a second")
+    assert "2048×1536" in text and "0.70× real time" in text and "coarse preset" in text
+    watch.reset()                                   # a new source: it may say it again
+    assert len(feed(watch, [stats(playback=0.7)] * 120)) == 1
+
+
+def test_short_slowdowns_pauses_and_fast_enough_tracking_give_no_advice():
+    slow, fine = stats(playback=0.8), stats(playback=1.0)
+    # slow for 4 s, caught up, slow for 4 s again: never 5 s in a row
+    assert feed(KeepUpWatch(), ([slow] * 60 + [fine]) * 4) == []
+    assert feed(KeepUpWatch(), [slow] * 200, paused=True) == []
+    assert feed(KeepUpWatch(), [stats(playback=0.97)] * 200) == []
+    assert feed(KeepUpWatch(), [slow] * 200, paced=False) == []          # flat out by choice
+    assert feed(KeepUpWatch(), [slow] * 200, params=load_preset("coarse")) == []
+    assert feed(KeepUpWatch(), [slow] * 200, size=(1280, 720)) == []
+
+
+def test_live_cameras_advised_on_the_share_of_pairs_dropped():
+    # 80 of 119 pairs a second tracked: 39 dropped a second, a third
+    dropping = [stats(frames=int(80 * k / 15), dropped=int(39 * k / 15)) for k in range(200)]
+    given = feed(KeepUpWatch(), dropping, live=True, paced=False)
+    assert len(given) == 1 and "so pairs are being dropped" in given[0][1]
+    # 2 % dropped (a hiccup now and then) is keeping up
+    keeping = [stats(frames=int(117 * k / 15), dropped=int(2 * k / 15)) for k in range(200)]
+    assert feed(KeepUpWatch(), keeping, live=True, paced=False) == []
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs Xvfb (QT_QPA_PLATFORM=xcb)")
+def test_the_banner_offers_the_preset_and_its_button_applies_it(main_window, qtbot):
+    from badminton_gui.gui.worker import WorkerStats
+
+    window = main_window(params=TrackerParams())
+    window._keep_up.sustained_s, window._keep_up.warm_up_s = 0.5, 0.0
+    packet = SimpleNamespace(stats=WorkerStats(processing_fps=83.0, capture_fps_left=119.0,
+                                               playback_speed=0.7, paced=True),
+                             result=SimpleNamespace(left=SimpleNamespace(image_size=WIDE)))
+    for k in range(10):
+        window._check_keep_up(k * 0.1, packet)
+    assert window.banner.isVisible() and window.banner.kind == "advice"
+    assert "coarse preset" in window.banner.text
+    assert window.banner.action_button.text() == "Use coarse"
+    window.banner.action_button.click()
+    assert not window.banner.isVisible()
+    assert window.params == load_preset("coarse")
+    assert not has_faster_preset(window.params, 2048)
+    # An error shown later is red and has no button.
+    window.banner.show_message("The left camera stopped delivering frames.")
+    assert window.banner.kind == "error" and not window.banner.action_button.isVisible()
