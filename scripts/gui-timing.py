@@ -99,6 +99,8 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=2, help="alone/GUI phase pairs")
     ap.add_argument("--size", default="1280x720", help="demo frame size WxH")
     ap.add_argument("--realtime", action="store_true", help="pace the demo at its 120 fps instead of flat out")
+    ap.add_argument("--hide", nargs="*", default=[], choices=["3D", "plan", "side"],
+                    help="hide these court views during the GUI phases (each view's share of the cost)")
     ap.add_argument("--switch-interval", type=float, default=None,
                     help="GIL switch interval in s (default: what badminton-gui sets)")
     args = ap.parse_args()
@@ -227,6 +229,13 @@ def main() -> int:
     window.resize(1280, 720)
     window.show()
     window.realtime_action.setChecked(args.realtime)
+    # A hidden view is skipped by the display (MainWindow._refresh_slow_views draws only views on
+    # screen), so hiding one measures what it costs the tracking rate.
+    hidden = {"3D": window.gl_view.widget if window.gl_view is not None else None,
+              "plan": window.plan.widget, "side": window.side.widget}
+    for name in args.hide:
+        if hidden[name] is not None:
+            hidden[name].hide()
     feed_ids[id(window.left_feed)] = "left"
     feed_ids[id(window.right_feed)] = "right"
 
@@ -270,7 +279,8 @@ def main() -> int:
     print(f"demo {size[0]}×{size[1]}, {'real-time' if args.realtime else 'as fast as possible'}, "
           f"window {window.width()}×{window.height()}, feeds "
           f"{window.left_feed.width()}×{window.left_feed.height()}, "
-          f"{'3D + 2D views' if window.gl_view is not None else '2D views only'}")
+          f"{'3D + 2D views' if window.gl_view is not None else '2D views only'}"
+          + (f", hidden: {', '.join(args.hide)}" if args.hide else ""))
     alone_fps, gui_fps, feed_hz, display_cpu_ms = [], [], defaultdict(list), []
     for r in range(args.rounds):
         fps_a, ms_a, cpu_a = alone(args.seconds)
