@@ -8,7 +8,8 @@ and 640×480) it prints:
     *plain chain* — MOG2 + threshold + open + findContours + the four filters, per camera, one
     camera after the other, at full resolution (the paper written plainly) — timed on the same
     frames in the same run (GUIDE §9: absolute times drift ±15–25 % between runs, ratios do not);
-  - latency from a frame pair to its TrackResult, p50 / p99;
+  - latency from a frame pair to its TrackResult, p50 / p99, and the process's voluntary context
+    switches a pair (a thread waiting, mostly for the GIL);
   - peak RSS;
   - the F1 (GUIDE §6 protocol, both cameras) of the tracker at that resolution on NYCU rallies
     (``--f1-rallies``; detections scaled back to the recorded 2048 px, so the tolerance is the
@@ -190,9 +191,13 @@ def time_plain(pairs) -> float:
     return len(pairs) / (time.perf_counter() - start)
 
 
-def time_tracker(pairs, rig: StereoRig, params: TrackerParams, repeat: int = 1):
+def time_tracker(pairs, rig: StereoRig, params: TrackerParams, repeat: int = 1, switches: list | None = None):
+    """(pairs/s, latency p50, p99 ms). ``switches``, if given, gets the process's voluntary context
+    switches a pair: how often a thread waited (for the GIL, mostly) — two camera threads that
+    hand the GIL to each other at every small OpenCV call made ≈ 65 a pair (README Speed)."""
     tracker = StereoTracker(rig, params)
     lat = []
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_nvcsw
     start = time.perf_counter()
     for _ in range(repeat):
         for lf, rf, t in pairs:
@@ -200,6 +205,8 @@ def time_tracker(pairs, rig: StereoRig, params: TrackerParams, repeat: int = 1):
             tracker.process(lf, rf, t, keep_masks=False)
             lat.append(time.perf_counter() - t0)
     rate = len(lat) / (time.perf_counter() - start)
+    if switches is not None:
+        switches.append((resource.getrusage(resource.RUSAGE_SELF).ru_nvcsw - before) / max(len(lat), 1))
     tracker.close()
     lat_ms = np.asarray(lat) * 1000
     return rate, float(np.percentile(lat_ms, 50)), float(np.percentile(lat_ms, 99))
@@ -695,18 +702,19 @@ def main() -> None:
             f1 = f1_by_resolution(full_rig, params, sizes, args.f1_rallies, args.f1_pairs)
         print(f"F1 on {', '.join(args.f1_rallies)} (both cameras, first {args.f1_pairs} pairs at most)")
     print(f"{'resolution':>10} {'plain/s':>8} {'tracker/s':>9} {'ratio':>6} {'p50 ms':>7} {'p99 ms':>7} "
-          f"{'RSS MB':>7} {'F1':>6} {'acc':>6}")
+          f"{'RSS MB':>7} {'F1':>6} {'acc':>6} {'waits/pair':>10}")
     for size in sizes:
         pairs = load_pairs(args.pairs, size)
         rig = full_rig if size is None else scaled_rig(full_rig, size)
         plain = time_plain(pairs)
+        waits: list[float] = []
         with tracker_threads:
-            rate, p50, p99 = time_tracker(pairs, rig, params)
+            rate, p50, p99 = time_tracker(pairs, rig, params, switches=waits)
         w, h = pairs[0][0].shape[1], pairs[0][0].shape[0]
         score = f1.get(size)
         quality = f"{100 * score.f1:6.2f} {100 * score.accuracy:6.2f}" if score else f"{'-':>6} {'-':>6}"
         print(f"{w:>5}x{h:<4} {plain:8.1f} {rate:9.1f} {rate / plain:6.2f} {p50:7.2f} {p99:7.2f} "
-              f"{peak_rss_mb():7.0f} {quality}")
+              f"{peak_rss_mb():7.0f} {quality} {waits[0]:10.0f}")
         if args.profile and size is None:
             prof = cProfile.Profile()
             tracker = StereoTracker(rig, params, parallel=False)
