@@ -12,6 +12,11 @@ and without the window and their ratio, and the GUI-thread slot times. Run under
 
     QT_QPA_PLATFORM=xcb xvfb-run -a -s "-screen 0 1600x900x24" \
         .venv/bin/python scripts/gui-timing.py --seconds 20 --rounds 2
+
+``--nycu PAIRS --preset coarse`` replaces the demo court by the real rig at its real rate: a NYCU
+rally's 2048×1536 pairs held in memory and delivered like live cameras at 119 fps, so the figure
+is the one the operator meets — how many of the cameras' pairs are tracked (and how many dropped)
+with the window showing them, against the same tracker with no window.
 """
 
 from __future__ import annotations
@@ -93,6 +98,85 @@ def _display_side_cpu(before: dict, after: dict) -> float:
                if key[1] in ("GUI thread", "X server") or key[1].startswith("llvmpipe"))
 
 
+class _NycuReplay:
+    """Live cameras stand-in: real 2048×1536 NYCU frames held in memory, delivered on the rig's
+    119 fps clock (``fps`` None: the worker treats it as cameras, newest pair wins, drops
+    counted). Decoding the rally's video would cost the tracker half its time (README Speed), a
+    camera costs it none: this measures the GUI beside the tracker at the rig's real rate. The
+    stretch plays forwards then backwards, so the background model never sees a cut."""
+
+    FPS = 119.0
+
+    def __init__(self, pairs, rig) -> None:
+        self.pairs, self.rig = pairs, rig
+        self.name = "NYCU rally (live replay)"
+        self.image_size = (pairs[0][0].shape[1], pairs[0][0].shape[0])
+        self.fps = None
+        self._k = 0
+        self._t0 = 0.0
+
+    @classmethod
+    def load(cls, n: int, skip: int) -> "_NycuReplay":
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+        import speed
+        rally = speed.DATA / speed.RALLY
+        rig = speed.rig_from_nycu(rally / "CameraReader_1.cfg", rally / "CameraReader_2.cfg")
+        pairs = [(left, right) for left, right, _ in speed.load_pairs(n, None, skip)]
+        print(f"{len(pairs)} pairs of {speed.RALLY} in memory (from pair {skip})")
+        return cls(pairs, rig)
+
+    def restart(self) -> "_NycuReplay":
+        self._k, self._t0 = 0, time.perf_counter()
+        return self
+
+    def read(self):
+        from badminton_gui.core.types import StereoFrame
+        k = self._k
+        self._k += 1
+        due = self._t0 + k / self.FPS
+        wait = due - time.perf_counter()
+        if wait > 0:
+            time.sleep(wait)
+        n = len(self.pairs)
+        i = k % (2 * n - 2)
+        i = i if i < n else 2 * n - 2 - i
+        left, right = self.pairs[i]
+        t = k / self.FPS
+        return StereoFrame(left, right, t, t, k, k)
+
+    def close(self) -> None:
+        pass
+
+
+def _alternate(args, window, with_gui, latencies, worker_module, display_cpu_ms) -> int:
+    """``--ab``: the display as it was (buffer 1, views never slowed) against as it is, phase by
+    phase in one process, so the machine's drift (±20 % between runs here) hits both alike."""
+    setups = {"before (buffer 1, no yield)": (1, window._display_yield.normal_s),
+              f"now (buffer {worker_module.LIVE_BUFFER_PAIRS}, yield)": (worker_module.LIVE_BUFFER_PAIRS,
+                                                                        window._display_yield.slowed_s)}
+    totals = {name: {"results": 0.0, "dropped": 0, "latency": [], "cpu": []} for name in setups}
+    names = list(setups)
+    for r in range(args.ab):
+        for name in (names if r % 2 == 0 else names[::-1]):
+            worker_module.LIVE_BUFFER_PAIRS, window._display_yield.slowed_s = setups[name]
+            rate, _, _, dropped, _ = with_gui(args.seconds)
+            totals[name]["results"] += rate * args.seconds
+            totals[name]["dropped"] += dropped
+            totals[name]["latency"] += latencies
+            totals[name]["cpu"].append(display_cpu_ms[-1])
+            print(f"round {r + 1} {name:32s}: {rate:6.1f} results/s, dropped {dropped:4d}, "
+                  f"latency p50 {_pct(latencies, 50):.1f} / p99 {_pct(latencies, 99):.1f} ms, "
+                  f"display-side CPU {display_cpu_ms[-1]:.1f} ms a pair shown", flush=True)
+    window.close()
+    print("\nTotals")
+    for name, t in totals.items():
+        share = t["dropped"] / max(t["results"] + t["dropped"], 1.0)
+        print(f"  {name:32s}: {100 * share:.2f} % of the camera pairs dropped ({t['dropped']}), latency p50 "
+              f"{_pct(t['latency'], 50):.1f} / p99 {_pct(t['latency'], 99):.1f} ms, display-side CPU "
+              f"{statistics.median(t['cpu']):.1f} ms a pair shown (median of the phases)")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=20.0, help="length of each phase")
@@ -101,6 +185,22 @@ def main() -> int:
     ap.add_argument("--realtime", action="store_true", help="pace the demo at its 120 fps instead of flat out")
     ap.add_argument("--hide", nargs="*", default=[], choices=["3D", "plan", "side"],
                     help="hide these court views during the GUI phases (each view's share of the cost)")
+    ap.add_argument("--nycu", type=int, default=0, metavar="PAIRS",
+                    help="instead of the demo court: PAIRS pairs of a NYCU rally (2048×1536) held in "
+                         "memory and delivered as live cameras at the rig's 119 fps (forwards, then "
+                         "backwards, so the tracker never sees a cut); the tracker keeps up or drops")
+    ap.add_argument("--skip", type=int, default=200, help="--nycu: pairs of the rally skipped first")
+    ap.add_argument("--preset", default=None, help="tracker preset (default: the default preset)")
+    ap.add_argument("--live-buffer", type=int, default=None, metavar="PAIRS",
+                    help="camera pairs the live grabber keeps (default: gui/worker.py LIVE_BUFFER_PAIRS; "
+                         "1 = newest pair only)")
+    ap.add_argument("--ab", type=int, default=0, metavar="ROUNDS",
+                    help="only: ROUNDS rounds of two window phases, the live buffer at 1 pair with the "
+                         "court views never slowed (the twelfth round's display) against this round's "
+                         "defaults, in alternating order; totals of pairs tracked and dropped per set-up")
+    ap.add_argument("--no-yield", action="store_true",
+                    help="keep the court views at their normal rate while tracking is behind "
+                         "(gui/keep_up.py DisplayYield off: what the yield saves)")
     ap.add_argument("--switch-interval", type=float, default=None,
                     help="GIL switch interval in s (default: what badminton-gui sets)")
     args = ap.parse_args()
@@ -112,15 +212,34 @@ def main() -> int:
     from PySide6.QtCore import QCoreApplication, Qt
     from PySide6.QtWidgets import QApplication
 
-    from badminton_gui.core.params import TrackerParams
     from badminton_gui.gui import feed_view
     from badminton_gui.gui.main_window import MainWindow
+    from badminton_gui.gui import worker as worker_module
     from badminton_gui.gui.worker import TrackingWorker
+    if args.live_buffer:
+        worker_module.LIVE_BUFFER_PAIRS = args.live_buffer
+    # Every result's latency (frame available → result; with a live source the wait in the
+    # grabber's buffer included), recorded where the worker makes its statistics.
+    latencies: list[float] = []
+    real_stats = worker_module.WorkerStats
+
+    def recording_stats(**fields):
+        latencies.append(fields.get("latency_ms", float("nan")))
+        return real_stats(**fields)
+    worker_module.WorkerStats = recording_stats
     from badminton_gui.io.demo_scene import DemoScene
 
-    def opener():
-        scene = DemoScene(seed=0, size=size)
-        return scene, scene.rig
+    from badminton_gui.io.presets import load_preset
+    params = load_preset(args.preset)
+    if args.nycu:
+        replay = _NycuReplay.load(args.nycu, args.skip)
+
+        def opener():
+            return replay.restart(), replay.rig
+    else:
+        def opener():
+            scene = DemoScene(seed=0, size=size)
+            return scene, scene.rig
 
     QCoreApplication.setAttribute(Qt.ApplicationAttribute.AA_ShareOpenGLContexts)
     from badminton_gui.gui import app as gui_app
@@ -204,10 +323,14 @@ def main() -> int:
         (ta, fa), (tb, fb) = sample_a, sample_b
         return (fb - fa) / (tb - ta) if tb > ta else float("nan")
 
+    def latency_text(values: list[float]) -> str:
+        return f"latency p50 {_pct(values, 50):.1f} / p99 {_pct(values, 99):.1f} ms"
+
     def alone(seconds: float) -> tuple[float, float]:
+        latencies.clear()
         cpu0, t0 = _cpu_by_thread(), time.perf_counter()
         # No window, nobody asks for display packets: the tracker as a headless user runs it.
-        worker = TrackingWorker(opener, TrackerParams(), realtime=args.realtime)
+        worker = TrackingWorker(opener, params, realtime=args.realtime)
         thread = threading.Thread(target=worker.run, daemon=True, name="tracking")
         thread.start()
         samples, ms = [], []
@@ -222,10 +345,17 @@ def main() -> int:
         worker.abort()
         thread.join(10)
         warm = [s for s in samples if s[0] >= samples[0][0] + 2.0] if samples else []
+        dropped = worker.latest_stats.dropped if worker.latest_stats is not None else 0
+        if args.nycu:
+            cpu_use += f"; dropped {dropped} camera pairs, {latency_text(latencies)}"
         return (rate_of(warm[0], warm[-1]) if len(warm) > 1 else float("nan"),
                 statistics.median(ms) if ms else float("nan"), cpu_use)
 
     window = MainWindow(start=False)
+    if args.preset:
+        window.use_preset(args.preset)
+    if args.no_yield:
+        window._display_yield.slowed_s = window._display_yield.normal_s
     window.resize(1280, 720)
     window.show()
     window.realtime_action.setChecked(args.realtime)
@@ -240,16 +370,20 @@ def main() -> int:
     feed_ids[id(window.right_feed)] = "right"
 
     def with_gui(seconds: float) -> tuple[float, float, float, float]:
+        latencies.clear()
         cpu0, t0 = _cpu_by_thread(), time.perf_counter()
         sched0 = _gui_thread_sched()
         ticks0 = len(refresh_all)
         window.start_opener(opener, "demo (timing)")
         samples, ms = [], []
         n_before = window.results_seen
+        views0 = dict(window.slow_view_updates)
         end = time.monotonic() + seconds
         t_first = None
+        slowed = []
         while time.monotonic() < end:
             pump(0.25)
+            slowed.append(window._display_yield.slowed)
             p = window.latest_packet
             st = window.worker.latest_stats if window.worker is not None else None
             if st is not None:
@@ -265,10 +399,12 @@ def main() -> int:
         sched1 = _gui_thread_sched()
         frames_shown = window.results_seen - n_before
         display_cpu_ms.append(_display_side_cpu(cpu0, cpu1) * 1000.0 / max(frames_shown, 1))
-        cpu_use += (f"; display timer ran {(len(refresh_all) - ticks0) / span:.1f} ticks/s; GUI thread "
+        cpu_use += (f"; {latency_text(latencies)}; display timer ran {(len(refresh_all) - ticks0) / span:.1f} ticks/s; GUI thread "
                     f"on a CPU {(sched1[0] - sched0[0]) / span * 100:.0f}% of the time, runnable but "
                     f"waiting for a CPU {(sched1[1] - sched0[1]) / span * 100:.0f}%, the rest idle or "
-                    f"blocked (event loop, GIL); worker built {built / span:.1f} display packets/s")
+                    f"blocked (event loop, GIL); worker built {built / span:.1f} display packets/s; "
+                    f"3D view {(window.slow_view_updates.get('3D', 0) - views0.get('3D', 0)) / span:.1f} "
+                    f"updates/s, slowed for tracking {100.0 * sum(slowed) / max(len(slowed), 1):.0f}% of the time")
         window.stop_worker()
         warm = [s for s in samples if s[0] >= samples[0][0] + 2.0] if samples else []
         return (rate_of(warm[0], warm[-1]) if len(warm) > 1 else float("nan"),
@@ -276,12 +412,17 @@ def main() -> int:
                 p.stats.dropped if p is not None else 0, cpu_use)
 
     pump(1.0)
-    print(f"demo {size[0]}×{size[1]}, {'real-time' if args.realtime else 'as fast as possible'}, "
+    what = (f"NYCU rally as live cameras, 2048×1536 at {_NycuReplay.FPS:.0f} fps, {args.nycu} pairs in memory"
+            if args.nycu else f"demo {size[0]}×{size[1]}, {'real-time' if args.realtime else 'as fast as possible'}")
+    print(f"{what}, preset {args.preset or 'default'}, live buffer {worker_module.LIVE_BUFFER_PAIRS} pairs, "
+          f"court views {'not ' if args.no_yield else ''}slowed while tracking is behind, "
           f"window {window.width()}×{window.height()}, feeds "
           f"{window.left_feed.width()}×{window.left_feed.height()}, "
           f"{'3D + 2D views' if window.gl_view is not None else '2D views only'}"
           + (f", hidden: {', '.join(args.hide)}" if args.hide else ""))
     alone_fps, gui_fps, feed_hz, display_cpu_ms = [], [], defaultdict(list), []
+    if args.ab:
+        return _alternate(args, window, with_gui, latencies, worker_module, display_cpu_ms)
     for r in range(args.rounds):
         fps_a, ms_a, cpu_a = alone(args.seconds)
         alone_fps.append(fps_a)

@@ -340,6 +340,24 @@ def test_live_source_drops_old_frames_and_reports_unplugging(main_window, qtbot)
     qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)
 
 
+def test_the_camera_buffer_drops_the_oldest_pair_and_counts_it():
+    """The grabber's buffer (gui/worker.py): the tracker takes pairs oldest first; a full buffer
+    makes room by dropping its oldest pair, counted; capacity 1 is newest-wins."""
+    from badminton_gui.gui.worker import LIVE_BUFFER_PAIRS, DropOldestBuffer
+
+    assert LIVE_BUFFER_PAIRS == 2
+    buffer = DropOldestBuffer(2)
+    assert buffer.take() is None
+    assert [buffer.put(k) for k in range(4)] == [False, False, True, True]
+    assert buffer.overwritten == 2 and len(buffer) == 2
+    assert (buffer.take(), buffer.take(), buffer.take()) == (2, 3, None)
+    newest = DropOldestBuffer(1)
+    newest.put("a"), newest.put("b")
+    assert newest.take() == "b" and newest.overwritten == 1
+    with pytest.raises(ValueError):
+        DropOldestBuffer(0)
+
+
 def test_ctrl_c_closes_cleanly(tmp_path):
     """Ctrl+C in the terminal closes the window with exit code 0 and nothing on stderr.
 

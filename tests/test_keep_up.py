@@ -100,3 +100,95 @@ def test_the_banner_offers_the_preset_and_its_button_applies_it(main_window, qtb
     # An error shown later is red and has no button.
     window.banner.show_message("The left camera stopped delivering frames.")
     assert window.banner.kind == "error" and not window.banner.action_button.isVisible()
+
+
+def _yield_run(watch, samples, *, live=True, paced=False, paused=False, hz=30):
+    """Feed DisplayYield ``samples`` at ``hz``; the interval it returned after each."""
+    return [watch.update(k / hz, s, live=live, paced=paced, paused=paused) for k, s in enumerate(samples)]
+
+
+def test_the_court_views_slow_down_while_live_pairs_are_dropped_and_come_back_after_a_while():
+    from badminton_gui.gui.keep_up import DisplayYield
+
+    watch = DisplayYield(normal_s=1 / 15, slowed_s=0.25, hold_s=10.0)
+    # 119 pairs a second, all tracked, for 3 s: normal rate throughout.
+    keeping = [stats(frames=int(119 * k / 30), dropped=0) for k in range(90)]
+    assert set(_yield_run(watch, keeping)) == {1 / 15} and not watch.slowed
+    # Then 5 % dropped: slowed within half a second, once the last second's share passes 1 %.
+    base = keeping[-1].frames
+    dropping = [stats(frames=base + int(113 * k / 30), dropped=int(6 * k / 30)) for k in range(1, 61)]
+    intervals = [watch.update(3 + k / 30, s, live=True, paced=False, paused=False)
+                 for k, s in enumerate(dropping, start=1)]
+    first = intervals.index(0.25)
+    assert 5 <= first <= 15 and set(intervals[first:]) == {0.25} and watch.slowed
+    # Caught up: still slowed for the hold, then normal again.
+    frames, dropped = dropping[-1].frames, dropping[-1].dropped
+    t0 = 5.0
+    after = [(t0 + k / 30, watch.update(t0 + k / 30, stats(frames=frames + int(119 * k / 30), dropped=dropped),
+                                        live=True, paced=False, paused=False)) for k in range(1, 400)]
+    back = next(t for t, interval in after if interval == 1 / 15)
+    assert 15.0 <= back <= 16.1
+    # Less than 1 % dropped (one pair now and then) is no reason to slow the views.
+    calm = DisplayYield(normal_s=1 / 15)
+    trickle = [stats(frames=int(119 * k / 30), dropped=k // 90) for k in range(300)]
+    assert set(_yield_run(calm, trickle)) == {1 / 15}
+
+
+def test_a_slow_paced_playback_slows_the_views_but_a_flat_out_or_paused_one_does_not():
+    from badminton_gui.gui.keep_up import DisplayYield
+
+    watch = DisplayYield(normal_s=1 / 15)
+    assert _yield_run(watch, [stats(playback=0.9)] * 3, live=False, paced=True)[-1] == watch.slowed_s
+    assert _yield_run(watch, [stats(playback=0.9)], live=False, paced=True, paused=True) == [1 / 15]
+    assert not watch.slowed                                      # a pause starts afresh
+    assert set(_yield_run(watch, [stats(playback=0.5)] * 30, live=False, paced=False)) == {1 / 15}
+    assert set(_yield_run(watch, [stats(playback=0.99)] * 30, live=False, paced=True)) == {1 / 15}
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs Xvfb (QT_QPA_PLATFORM=xcb)")
+def test_the_window_slows_its_court_views_and_says_so_while_the_cameras_drop_pairs(main_window, monkeypatch):
+    """Live packets with 10 % dropped: the plan view and the readouts are redrawn at 4 Hz
+    instead of 15, the readouts are told why, and the feeds still take every packet."""
+    from badminton_gui.gui import main_window as mw
+    from badminton_gui.gui.worker import LatestSlot, WorkerStats
+
+    window = main_window(params=TrackerParams())
+    window._timer.stop()                          # the test drives the ticks and the clock
+    clock = [1000.0]
+    monkeypatch.setattr(mw.time, "perf_counter", lambda: clock[0])
+
+    class StandInWorker:
+        output, link_error = LatestSlot(), ""
+
+        def request_display(self, not_before=0.0):
+            pass
+
+        def set_display_size(self, width, height):
+            pass
+
+    plan_shown, readout_notes, feed_frames = [], [], []
+    monkeypatch.setattr(window.plan, "show_packet", plan_shown.append)
+    monkeypatch.setattr(window.side, "show_packet", lambda p: None)
+    if window.gl_view is not None:
+        monkeypatch.setattr(window.gl_view, "show_packet", lambda p: None)
+    monkeypatch.setattr(window.readouts, "show_packet", lambda p, hz, slowed=None: readout_notes.append(slowed))
+    monkeypatch.setattr(window.left_feed, "set_frame", lambda *a: feed_frames.append(a))
+    monkeypatch.setattr(window.right_feed, "set_frame", lambda *a: None)
+    monkeypatch.setattr(window, "_check_keep_up", lambda now, packet: None)
+    window.worker = StandInWorker()
+    try:
+        for k in range(90):                                # 3 s of ticks at 30 Hz
+            stats_now = WorkerStats(frames=int(107 * k / 30), dropped=int(12 * k / 30), live=True,
+                                    processing_fps=107.0, capture_fps_left=119.0)
+            window.worker.output.put(SimpleNamespace(stats=stats_now, result=SimpleNamespace(left=None, right=None),
+                                                     left=None, right=None, display_scale=1.0,
+                                                     trail_left=None, trail_right=None))
+            window._refresh_display()
+            clock[0] += mw.DISPLAY_INTERVAL_MS / 1000.0
+    finally:
+        window.worker = None
+    assert len(feed_frames) == 90
+    # 15 Hz while the first half second is judged, 4 Hz after: 8 + 10, give or take a tick
+    assert 15 <= len(plan_shown) <= 21 and len(readout_notes) == len(plan_shown)
+    assert readout_notes[0] is None and readout_notes[-1] == pytest.approx(4.0)
+    assert window._slowed_views_hz() == pytest.approx(4.0)

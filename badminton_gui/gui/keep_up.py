@@ -1,4 +1,4 @@
-"""Notices when tracking falls behind its source for a while, and names the faster preset.
+"""Notices when tracking falls behind its source: names the faster preset, slows the court views.
 
 Why this file exists: with the default preset a pair of 2048×1536 cameras at 119 fps is tracked
 at roughly 80–90 pairs/s on a 2-core laptop, so a third of the pairs are dropped (live) or the
@@ -7,12 +7,20 @@ for exactly those cameras (README Speed: about twice as fast, F1 within 0.3 poin
 preset stays the operator's choice (issue 5: presets are chosen by the user); this only says
 so, once per source, when tracking has been behind for ``SUSTAINED_S`` seconds without a pause.
 
+:class:`DisplayYield` acts at once instead: while a live or paced source is being dropped or
+played slow, the court views (3D, plan, side) and the readouts refresh at 4 Hz instead of 15,
+the feeds stay at 30 Hz. Those views are most of what the display costs the tracker — PySide6
+keeps the GIL through Qt's painting, and the 3D view paints through software OpenGL here
+(benchmarks/README, thirteenth round: with them hidden, 2048×1536 cameras at 119 fps were
+tracked with 0.4 % of the pairs dropped instead of 3–4 %).
+
 Plain Python, no Qt: the window feeds it the worker's statistics and shows what it returns.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, field
 
 from ..core.detector import model_scale
 from ..core.params import TrackerParams
@@ -112,3 +120,66 @@ class KeepUpWatch:
         if done + dropped <= 0:
             return False, delivered
         return dropped / (done + dropped) > MAX_DROPPED_SHARE, delivered
+
+
+# The court views' refresh while the tracker is behind (normal: main_window.SLOW_VIEW_INTERVAL_S).
+YIELD_INTERVAL_S = 0.25
+# Behind, for the display: more than this share of a live source's pairs dropped over the last
+# second, or a paced source played slower than this (a drop or two a second is the cameras'
+# jitter against the tracker's slowest pairs, not a trend).
+YIELD_DROPPED_SHARE = 0.01
+YIELD_MIN_PLAYBACK = 0.98
+# How long the views stay slowed after the last sign of being behind: slowing them is what lets
+# the tracker catch up, so an immediate return would only make the display pulse.
+YIELD_HOLD_S = 10.0
+
+
+@dataclass
+class DisplayYield:
+    """The court views' refresh interval: ``normal_s``, or ``slowed_s`` while tracking is behind.
+
+    Fed the worker's statistics with every display packet (about 30 times a second).
+    """
+
+    normal_s: float
+    slowed_s: float = YIELD_INTERVAL_S
+    hold_s: float = YIELD_HOLD_S
+    _behind_at: float | None = None
+    _samples: deque = field(default_factory=deque)     # (time, results, dropped), live only
+
+    def reset(self) -> None:
+        """A new source or a pause: back to the normal rate."""
+        self._behind_at = None
+        self._samples.clear()
+
+    @property
+    def slowed(self) -> bool:
+        return self._behind_at is not None
+
+    @property
+    def interval(self) -> float:
+        return self.slowed_s if self.slowed else self.normal_s
+
+    def update(self, now: float, stats, *, live: bool, paced: bool, paused: bool) -> float:
+        """The interval to use from now on. ``stats`` as for :meth:`KeepUpWatch.update`."""
+        if paused or not (live or paced):
+            self.reset()           # a paused display or a flat-out file: nothing to yield to
+            return self.normal_s
+        behind = False
+        if live:
+            samples = self._samples
+            samples.append((now, stats.frames, stats.dropped))
+            while len(samples) > 2 and now - samples[1][0] >= 1.0:
+                samples.popleft()
+            t0, frames0, dropped0 = samples[0]
+            done, dropped = stats.frames - frames0, stats.dropped - dropped0
+            behind = (now - t0 >= 0.5 and done + dropped > 0
+                      and dropped / (done + dropped) > YIELD_DROPPED_SHARE)
+        else:
+            self._samples.clear()
+            behind = stats.playback_speed < YIELD_MIN_PLAYBACK
+        if behind:
+            self._behind_at = now
+        elif self._behind_at is not None and now - self._behind_at >= self.hold_s:
+            self._behind_at = None
+        return self.interval

@@ -35,7 +35,7 @@ from ..io.track_log import RecordingError, TrackRecorder
 from . import settings as st
 from .court_views import CourtGLView, CourtPlanView, SideView, gl_unavailable_reason
 from .feed_view import FeedView
-from .keep_up import FAST_PRESET, KeepUpWatch
+from .keep_up import FAST_PRESET, DisplayYield, KeepUpWatch
 from .robot_panel import RobotLinkPanel
 from .sources import CameraPairDialog, VideoPairDialog, open_spec
 from .worker import DisplayPacket, RateMeter, SourceOpener, TrackingWorker
@@ -191,7 +191,7 @@ class Readouts(QWidget):
         for value in self.values.values():
             value.setText("—")
 
-    def show_packet(self, packet: DisplayPacket, display_hz: float) -> None:
+    def show_packet(self, packet: DisplayPacket, display_hz: float, slowed_views_hz: float | None = None) -> None:
         r, s = packet.result, packet.stats
         v = self.values
         v["distance"].setText(distance_text(r.distance, r.predicted_distance))
@@ -211,7 +211,9 @@ class Readouts(QWidget):
             v["call"].setText("—")
         v["capture"].setText(f"{s.capture_fps_left:.0f} / {s.capture_fps_right:.0f}")
         v["processing"].setText(f"{s.processing_fps:.0f} fps  ({s.processing_ms:.1f} ms/pair)")
-        v["display"].setText(f"{display_hz:.0f} Hz")
+        v["display"].setText(f"{display_hz:.0f} Hz" if slowed_views_hz is None else
+                             f"{display_hz:.0f} Hz<br><span style='color:#e8a33c'>court views "
+                             f"{slowed_views_hz:.0f} Hz, tracker behind</span>")
         v["dropped"].setText(str(s.dropped))
         v["latency"].setText(f"{s.latency_ms:.1f} ms")
         v["playback"].setText(f"{s.playback_speed:.2f}× real time")
@@ -249,6 +251,8 @@ class MainWindow(QMainWindow):
         self._recorder: TrackRecorder | None = None   # Source ▸ Record track, while on
         self._process = None                # Tools ▸ Process a recording, built when first opened
         self._keep_up = KeepUpWatch()       # advice when tracking falls behind (gui/keep_up.py)
+        # The court views slow down while tracking is behind its source (gui/keep_up.py).
+        self._display_yield = DisplayYield(SLOW_VIEW_INTERVAL_S)
         self._build_ui()
         self._build_actions()
         self._timer = QTimer(self)
@@ -604,6 +608,7 @@ class MainWindow(QMainWindow):
     def _on_opened(self, name: str, rig: StereoRig) -> None:
         self.rig = rig
         self._keep_up.reset()
+        self._display_yield.reset()
         if self._restart_rig is not None:
             restarted, self._restart_rig = self._restart_rig is rig, None
             if restarted:
@@ -782,7 +787,7 @@ class MainWindow(QMainWindow):
         now = time.perf_counter()
         if not self._show_newest(now):
             self._late_timer.start(LATE_POLL_MS)
-        if now - self._slow_shown_at >= SLOW_VIEW_INTERVAL_S - 0.002:   # a tick may come a little early
+        if now - self._slow_shown_at >= self._display_yield.interval - 0.002:   # a tick may come a little early
             self._refresh_slow_views(now)
 
     def _late_poll(self) -> None:
@@ -809,6 +814,8 @@ class MainWindow(QMainWindow):
         self.worker.set_display_size(int(max(self.left_feed.width(), self.right_feed.width()) * ratio),
                                      int(max(self.left_feed.height(), self.right_feed.height()) * ratio))
         self.latest_packet = packet
+        stats = packet.stats
+        self._display_yield.update(now, stats, live=stats.live, paced=stats.paced, paused=self._paused)
         self.results_seen += 1
         self.display_refreshes += 1
         self._display_rate.tick(now)
@@ -824,10 +831,15 @@ class MainWindow(QMainWindow):
         views += [("plan", self.plan.widget, self.plan.show_packet),
                   ("side", self.side.widget, self.side.show_packet),
                   ("readouts", self.readouts,
-                   lambda p: self.readouts.show_packet(p, self._display_rate.rate()))]
+                   lambda p: self.readouts.show_packet(p, self._display_rate.rate(),
+                                                       self._slowed_views_hz()))]
         if self._tuning is not None:
             views.append(("tuning preview", self._tuning, self._tuning.show_preview))
         return views
+
+    def _slowed_views_hz(self) -> float | None:
+        """The court views' refresh rate while they yield to a tracker that is behind, else None."""
+        return 1.0 / self._display_yield.interval if self._display_yield.slowed else None
 
     def packet_shown_in(self, view: str) -> DisplayPacket | None:
         """The packet a slow view ("3D", "plan", "side", "readouts", "tuning preview") shows."""

@@ -21,9 +21,13 @@ the worker calls with every result at the tracking rate (the display packets are
 io/track_log.py is the other tap), and :meth:`TrackingWorker.set_rig`, which makes the running
 loop continue with a new rig.
 
-Live cameras get a grabber thread with its own one-slot buffer, so a slow tracker drops old
-camera frames (counted and shown) instead of falling behind; file and demo sources are read
-in step with the tracker and paced to their fps ("as fast as possible" switches that off).
+Live cameras get a grabber thread with its own buffer of ``LIVE_BUFFER_PAIRS`` pairs that drops
+the oldest when full (ROS camera_calibration's ``BufferQueue``), so a slow tracker drops old
+camera frames (counted and shown) instead of falling behind, while one slow pair — the GUI
+thread holding the GIL through a paint, a whole frame among windowed ones — no longer costs a
+pair: the tracker takes it up one pair late and catches up (benchmarks/README, thirteenth
+round). File and demo sources are read in step with the tracker and paced to their fps ("as
+fast as possible" switches that off).
 """
 
 from __future__ import annotations
@@ -59,6 +63,13 @@ except ImportError:  # pragma: no cover - the classifier is optional
 DISPLAY_MAX_WIDTH = 960        # frame width for the display until the GUI says how wide the feeds are
 TRAIL_SECONDS = 0.5            # the fading trail behind the red circle
 RESYNC_AFTER = 0.25            # s behind the source clock before real-time pacing gives up catching up
+# Camera pairs the grabber keeps for the tracker. One (newest wins) dropped a pair whenever a
+# single pair took longer than the camera period: 2048×1536 at 119 fps with the coarse preset
+# and the window open dropped 3–4 % of the pairs although the tracker's mean time (≈ 5.5 ms)
+# is well inside the 8.4 ms period. Two absorb such a spike for at most one period of extra
+# latency (the readouts' latency includes the wait), and a tracker that is simply too slow
+# still drops the same share (and gets the faster-preset advice, gui/keep_up.py).
+LIVE_BUFFER_PAIRS = 2
 
 
 class LatestSlot:
@@ -86,6 +97,37 @@ class LatestSlot:
     def clear(self) -> None:
         with self._lock:
             self._value = None
+
+
+class DropOldestBuffer:
+    """A bounded FIFO hand-off: ``put`` appends and, when full, drops the oldest (counted);
+    ``take`` returns the oldest or None. Capacity 1 is :class:`LatestSlot`'s newest-wins."""
+
+    def __init__(self, capacity: int) -> None:
+        if capacity < 1:
+            raise ValueError("a frame buffer holds at least one pair")
+        self._lock = threading.Lock()
+        self._items: collections.deque = collections.deque()
+        self.capacity = capacity
+        self.overwritten = 0
+
+    def put(self, value: Any) -> bool:
+        """Store value; True when the oldest value was dropped to make room."""
+        with self._lock:
+            self._items.append(value)
+            if len(self._items) > self.capacity:
+                self._items.popleft()
+                self.overwritten += 1
+                return True
+            return False
+
+    def take(self) -> Any:
+        with self._lock:
+            return self._items.popleft() if self._items else None
+
+    def __len__(self) -> int:
+        with self._lock:
+            return len(self._items)
 
 
 class RateMeter:
@@ -186,10 +228,10 @@ def _call_opener(opener: SourceOpener, context: OpeningContext) -> tuple[FrameSo
 class _LiveReader(threading.Thread):
     """Reads a live source as fast as it delivers; the tracker takes the newest pair."""
 
-    def __init__(self, source: FrameSource) -> None:
+    def __init__(self, source: FrameSource, buffer_pairs: int = LIVE_BUFFER_PAIRS) -> None:
         super().__init__(name="camera-grabber", daemon=True)
         self.source = source
-        self.slot = LatestSlot()
+        self.slot = DropOldestBuffer(buffer_pairs)
         self.error: BaseException | None = None
         self.ended = False
         self.stop_flag = threading.Event()
@@ -226,8 +268,9 @@ class TrackingWorker(QObject):
     finished = Signal()
 
     def __init__(self, open_source: SourceOpener, params: TrackerParams, realtime: bool = True,
-                 show_mask: bool = False) -> None:
+                 show_mask: bool = False, live_buffer_pairs: int | None = None) -> None:
         super().__init__()
+        self._live_buffer_pairs = live_buffer_pairs or LIVE_BUFFER_PAIRS
         self._open_source = open_source
         self.output = LatestSlot()
         self._lock = threading.Lock()
@@ -336,7 +379,7 @@ class TrackingWorker(QObject):
             self._rig_in_use = rig
             self.opened.emit(getattr(source, "name", "source"), rig)
             if source.fps is None:
-                reader = _LiveReader(source)
+                reader = _LiveReader(source, self._live_buffer_pairs)
                 reader.start()
             self._loop(source, tracker, reader)
         except USER_ERRORS as exc:
