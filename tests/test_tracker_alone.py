@@ -140,6 +140,35 @@ def test_only_a_track_seen_in_the_air_is_held():
 
 
 
+def test_a_shoe_walking_past_does_not_take_the_report_from_the_landed_shuttle():
+    """After the landing the association's readout jumps to a track never seen in the air (a
+    player's white shoe, tracklet 9) with no stereo partner above the floor: the shuttle lying
+    where it landed (tracklet 4) stays the report while the hold lasts, then the shoe is. A
+    track that flew, or a pair above the floor (a new serve), takes the report at once."""
+    def run(tracker, shoe_flew=False, paired=False, frames=4):
+        tracker._note_flown(0, 4, 0.5)
+        if shoe_flew:
+            tracker._note_flown(0, 9, 0.9)
+        tracker._last_point = (1.0, 0.0)
+        shuttle = _cand(100)
+        tracker._hold_landed(0, CameraResult(shuttle, (shuttle,), image_size=(1280, 720)), shuttle, 1.0)
+        tracker._held[0][4] = True
+        out = []
+        for k in range(1, frames + 1):
+            lying = _cand(100 + 0.5 * k, "motion")
+            shoe = dataclasses.replace(_cand(400 + 3 * k), tracklet=9)
+            res, det = tracker._hold_landed(0, CameraResult(shoe, (lying, shoe), image_size=(1280, 720)),
+                                            shoe, 1.0 + 0.01 * k, paired)
+            out.append(None if det is None else (det.tracklet, det.x))
+        tracker.close()
+        return out
+
+    assert run(_tracker(landed_frames=10)) == [(4, 100.5), (4, 101.0), (4, 101.5), (4, 102.0)]
+    assert run(_tracker(landed_frames=2)) == [(4, 100.5), (4, 101.0), (9, 409.0), (9, 412.0)]
+    assert run(_tracker(landed_frames=10), shoe_flew=True)[0] == (9, 403.0)
+    assert run(_tracker(landed_frames=10), paired=True)[0] == (9, 403.0)
+
+
 def test_the_other_camera_holding_keeps_this_cameras_anchor():
     """The left camera's landed shuttle is held (no pair, no 3D point); the right camera still
     reports the same shuttle a few frames: its report stays anchored, so its own hold can start

@@ -326,8 +326,12 @@ class StereoTracker:
             det_left, det_right = dets
         self._held_now = [False, False]
         if sp.landed_frames > 0 and self.rig.has_court_pose:
-            res_left, det_left = self._hold_landed(0, res_left, det_left, timestamp)
-            res_right, det_right = self._hold_landed(1, res_right, det_right, timestamp)
+            # A stereo pair counts as the shuttle in the air only above the floor: a shoe paired
+            # with the lying shuttle (rally_11-47-21 986: 1.7 m below the court) is not one.
+            paired = (point_left is not None
+                      and float(self.rig.to_output(point_left)[0][2]) > sp.landed_max_height)
+            res_left, det_left = self._hold_landed(0, res_left, det_left, timestamp, paired)
+            res_right, det_right = self._hold_landed(1, res_right, det_right, timestamp, paired)
         # The sources hand out a new array per frame: keeping the reference costs no copy.
         self._previous = (left_bgr, right_bgr)
         # The 2D readout is the cork, not the trailing bright centroid. The 3D point is still
@@ -391,8 +395,8 @@ class StereoTracker:
             predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
 
-    def _hold_landed(self, cam: int, result: CameraResult, det: Candidate | None, t: float
-                     ) -> tuple[CameraResult, Candidate | None]:
+    def _hold_landed(self, cam: int, result: CameraResult, det: Candidate | None, t: float,
+                     paired: bool = False) -> tuple[CameraResult, Candidate | None]:
         """Keep reporting a shuttle that landed and lies still (``stereo.landed_frames``).
 
         The association reports a still track only for ``association.pause_frames`` after it
@@ -408,6 +412,15 @@ class StereoTracker:
         """
         sp = self.params.stereo
         state = self._held[cam]
+        if (det is not None and not paired and not det.predicted and 0 <= state[0] != det.tracklet
+                and not self._flown_recently(cam, det.tracklet, t)):
+            # The readout leaves the landed shuttle for a track never seen in the air, with no
+            # stereo partner above the floor: after a rally that is a player's white shoe walking past
+            # (rally_11-47-21 left 986, rally_11-48-00 right 630). The shuttle, still lying
+            # there, stays the report while the hold's conditions last; else the new track is.
+            held_result, held = self._hold_landed(cam, result, None, t, paired)
+            if held is not None:
+                return held_result, held
         if det is not None:
             if det.predicted or det.tracklet < 0:
                 state[0] = -1
