@@ -126,6 +126,21 @@ def test_a_whole_frame_every_full_every_frames(full_every):
         assert longest == full_every - 1   # the dot is followed: the window is used up to the limit
 
 
+def test_keep_whole_processes_the_whole_frame_while_it_is_set():
+    """The stereo tracker sets ``keep_whole`` while it holds a landed shuttle for the camera:
+    those frames are whole though the followed dot would be windowed, and the window comes
+    back once it is cleared."""
+    frames, truth = _scene(120)
+    det = CameraDetector(_params(window__full_every=8))
+    windows = []
+    for i, img in enumerate(frames):
+        det.keep_whole = 60 <= i < 80
+        det.process(img, i / FPS, keep_mask=False)
+        windows.append(det._window.last_window)
+    assert all(w is None for w in windows[60:80])
+    assert sum(w is not None for w in windows[40:60]) >= 15 and sum(w is not None for w in windows[90:]) >= 20
+
+
 def test_never_windowed_when_off_or_not_following():
     frames, truth = _scene(60)
     _, log = _run(_params(window__enabled=False), frames, truth)

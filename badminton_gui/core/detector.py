@@ -102,6 +102,10 @@ class CameraDetector:
         self._large_boxes = np.zeros((0, 4), np.int64)   # full-res boxes of blobs too large (filters 1, 2)
         self._window = WindowTracker(self.params)   # windowed tracking (``window.enabled``)
         self._planned: tuple[float, tuple[int, int, int, int] | None] | None = None   # plan_window
+        # Set by the stereo tracker while it holds a landed shuttle for this camera: the frame is
+        # processed whole, since the window follows the association's track (after a rally, a
+        # player walking past) and the lying shuttle outside it would have no candidate.
+        self.keep_whole = False
         self._previous_gray: np.ndarray | None = None   # last whole frame's grey image (split_min_length)
         self.last_split = 0   # candidates split off merged blobs in the last frame
 
@@ -149,7 +153,8 @@ class CameraDetector:
         cameras before it decides whether to run them side by side or in turn."""
         h, w = frame_bgr.shape[:2]
         p = self.params
-        window = (self._window.plan(self._associator, t, w, h, model_scale(p.background, w))
+        window = (self._window.plan(self._associator, t, w, h, model_scale(p.background, w),
+                                    self.keep_whole)
                   if p.window.enabled else None)
         self._planned = (t, window)
         return window is not None
@@ -183,7 +188,8 @@ class CameraDetector:
         if planned is not None and planned[0] == t:
             window = planned[1]
         else:
-            window = self._window.plan(self._associator, t, w, h, scale) if p.window.enabled else None
+            window = (self._window.plan(self._associator, t, w, h, scale, self.keep_whole)
+                      if p.window.enabled else None)
         windowed = None if window is None else self._window.model_mask(frame_bgr, scale, window,
                                                                        self._background)
         if windowed is None:

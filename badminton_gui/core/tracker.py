@@ -235,6 +235,7 @@ class StereoTracker:
         # in play: 179–222 against 169–172 pairs/s, README Speed); a pair with a whole frame,
         # mostly image work that releases the GIL, runs side by side. The windows are chosen
         # first, so a camera's periodic whole frame is never run in turn with the other's.
+        self.left.keep_whole, self.right.keep_whole = self._held_now
         in_turn = (self.left.plan_window(left_bgr, timestamp)
                    & self.right.plan_window(right_bgr, timestamp))
         if self._pool is not None and not in_turn:

@@ -124,13 +124,14 @@ class WindowTracker:
 
     # ---- the choice --------------------------------------------------------------------
     def plan(self, associator: TrackletAssociator, t: float, width: int, height: int,
-             scale: float) -> tuple[int, int, int, int] | None:
-        """This frame's window (x0, y0, x1, y1 in full-resolution px), or None: the whole frame.
+             scale: float, whole: bool = False) -> tuple[int, int, int, int] | None:
+        """This frame's window (x0, y0, x1, y1 in full-resolution px), or None: the whole frame
+        (always when ``whole``).
 
         Call once per frame, before the frame is processed (after the last frame's ``commit``).
         """
         self.frames += 1
-        window = self._choose(associator, t, width, height, scale)
+        window = None if whole else self._choose(associator, t, width, height, scale)
         self.note(window)
         return window
 
