@@ -356,6 +356,26 @@ def test_the_camera_buffer_drops_the_oldest_pair_and_counts_it():
     assert newest.take() == "b" and newest.overwritten == 1
     with pytest.raises(ValueError):
         DropOldestBuffer(0)
+    # Shrunk while full (the operator chose the lowest latency): the oldest goes, counted.
+    buffer.put(4), buffer.put(5)
+    buffer.set_capacity(1)
+    assert buffer.take() == 5 and buffer.overwritten == 3 and buffer.capacity == 1
+
+
+def test_the_newest_pair_only_choice_reaches_the_running_grabber_and_is_remembered(main_window, qtbot):
+    """Playback ▸ Newest camera pair only: the live grabber keeps one pair instead of two, at
+    once for the running cameras and for the next source; the choice survives a restart."""
+    window = main_window()
+    window.start_opener(lambda: ((s := _UnpluggedCameras(10_000)), s.scene.rig), "stand-in cameras")
+    qtbot.waitUntil(lambda: window.worker is not None and window.worker._reader is not None, timeout=WAIT_MS)
+    reader = window.worker._reader
+    assert reader.slot.capacity == 2 and not window.newest_only_action.isChecked()
+    window.newest_only_action.trigger()
+    assert reader.slot.capacity == 1 and window.worker._live_buffer_pairs == 1
+    assert window._live_buffer_pairs() == 1
+    assert str(window.settings.value("live/newest_only")) == "true"
+    window.newest_only_action.trigger()
+    assert reader.slot.capacity == 2
 
 
 def test_ctrl_c_closes_cleanly(tmp_path):

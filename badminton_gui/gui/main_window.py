@@ -38,7 +38,7 @@ from .feed_view import FeedView
 from .keep_up import FAST_PRESET, DisplayYield, KeepUpWatch
 from .robot_panel import RobotLinkPanel
 from .sources import CameraPairDialog, VideoPairDialog, open_spec
-from .worker import DisplayPacket, RateMeter, SourceOpener, TrackingWorker
+from .worker import LIVE_BUFFER_PAIRS, DisplayPacket, RateMeter, SourceOpener, TrackingWorker
 
 DISPLAY_INTERVAL_MS = 33          # feeds: ≈30 Hz, whatever the tracking rate
 # The worker is asked for a result finished at least this long before the next tick, so the
@@ -371,6 +371,13 @@ class MainWindow(QMainWindow):
         self.realtime_action.setChecked(self.spec.realtime)
         self.realtime_action.setToolTip("Pace file and demo sources to their frame rate; "
                                         "off: as fast as possible")
+        self.newest_only_action = self._action(play, "&Newest camera pair only (lowest latency)",
+                                               self._live_buffer_changed, checkable=True)
+        self.newest_only_action.setChecked(str(self.settings.value("live/newest_only", "false")) == "true")
+        self.newest_only_action.setToolTip(
+            "Live cameras: track only the newest pair, for the lowest latency to the robot; a single "
+            "slow pair then costs a dropped pair. Off: the grabber keeps two pairs, so a slow pair is "
+            "taken up late instead of lost (at most one camera period more latency)")
 
         view = menu.addMenu("&View")
         self.mask_action = self._action(view, "Foreground &mask", self._overlays_changed, "M", checkable=True)
@@ -443,7 +450,8 @@ class MainWindow(QMainWindow):
         self._pending_start = None
         self.latest_packet = None
         worker = TrackingWorker(opener, self.params, realtime=self.realtime_action.isChecked(),
-                                show_mask=self.mask_action.isChecked())
+                                show_mask=self.mask_action.isChecked(),
+                                live_buffer_pairs=self._live_buffer_pairs())
         thread = QThread(self)
         thread.setObjectName("tracking")
         worker.moveToThread(thread)
@@ -663,6 +671,14 @@ class MainWindow(QMainWindow):
         st.save_source_spec(self.settings, self.spec)
         if self.worker is not None:
             self.worker.set_realtime(self.realtime_action.isChecked())
+
+    def _live_buffer_pairs(self) -> int:
+        return 1 if self.newest_only_action.isChecked() else LIVE_BUFFER_PAIRS
+
+    def _live_buffer_changed(self) -> None:
+        self.settings.setValue("live/newest_only", "true" if self.newest_only_action.isChecked() else "false")
+        if self.worker is not None:
+            self.worker.set_live_buffer_pairs(self._live_buffer_pairs())
 
     def _overlays_changed(self) -> None:
         if self.worker is not None:

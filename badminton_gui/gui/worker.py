@@ -125,6 +125,16 @@ class DropOldestBuffer:
         with self._lock:
             return self._items.popleft() if self._items else None
 
+    def set_capacity(self, capacity: int) -> None:
+        """Hold at most ``capacity`` values from now on (the oldest beyond it dropped, counted)."""
+        if capacity < 1:
+            raise ValueError("a frame buffer holds at least one pair")
+        with self._lock:
+            self.capacity = capacity
+            while len(self._items) > capacity:
+                self._items.popleft()
+                self.overwritten += 1
+
     def __len__(self) -> int:
         with self._lock:
             return len(self._items)
@@ -271,6 +281,7 @@ class TrackingWorker(QObject):
                  show_mask: bool = False, live_buffer_pairs: int | None = None) -> None:
         super().__init__()
         self._live_buffer_pairs = live_buffer_pairs or LIVE_BUFFER_PAIRS
+        self._reader: _LiveReader | None = None
         self._open_source = open_source
         self.output = LatestSlot()
         self._lock = threading.Lock()
@@ -300,6 +311,15 @@ class TrackingWorker(QObject):
     def set_params(self, params: TrackerParams) -> None:
         with self._lock:
             self._pending_params = params
+
+    def set_live_buffer_pairs(self, pairs: int) -> None:
+        """Camera pairs the grabber keeps (1: the newest only, the lowest latency), now and for
+        the rest of this source."""
+        with self._lock:
+            self._live_buffer_pairs = pairs
+            reader = self._reader
+        if reader is not None:
+            reader.slot.set_capacity(pairs)
 
     @property
     def params_in_use(self) -> TrackerParams:
@@ -379,7 +399,8 @@ class TrackingWorker(QObject):
             self._rig_in_use = rig
             self.opened.emit(getattr(source, "name", "source"), rig)
             if source.fps is None:
-                reader = _LiveReader(source, self._live_buffer_pairs)
+                with self._lock:
+                    reader = self._reader = _LiveReader(source, self._live_buffer_pairs)
                 reader.start()
             self._loop(source, tracker, reader)
         except USER_ERRORS as exc:
