@@ -416,7 +416,7 @@ class StereoTracker:
         if (det is not None and not paired and not det.predicted and 0 <= state[0] != det.tracklet
                 and not self._flown_recently(cam, det.tracklet, t)):
             # The readout leaves the landed shuttle for a track never seen in the air, with no
-            # stereo partner above the floor: after a rally that is a player's white shoe walking past
+            # stereo partner above the floor: after a rally, a player's white shoe walking past
             # (rally_11-47-21 left 986, rally_11-48-00 right 630). The shuttle, still lying
             # there, stays the report while the hold's conditions last; else the new track is.
             held_result, held = self._hold_landed(cam, result, None, t, paired)

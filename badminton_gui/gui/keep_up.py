@@ -10,9 +10,10 @@ so, once per source, when tracking has been behind for ``SUSTAINED_S`` seconds w
 :class:`DisplayYield` acts at once instead: while a live or paced source is being dropped or
 played slow, the court views (3D, plan, side) and the readouts refresh at 4 Hz instead of 15,
 the feeds stay at 30 Hz. Those views are most of what the display costs the tracker — PySide6
-keeps the GIL through Qt's painting, and the 3D view paints through software OpenGL here
-(benchmarks/README, thirteenth round: with them hidden, 2048×1536 cameras at 119 fps were
-tracked with 0.4 % of the pairs dropped instead of 3–4 %).
+keeps the GIL through Qt's painting, and the 3D view paints through software OpenGL here: the
+display-side CPU a pair shown fell 5.2 → 3.7 ms, and with the worker's two-pair camera buffer
+the pairs dropped at 2048×1536 / 119 fps fell 4.37 → 1.35 % (benchmarks/README, thirteenth
+round, ``scripts/gui-timing.py --nycu 400 --preset coarse --ab 6``; not measured apart).
 
 Plain Python, no Qt: the window feeds it the worker's statistics and shows what it returns.
 """

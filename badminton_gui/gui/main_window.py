@@ -191,7 +191,8 @@ class Readouts(QWidget):
         for value in self.values.values():
             value.setText("—")
 
-    def show_packet(self, packet: DisplayPacket, display_hz: float, slowed_views_hz: float | None = None) -> None:
+    def show_packet(self, packet: DisplayPacket, display_hz: float,
+                    slowed_views_hz: float | None = None) -> None:
         r, s = packet.result, packet.stats
         v = self.values
         v["distance"].setText(distance_text(r.distance, r.predicted_distance))
@@ -373,7 +374,8 @@ class MainWindow(QMainWindow):
                                         "off: as fast as possible")
         self.newest_only_action = self._action(play, "&Newest camera pair only (lowest latency)",
                                                self._live_buffer_changed, checkable=True)
-        self.newest_only_action.setChecked(str(self.settings.value("live/newest_only", "false")) == "true")
+        self.newest_only_action.setChecked(
+            str(self.settings.value("live/newest_only", "false")) == "true")
         self.newest_only_action.setToolTip(
             "Live cameras: track only the newest pair, for the lowest latency to the robot; a single "
             "slow pair then costs a dropped pair. Off: the grabber keeps two pairs, so a slow pair is "
@@ -676,7 +678,8 @@ class MainWindow(QMainWindow):
         return 1 if self.newest_only_action.isChecked() else LIVE_BUFFER_PAIRS
 
     def _live_buffer_changed(self) -> None:
-        self.settings.setValue("live/newest_only", "true" if self.newest_only_action.isChecked() else "false")
+        self.settings.setValue("live/newest_only",
+                               "true" if self.newest_only_action.isChecked() else "false")
         if self.worker is not None:
             self.worker.set_live_buffer_pairs(self._live_buffer_pairs())
 
