@@ -16,6 +16,11 @@ import numpy as np
 from .params import BackgroundParams, BinarizeParams
 
 
+# Inside the box around the last report (``BackgroundModel.protect``) a pixel is foreground from
+# this fraction of ``binarize.diff_threshold``.
+PROTECT_THRESHOLD = 0.5
+
+
 class BackgroundModel:
     """Turns successive grey frames into binary foreground masks (0 / 255)."""
 
@@ -35,6 +40,9 @@ class BackgroundModel:
         # Windowed tracking: pixels (255) that missed updates, and the extra learning rate they
         # get on the next whole frame (``catch_up``); used once.
         self._catch_up: tuple[np.ndarray, float] | None = None
+        # Model pixels (x0, y0, x1, y1) thresholded lower in the next update only: around a
+        # held landed shuttle (``protect``).
+        self._protected: tuple[int, int, int, int] | None = None
         self._configure()
 
     @property
@@ -55,6 +63,7 @@ class BackgroundModel:
         self._mog = None
         self._previous.clear()
         self._average = None
+        self._protected = None
 
     def _configure(self) -> None:
         b = self._bg
@@ -143,6 +152,8 @@ class BackgroundModel:
             reference = np.multiply(avg, gain) if gain != 1.0 else avg
         diff = cv2.subtract(gray, reference, dst=self._difference[rows, cols], dtype=cv2.CV_32F)
         mask = cv2.compare(diff, float(self._bin.diff_threshold), cv2.CMP_GT)
+        box = self._take_protected((h, w), x0, y0)
+        self._protected_mask(mask, diff, box)
         self.last_difference = self._difference
         self.last_unlit = None
         if self._bin.max_background < 255:
@@ -156,6 +167,42 @@ class BackgroundModel:
             cv2.accumulateWeighted(gray, avg, alpha, mask=cv2.bitwise_not(slow))
             cv2.accumulateWeighted(gray, avg, alpha * 0.1, mask=slow)
         return self._clean(mask)
+
+    def protect(self, box: tuple[int, int, int, int] | None) -> None:
+        """In the next update only, a pixel inside ``box`` (model px x0, y0, x1, y1; None:
+        nowhere) is foreground from ``PROTECT_THRESHOLD`` × ``binarize.diff_threshold``.
+
+        The stereo tracker passes the box around a landed shuttle it holds. At a quarter-scale
+        model (``coarse``) a lying shuttle is 2–3 px, averaged with the floor around it: its
+        difference hovers near the threshold, and when it dims a little (it rolls, a player's
+        shadow passes) it drops out of the mask and the hold ends (rally_11-48-00 right 636:
+        the difference fell from 20 to 10 against 12, while the average there stayed put).
+        A lower threshold where the shuttle is known to lie is hysteresis: it keeps what is
+        already followed and starts nothing new. Learning more slowly there changed nothing
+        (measured: the same outcomes to the frame).
+        """
+        self._protected = box
+
+    def _take_protected(self, shape: tuple[int, int], x0: int = 0, y0: int = 0
+                        ) -> tuple[slice, slice] | None:
+        """The protected box as slices of an image of ``shape`` whose origin is model pixel
+        (x0, y0), or None; the box is used up."""
+        box, self._protected = self._protected, None
+        if box is None:
+            return None
+        h, w = shape
+        bx0, by0 = max(box[0] - x0, 0), max(box[1] - y0, 0)
+        bx1, by1 = min(box[2] - x0, w), min(box[3] - y0, h)
+        if bx0 >= bx1 or by0 >= by1:
+            return None
+        return slice(by0, by1), slice(bx0, bx1)
+
+    def _protected_mask(self, mask: np.ndarray, diff: np.ndarray, box: tuple[slice, slice] | None) -> None:
+        """Inside the protected box the mask takes the difference from PROTECT_THRESHOLD × the
+        threshold (hysteresis: a reported shuttle stays in the mask while it dims a little)."""
+        if box is not None:
+            t = float(self._bin.diff_threshold) * PROTECT_THRESHOLD
+            mask[box] = np.where(diff[box] > t, np.uint8(255), np.uint8(0))
 
     def is_blind(self, x: float, y: float) -> bool:
         """True when a shuttle at (x, y) (processing-scale px) cannot show in the mask.
@@ -241,6 +288,8 @@ class BackgroundModel:
         diff = cv2.subtract(gray, reference, dst=self._difference, dtype=cv2.CV_32F)
         # diff > threshold as 0 / 255 in one call.
         mask = cv2.compare(diff, float(self._bin.diff_threshold), cv2.CMP_GT, dst=self._raw_mask)
+        box = self._take_protected(mask.shape)
+        self._protected_mask(mask, diff, box)
         self.last_difference = diff
         self.last_unlit = None
         if self._bin.max_background < 255:

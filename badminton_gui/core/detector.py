@@ -55,6 +55,9 @@ from .types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SID
 # At most this many blobs per frame get the (more expensive) full-resolution colour check;
 # beyond it the largest blobs are dropped first (players, not shuttles).
 MAX_COLOUR_CHECKS = 64
+# px at 1280 px width: the half-size of the box around a held shuttle thresholded lower in the
+# next frame (``protect_report``); a shuttle lying on the floor is ≈ 6–10 px long there.
+PROTECT_RADIUS = 8.0
 # Margin (full-res px) around a blob's box for the sub-pixel refinement window.
 REFINE_MARGIN = 5
 _GROW = np.ones((3, 3), np.uint8)
@@ -672,6 +675,18 @@ class CameraDetector:
         if detection is None:
             return  # the followed tracklet keeps its bonus while it coasts
         self._associator.select(self._tracklet_of.get(id(detection)))
+
+    def protect_report(self, report: Candidate | None, width: int) -> None:
+        """The next frame's mask keeps the pixels around ``report`` from a lower threshold
+        (``BackgroundModel.protect``; None: nowhere). The stereo tracker passes its held landed
+        shuttle, which a quarter-scale model otherwise loses when it dims a little."""
+        if report is None or report.predicted or self._mask_scale <= 0:
+            self._background.protect(None)
+            return
+        s = self._mask_scale
+        r = math.ceil(PROTECT_RADIUS * width / 1280.0 * s) + int(self.params.background.shake_tolerance)
+        x, y = report.x * s, report.y * s
+        self._background.protect((int(x) - r, int(y) - r, int(x) + r + 1, int(y) + r + 1))
 
     @staticmethod
     def finalise(result: CameraResult, chosen: Candidate | None,

@@ -333,6 +333,9 @@ class StereoTracker:
                       and float(self.rig.to_output(point_left)[0][2]) > sp.landed_max_height)
             res_left, det_left = self._hold_landed(0, res_left, det_left, timestamp, paired)
             res_right, det_right = self._hold_landed(1, res_right, det_right, timestamp, paired)
+        # A held landed shuttle stays in its camera's mask (``CameraDetector.protect_report``).
+        self.left.protect_report(det_left if self._held_now[0] else None, left_bgr.shape[1])
+        self.right.protect_report(det_right if self._held_now[1] else None, right_bgr.shape[1])
         # The sources hand out a new array per frame: keeping the reference costs no copy.
         self._previous = (left_bgr, right_bgr)
         # The 2D readout is the cork, not the trailing bright centroid. The 3D point is still
