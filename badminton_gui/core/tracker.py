@@ -331,8 +331,13 @@ class StereoTracker:
             # with the lying shuttle (rally_11-47-21 986: 1.7 m below the court) is not one.
             paired = (point_left is not None
                       and float(self.rig.to_output(point_left)[0][2]) > sp.landed_max_height)
+            paired_dets = (det_left, det_right)
             res_left, det_left = self._hold_landed(0, res_left, det_left, timestamp, paired)
             res_right, det_right = self._hold_landed(1, res_right, det_right, timestamp, paired)
+            if point_left is not None and (det_left is not paired_dets[0] or det_right is not paired_dets[1]):
+                # The hold gave the report back to the landed shuttle (the shoe of
+                # ``_hold_landed``): the pair made with the shoe, below the floor, is no point.
+                point_left, epi = None, None
         # A held landed shuttle stays in its camera's mask (``CameraDetector.protect_report``).
         self.left.protect_report(det_left if self._held_now[0] else None, left_bgr.shape[1])
         self.right.protect_report(det_right if self._held_now[1] else None, right_bgr.shape[1])
