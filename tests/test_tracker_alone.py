@@ -187,3 +187,27 @@ def test_the_other_camera_holding_keeps_this_cameras_anchor():
     t._note_anchor(1, c, False)
     assert not t._held[1][4]
     t.close()
+
+
+# ---- stereo.cold_epipolar_error -----------------------------------------------------------------
+
+def test_the_epipolar_gate_is_the_cold_one_until_the_rigs_error_is_learnt():
+    """From a fresh start the pair gate is ``cold_epipolar_error`` (a rough rig misses by tens of
+    px); after EPIPOLAR_LEARNT_SAMPLES sure pairs it is the learnt one, even when narrower; 0
+    keeps the fixed tolerance; without learning there is no cold gate either."""
+    from badminton_gui.core.tracker import EPIPOLAR_LEARNT_SAMPLES
+
+    t = _tracker(cold_epipolar_error=30.0, max_epipolar_error=6.0, adaptive_factor=2.5)
+    assert t.epipolar_tolerance() == 30.0
+    for _ in range(EPIPOLAR_LEARNT_SAMPLES - 1):
+        t._add_epipolar_sample(4.0)
+    assert t.epipolar_tolerance() == 30.0
+    t._add_epipolar_sample(4.0)
+    assert t.epipolar_tolerance() == 10.0          # 2.5 × the median 4 px
+    t.reset()
+    assert t.epipolar_tolerance() == 30.0
+    t.close()
+    for stereo in ({"cold_epipolar_error": 0.0}, {"adaptive_epipolar": False}):
+        t = _tracker(max_epipolar_error=6.0, **stereo)
+        assert t.epipolar_tolerance() == 6.0
+        t.close()

@@ -358,6 +358,13 @@ class StereoParams(ParamGroup):
                                    help="The learnt tolerance is this multiple of the running median error")
     max_learnt_tolerance: float = param(250.0, 1.0, 2000.0, step=5.0, unit="px",
                                         label="Learnt tolerance ≤")
+    cold_epipolar_error: float = param(30.0, 0.0, 500.0, step=1.0, unit="px",
+                                       label="Tolerance until learnt",
+                                       help="The epipolar tolerance from the start until the rig's error has been "
+                                            "learnt (20 sure pairs): a rig imported from rough calibration files "
+                                            "misses by tens of pixels, and a 6 px gate at a rally's first serve "
+                                            "leaves both cameras' reports without a 3D point (0: the fixed "
+                                            "tolerance from the start)")
     own_choice_bonus: float = param(1.0, 0.0, 10.0, step=0.1, label="Own-choice bonus",
                                     help="Merit bonus of each camera's own best candidate when pairing")
     confident_hits: int = param(15, 2, 500, step=1, unit="frames", label="Confident after",

@@ -86,6 +86,9 @@ LANDED_RECENT = 1.0
 # px at 1280 px width: how far a held landed shuttle's candidate may move from one frame to the
 # next (it slides or rolls a little; a hand picking it up moves more).
 LANDED_STEP = 4.0
+# Sure pairs (``_learn_epipolar``) before the learnt epipolar tolerance replaces
+# ``stereo.cold_epipolar_error``.
+EPIPOLAR_LEARNT_SAMPLES = 20
 # s: how long ago the held track may last have been reported with a 3D point above the floor
 # (``_flown_recently``): a landed shuttle slides and lies still for up to ~1.5 s before the hold
 # starts; a shoe walked along the floor after the rally was never seen in the air.
@@ -164,9 +167,15 @@ class StereoTracker:
         """The epipolar gate in use: the configured one, widened to the rig's measured error."""
         sp = self.params.stereo
         tol = float(sp.max_epipolar_error)
-        if sp.adaptive_epipolar and len(self._epipolar_samples) >= 20:
-            learnt = sp.adaptive_factor * self._epipolar_median()
-            tol = max(tol, min(learnt, sp.max_learnt_tolerance))
+        if sp.adaptive_epipolar:
+            if len(self._epipolar_samples) >= EPIPOLAR_LEARNT_SAMPLES:
+                learnt = sp.adaptive_factor * self._epipolar_median()
+                tol = max(tol, min(learnt, sp.max_learnt_tolerance))
+            else:
+                # Nothing learnt yet (a fresh start): the rig may be off by tens of px, and the
+                # 6 px gate left rally_11-47-02's serve unpaired in both cameras, then withheld
+                # as one-camera reports (coarse, 33 frames).
+                tol = max(tol, float(sp.cold_epipolar_error))
         return tol
 
     def _add_epipolar_sample(self, err: float) -> None:
@@ -589,7 +598,7 @@ class StereoTracker:
         ``vouch_rig_factor`` × the rig's measured median epipolar error of sure pairs."""
         sp = self.params.stereo
         tol = float(sp.vouch_max_epipolar)
-        if sp.vouch_rig_factor > 0 and len(self._epipolar_samples) >= 20:
+        if sp.vouch_rig_factor > 0 and len(self._epipolar_samples) >= EPIPOLAR_LEARNT_SAMPLES:
             tol = max(tol, sp.vouch_rig_factor * self._epipolar_median())
         return tol
 
@@ -722,8 +731,8 @@ class StereoTracker:
         it with its noise scaled by 1 + (error / typical)².
         """
         samples = self._epipolar_samples
-        typical = max(EPIPOLAR_TYPICAL_MIN, 1.5 * self._epipolar_median()) if len(samples) >= 20 \
-            else EPIPOLAR_TYPICAL_MIN
+        typical = (max(EPIPOLAR_TYPICAL_MIN, 1.5 * self._epipolar_median())
+                   if len(samples) >= EPIPOLAR_LEARNT_SAMPLES else EPIPOLAR_TYPICAL_MIN)
         return 1.0 + (epi / typical) ** 2
 
     def _weak_lone(self, detection: Candidate | None, paired: bool) -> bool:
