@@ -313,3 +313,28 @@ def test_no_window_while_the_followed_tracklet_looks_poor():
             assert before is not None and before >= threshold
         seen.add(det._window.last_window is not None)
     assert seen == {True, False}
+
+
+def test_a_shuttle_merged_with_a_wide_blob_is_split_off_it_in_windows_too():
+    """The merged-blob split (``contour_length.split_min_length``) works on windowed frames:
+    the previous frame's window overlaps this one's around the followed shuttle, and there the
+    brightened part of the long blob is the shuttle (coarse lost rally_11-48-00 left 483–492)."""
+    from tests.test_detector import _flight_across_a_wide_blob
+
+    frames, truth = _flight_across_a_wide_blob()
+    found, split_in_window = [], 0
+    for split in (0.0, 100.0):
+        det = CameraDetector(_params(contour_length__split_min_length=split, window__full_every=100))
+        hits = []
+        for i, img in enumerate(frames):
+            before = det._window.windowed
+            res = det.process(img, i / FPS, keep_mask=False)
+            if 30 <= i <= 40:
+                d = res.detection
+                hits.append(d is not None and math.hypot(d.x - truth[i][0], d.y - truth[i][1]) <= 6)
+                if split and det._window.windowed > before and det.last_split:
+                    split_in_window += 1
+        found.append(hits)
+    assert split_in_window >= 8
+    assert all(found[1])
+    assert sum(found[0]) < len(found[0]) // 2     # without the split it is lost in the blob

@@ -109,7 +109,9 @@ class CameraDetector:
         # processed whole, since the window follows the association's track (after a rally, a
         # player walking past) and the lying shuttle outside it would have no candidate.
         self.keep_whole = False
-        self._previous_gray: np.ndarray | None = None   # last whole frame's grey image (split_min_length)
+        # The last frame's grey image where it was made (its window, or the whole frame), that
+        # part's model-pixel origin and the whole model's shape (split_min_length).
+        self._previous_gray: tuple[np.ndarray, int, int, tuple[int, int]] | None = None
         self.last_split = 0   # candidates split off merged blobs in the last frame
 
     # ---- configuration ---------------------------------------------------------------------
@@ -305,7 +307,12 @@ class CameraDetector:
         measured = []
         pos_x, pos_y, whiteness_all, saturation_all, appearance_all = measure_blobs(
             frame_bgr, mask, [g[4] for g in geometric], sx, sy, p.colour.head_fraction)
-        split = self._split_merged(gray, mask, contours, length_all, t, w, sx, sy, not segmented.windowed)
+        if segmented.windowed:
+            # The window's corners are multiples of ALIGN px: exact model pixels.
+            fresh = tuple(int(round(v * self._mask_scale)) for v in window)
+        else:
+            fresh = (0, 0, mask.shape[1], mask.shape[0])
+        split = self._split_merged(gray, mask, contours, length_all, t, w, sx, sy, fresh)
         self.last_split = len(split[1]) if split is not None else 0
         if split is not None:
             # Parts split off merged blobs, measured on their own pixels (``_split_merged``).
@@ -403,7 +410,7 @@ class CameraDetector:
                             window=None if window is None else tuple(int(v) for v in window))
 
     def _split_merged(self, gray: np.ndarray, mask: np.ndarray, contours, length_all: np.ndarray,
-                      t: float, w: int, sx: float, sy: float, whole: bool):
+                      t: float, w: int, sx: float, sy: float, fresh: tuple[int, int, int, int]):
         """(mask of the parts, parts as (index, length, short side, area, box)) split off the
         frame's long blobs (``contour_length.split_min_length``), or None.
 
@@ -413,8 +420,11 @@ class CameraDetector:
         own size a frame, so the pixels of a long blob that brightened by ``split_threshold``
         since the previous frame (processing scale) hold it: each compact group of them (grown
         by a pixel like the mask, and within filters 1 and 2) inside the followed tracklet's
-        gate becomes a candidate of its own, measured on its own pixels. Whole frames only (a
-        window has no previous frame here), and only around a track seen lately
+        gate becomes a candidate of its own, measured on its own pixels. ``fresh`` (model px
+        x0, y0, x1, y1) is the part of ``gray`` made this frame (the window, when windowed);
+        a blob is split only where the previous frame's grey image was made too (windows
+        overlap while they follow the shuttle: rally_11-48-00 left 483–492, coarse, a shuttle
+        merged with a player for 10 frames). Only around a track seen lately
         (``split_max_misses``): the grown gate of one that lost its blob behind a player holds
         brightening parts of the player, split off in both cameras alike.
         """
@@ -422,11 +432,12 @@ class CameraDetector:
         prev, self._previous_gray = self._previous_gray, None
         if cl.split_min_length <= 0:
             return None
-        if not whole:
+        fx0, fy0, fx1, fy1 = fresh
+        self._previous_gray = (gray[fy0:fy1, fx0:fx1].copy(), fx0, fy0, gray.shape)
+        if prev is None or prev[3] != gray.shape:
             return None
-        self._previous_gray = gray.copy()
-        if prev is None or prev.shape != gray.shape:
-            return None
+        prev_gray, px0, py0, _ = prev
+        ph, pw = prev_gray.shape
         # Only where the followed shuttle may be (its tracklet's gate around its prediction):
         # elsewhere a moving hand or racket edge split off a player would start tracks of its own.
         followed = self._associator._followed()
@@ -452,9 +463,12 @@ class CameraDetector:
             if not (x0 * sx - radius <= px <= (x0 + bw) * sx + radius
                     and y0 * sy - radius <= py <= (y0 + bh) * sy + radius):
                 continue
+            if not (px0 <= x0 and py0 <= y0 and x0 + bw <= px0 + pw and y0 + bh <= py0 + ph):
+                continue   # the previous frame's grey image was not made here
             blob = np.zeros((bh, bw), np.uint8)
             cv2.drawContours(blob, contours, k, 255, -1, offset=(-x0, -y0))
-            rise = cv2.subtract(gray[y0:y0 + bh, x0:x0 + bw], prev[y0:y0 + bh, x0:x0 + bw])
+            rise = cv2.subtract(gray[y0:y0 + bh, x0:x0 + bw],
+                                prev_gray[y0 - py0:y0 - py0 + bh, x0 - px0:x0 - px0 + bw])
             core = cv2.compare(rise, float(cl.split_threshold), cv2.CMP_GT)
             cv2.bitwise_and(core, blob, dst=core)
             if not cv2.countNonZero(core):
