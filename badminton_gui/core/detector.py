@@ -763,8 +763,9 @@ def model_scale(background, width: int) -> float:
     classifier (trained at half scale) it costs accuracy: on rally_11-46-04 the F1 fell from
     96.9 % to 95.1–95.5 % (the 4× coarser mask lets dilated noise pass the length filter and
     shifts the mask-based features). The ``coarse`` preset pairs it with a classifier trained
-    on coarse-scale candidates; still 0.7 F1 points below the default on held-out rallies, so
-    it stays opt-in.
+    on coarse-scale candidates, windowed tracking and the landed hold's protected mask: within
+    0.2 F1 points of the default on the tuned-on rallies and ahead on the held-out ones
+    (fourteenth round, README Speed). It stays opt-in: presets are the operator's choice.
     """
     scale = float(background.processing_scale)
     if 0 < int(background.coarse_from_width) <= width:
