@@ -552,3 +552,18 @@ def test_recording_the_session_and_a_disk_that_fills_up(main_window, qtbot, tmp_
     assert not window.start_recording(blocker / "x.csv")
     assert not window.record_action.isChecked()
     assert window.banner.text.startswith("Cannot record: ")
+
+
+def test_each_tuning_page_opens_with_its_groups_whole_summary(qtbot):
+    """A page's header is the group docstring's first paragraph, also when it runs over lines
+    (the windowed-tracking page used to stop mid-sentence)."""
+    from PySide6.QtWidgets import QLabel
+
+    from badminton_gui.gui.tuning_dialog import TuningDialog
+
+    dialog = TuningDialog(TrackerParams())
+    qtbot.addWidget(dialog)
+    headers = [dialog.pages.widget(i).findChildren(QLabel)[0].text() for i in range(dialog.pages.count())]
+    window = next(h for h in headers if h.startswith("<b>Windowed tracking</b>"))
+    assert window.endswith("around its predicted position (core/window.py; faster at 2048 px, issue #7).")
+    assert all("\n" not in h for h in headers)

@@ -551,8 +551,8 @@ class LookaheadParams(ParamGroup):
 
 @dataclass(frozen=True, slots=True)
 class WindowParams(ParamGroup):
-    """Windowed tracking (issue #7): while the followed shuttle is confirmed, most frames are
-    processed only in a window around its predicted position (core/window.py)."""
+    """While the followed shuttle is confirmed, most frames are processed only in a window
+    around its predicted position (core/window.py; faster at 2048 px, issue #7)."""
 
     TITLE: ClassVar[str] = "Windowed tracking"
     enabled: bool = flag(False, label="Track in a window",

@@ -183,7 +183,8 @@ class TuningDialog(QDialog):
         page = QWidget()
         grid = QGridLayout(page)
         grid.setColumnStretch(1, 1)
-        doc = (type(group).__doc__ or "").strip().splitlines()[0] if type(group).__doc__ else ""
+        # The docstring's first paragraph, its line breaks undone (a summary may run over lines).
+        doc = " ".join((type(group).__doc__ or "").strip().split("\n\n")[0].split())
         header = QLabel(f"<b>{type(group).TITLE or group_name}</b> — {doc}")
         header.setWordWrap(True)
         header.setStyleSheet("color: #888;")
