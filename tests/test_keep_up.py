@@ -138,7 +138,11 @@ def test_a_slow_paced_playback_slows_the_views_but_a_flat_out_or_paused_one_does
     from badminton_gui.gui.keep_up import DisplayYield
 
     watch = DisplayYield(normal_s=1 / 15)
-    assert _yield_run(watch, [stats(playback=0.9)] * 3, live=False, paced=True)[-1] == watch.slowed_s
+    # a paced file slow for a second or more: slowed; a hiccup shorter than that: not
+    assert _yield_run(watch, [stats(playback=0.9)] * 31, live=False, paced=True)[-1] == watch.slowed_s
+    watch.reset()
+    hiccup = [stats(playback=0.9)] * 20 + [stats(playback=1.0)] + [stats(playback=0.9)] * 20
+    assert set(_yield_run(watch, hiccup, live=False, paced=True)) == {1 / 15}
     assert _yield_run(watch, [stats(playback=0.9)], live=False, paced=True, paused=True) == [1 / 15]
     assert not watch.slowed                                      # a pause starts afresh
     assert set(_yield_run(watch, [stats(playback=0.5)] * 30, live=False, paced=False)) == {1 / 15}

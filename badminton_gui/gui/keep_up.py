@@ -133,6 +133,12 @@ YIELD_MIN_PLAYBACK = 0.98
 # How long the views stay slowed after the last sign of being behind: slowing them is what lets
 # the tracker catch up, so an immediate return would only make the display pulse.
 YIELD_HOLD_S = 10.0
+# s: how long a paced source must play below YIELD_MIN_PLAYBACK before the display yields. The
+# playback speed is measured over the last 60 frames (0.5 s at 120 fps), in which one 10 ms
+# hiccup is 2 %: the demo's first frames (the 3D view's first paint, the classifier loading) had
+# the court views slowed for the first 10 s of every start, with the readouts saying "tracker
+# behind" while it played at 1.00×.
+YIELD_PACED_PERSIST_S = 1.0
 
 
 @dataclass
@@ -147,11 +153,13 @@ class DisplayYield:
     hold_s: float = YIELD_HOLD_S
     _behind_at: float | None = None
     _samples: deque = field(default_factory=deque)     # (time, results, dropped), live only
+    _slow_since: float | None = None                   # paced: playing slow since then
 
     def reset(self) -> None:
         """A new source or a pause: back to the normal rate."""
         self._behind_at = None
         self._samples.clear()
+        self._slow_since = None
 
     @property
     def slowed(self) -> bool:
@@ -178,7 +186,11 @@ class DisplayYield:
                       and dropped / (done + dropped) > YIELD_DROPPED_SHARE)
         else:
             self._samples.clear()
-            behind = stats.playback_speed < YIELD_MIN_PLAYBACK
+            if stats.playback_speed >= YIELD_MIN_PLAYBACK:
+                self._slow_since = None
+            elif self._slow_since is None:
+                self._slow_since = now
+            behind = self._slow_since is not None and now - self._slow_since >= YIELD_PACED_PERSIST_S
         if behind:
             self._behind_at = now
         elif self._behind_at is not None and now - self._behind_at >= self.hold_s:
