@@ -211,3 +211,32 @@ def test_the_epipolar_gate_is_the_cold_one_until_the_rigs_error_is_learnt():
         t = _tracker(max_epipolar_error=6.0, **stereo)
         assert t.epipolar_tolerance() == 6.0
         t.close()
+
+
+def test_the_shoes_pair_is_no_3d_point_once_the_hold_takes_the_report_back():
+    """The shoe walking past paired with the other camera into a point below the floor; when
+    the landed hold gives the report back to the lying shuttle, that point is dropped. Without a
+    hold to take the report back (no flight before), the pair stays as it was."""
+    def run(flew):
+        tracker = _tracker(landed_frames=10)
+        if flew:
+            tracker._note_flown(0, 4, 0.5)
+        tracker._last_point = (1.0, 0.0)
+        shuttle = _cand(100)
+        tracker._hold_landed(0, CameraResult(shuttle, (shuttle,), image_size=(1280, 720)), shuttle, 1.0)
+        tracker._held[0][4] = True
+        lying = _cand(100.5, "motion")
+        shoe = dataclasses.replace(_cand(400), tracklet=9)
+        other = dataclasses.replace(_cand(380), tracklet=2)
+        below = tracker.rig.to_left([(0.0, 0.0, -1.7)])[0]
+        left, right, point, epi = tracker._hold_both(
+            (CameraResult(shoe, (lying, shoe), image_size=(1280, 720)), shoe),
+            (CameraResult(other, (other,), image_size=(1280, 720)), other), below, 2.0, 1.01)
+        tracker.close()
+        return left[1], right[1], point, epi
+
+    det, right, point, epi = run(flew=True)
+    assert det.tracklet == 4 and right.tracklet == 2
+    assert point is None and epi is None
+    det, _, point, epi = run(flew=False)
+    assert det.tracklet == 9 and point is not None and epi == 2.0

@@ -334,19 +334,8 @@ class StereoTracker:
                     dets[cam] = None
                     point_left, epi = None, None
             det_left, det_right = dets
-        self._held_now = [False, False]
-        if sp.landed_frames > 0 and self.rig.has_court_pose:
-            # A stereo pair counts as the shuttle in the air only above the floor: a shoe paired
-            # with the lying shuttle (rally_11-47-21 986: 1.7 m below the court) is not one.
-            paired = (point_left is not None
-                      and float(self.rig.to_output(point_left)[0][2]) > sp.landed_max_height)
-            paired_dets = (det_left, det_right)
-            res_left, det_left = self._hold_landed(0, res_left, det_left, timestamp, paired)
-            res_right, det_right = self._hold_landed(1, res_right, det_right, timestamp, paired)
-            if point_left is not None and (det_left is not paired_dets[0] or det_right is not paired_dets[1]):
-                # The hold gave the report back to the landed shuttle (the shoe of
-                # ``_hold_landed``): the pair made with the shoe, below the floor, is no point.
-                point_left, epi = None, None
+        (res_left, det_left), (res_right, det_right), point_left, epi = self._hold_both(
+            (res_left, det_left), (res_right, det_right), point_left, epi, timestamp)
         # A held landed shuttle stays in its camera's mask (``CameraDetector.protect_report``).
         self.left.protect_report(det_left if self._held_now[0] else None, left_bgr.shape[1])
         self.right.protect_report(det_right if self._held_now[1] else None, right_bgr.shape[1])
@@ -412,6 +401,26 @@ class StereoTracker:
             epipolar_error=epi, index_right=index_right, measured_point=measured,
             predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
+
+    def _hold_both(self, left: tuple[CameraResult, Candidate | None],
+                   right: tuple[CameraResult, Candidate | None], point_left: np.ndarray | None,
+                   epi: float | None, t: float):
+        """Both cameras through ``_hold_landed``: ((result, report) left, right, 3D point, its
+        epipolar error). When a hold gives a camera's report back to the landed shuttle (the shoe
+        walking past), the pair made with the shoe, below the floor, is no 3D point any more."""
+        self._held_now = [False, False]
+        sp = self.params.stereo
+        if sp.landed_frames <= 0 or not self.rig.has_court_pose:
+            return left, right, point_left, epi
+        # A stereo pair counts as the shuttle in the air only above the floor: a shoe paired
+        # with the lying shuttle (rally_11-47-21 986: 1.7 m below the court) is not one.
+        paired = (point_left is not None
+                  and float(self.rig.to_output(point_left)[0][2]) > sp.landed_max_height)
+        held_left = self._hold_landed(0, left[0], left[1], t, paired)
+        held_right = self._hold_landed(1, right[0], right[1], t, paired)
+        if point_left is not None and (held_left[1] is not left[1] or held_right[1] is not right[1]):
+            point_left, epi = None, None
+        return held_left, held_right, point_left, epi
 
     def _hold_landed(self, cam: int, result: CameraResult, det: Candidate | None, t: float,
                      paired: bool = False) -> tuple[CameraResult, Candidate | None]:
