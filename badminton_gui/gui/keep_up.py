@@ -104,7 +104,7 @@ class KeepUpWatch:
                 else f"so it plays at {playback:.2f}× real time")
         return (f"Tracking keeps up with {rate:.0f} of the {delivered:.0f} frame pairs a second "
                 f"the source delivers at {width}×{height}, {what}. The {FAST_PRESET} preset is "
-                f"made for cameras this size and tracks about twice as fast, within 0.3 F1 points.")
+                f"made for cameras this size and tracks about twice as fast, within 0.2 F1 points.")
 
     def _behind(self, now: float, stats, live: bool) -> tuple[bool, float]:
         """(behind now, pairs/s the source delivers)."""
