@@ -178,6 +178,17 @@ class StereoTracker:
                 tol = max(tol, float(sp.cold_epipolar_error))
         return tol
 
+    @property
+    def rig_epipolar_px(self) -> float | None:
+        """How far the rig really misses: the median epipolar error (px) of the sure pairs
+        learnt so far (``_learn_epipolar``), or None before EPIPOLAR_LEARNT_SAMPLES of them.
+        A chessboard-calibrated rig stays at a few px; the NYCU rig imported from its ``.cfg``
+        files misses by ≈ 30 px (its relative pose is ≈ 10° off, benchmarks/README.md)."""
+        if len(self._epipolar_samples) < EPIPOLAR_LEARNT_SAMPLES:
+            return None
+        median = self._epipolar_median()
+        return None if math.isnan(median) else median
+
     def _add_epipolar_sample(self, err: float) -> None:
         """Append a sample to the deque and to its sorted copy (the oldest leaves both)."""
         samples = self._epipolar_samples

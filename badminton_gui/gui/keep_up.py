@@ -3,7 +3,7 @@
 Why this file exists: with the default preset a pair of 2048×1536 cameras at 119 fps is tracked
 at roughly 80–90 pairs/s on a 2-core laptop, so a third of the pairs are dropped (live) or the
 recording plays at 0.7× (file), and nothing told the operator that the ``coarse`` preset is made
-for exactly those cameras (README Speed: about twice as fast, F1 within 0.3 points). The
+for exactly those cameras (README Speed: about twice as fast, F1 within 0.2 points). The
 preset stays the operator's choice (issue 5: presets are chosen by the user); this only says
 so, once per source, when tracking has been behind for ``SUSTAINED_S`` seconds without a pause.
 

@@ -36,6 +36,7 @@ from . import settings as st
 from .court_views import CourtGLView, CourtPlanView, SideView, gl_unavailable_reason
 from .feed_view import FeedView
 from .keep_up import FAST_PRESET, DisplayYield, KeepUpWatch
+from .rig_check import RigCheck, readout_text as rig_readout_text
 from .robot_panel import RobotLinkPanel
 from .sources import CameraPairDialog, VideoPairDialog, open_spec
 from .worker import LIVE_BUFFER_PAIRS, DisplayPacket, RateMeter, SourceOpener, TrackingWorker
@@ -158,7 +159,7 @@ class Readouts(QWidget):
                 ("landing", "Landing"), ("call", "Call"), (None, None),
                 ("capture", "Capture fps L / R"), ("processing", "Processing"),
                 ("display", "Display"), ("dropped", "Dropped frames"), ("latency", "Latency"),
-                ("playback", "Playback")]
+                ("playback", "Playback"), ("rig", "Stereo rig")]
         for r, (key, text) in enumerate(rows):
             if key is None:
                 line = QFrame(self)
@@ -218,6 +219,7 @@ class Readouts(QWidget):
         v["dropped"].setText(str(s.dropped))
         v["latency"].setText(f"{s.latency_ms:.1f} ms")
         v["playback"].setText(f"{s.playback_speed:.2f}× real time")
+        v["rig"].setText(rig_readout_text(s.rig_epipolar_px, r.left.image_size[0]))
 
 
 class MainWindow(QMainWindow):
@@ -252,6 +254,7 @@ class MainWindow(QMainWindow):
         self._recorder: TrackRecorder | None = None   # Source ▸ Record track, while on
         self._process = None                # Tools ▸ Process a recording, built when first opened
         self._keep_up = KeepUpWatch()       # advice when tracking falls behind (gui/keep_up.py)
+        self._rig_check = RigCheck()        # advice when the stereo calibration is off (gui/rig_check.py)
         # The court views slow down while tracking is behind its source (gui/keep_up.py).
         self._display_yield = DisplayYield(SLOW_VIEW_INTERVAL_S)
         self._build_ui()
@@ -618,6 +621,7 @@ class MainWindow(QMainWindow):
     def _on_opened(self, name: str, rig: StereoRig) -> None:
         self.rig = rig
         self._keep_up.reset()
+        self._rig_check.reset()
         self._display_yield.reset()
         if self._restart_rig is not None:
             restarted, self._restart_rig = self._restart_rig is rig, None
@@ -772,6 +776,7 @@ class MainWindow(QMainWindow):
 
     def _on_rig_applied(self, rig: StereoRig) -> None:
         self.rig = rig
+        self._rig_check.reset()             # the tracker learns the new rig's error afresh
         if self.gl_view is not None:
             self.gl_view.set_rig(rig)
         saved = self._refine.saved_path_of(rig) if self._refine is not None else None
@@ -885,7 +890,8 @@ class MainWindow(QMainWindow):
         self._check_keep_up(now, packet)
 
     def _check_keep_up(self, now: float, packet: DisplayPacket) -> None:
-        """Advise the faster preset when tracking has been behind the source for a while."""
+        """Advice lines: the faster preset when tracking has been behind the source for a while
+        (gui/keep_up.py), a refit when the stereo calibration is off (gui/rig_check.py)."""
         stats = packet.stats
         advice = self._keep_up.update(now, stats, live=stats.live, paced=stats.paced,
                                       paused=self._paused, params=self.params,
@@ -893,6 +899,10 @@ class MainWindow(QMainWindow):
         if advice is not None and not self.banner.isVisible():   # an error is not covered up
             self.banner.show_message(advice, kind="advice",
                                      action=(f"Use {FAST_PRESET}", lambda: self.use_preset(FAST_PRESET)))
+        if not self.banner.isVisible():
+            rig_advice = self._rig_check.update(stats, packet.result.left.image_size[0])
+            if rig_advice is not None:
+                self.banner.show_message(rig_advice, kind="advice", action=("Refine…", self.open_refine))
 
     def use_preset(self, name: str) -> None:
         """Track with a shipped preset from now on (as choosing it in the Tuning dialog does)."""

@@ -173,6 +173,7 @@ class WorkerStats:
     playback_speed: float = 1.0      # source seconds per wall second (file/demo sources)
     live: bool = False               # a camera pair: newest frame wins, drops counted
     paced: bool = False              # a file or the demo played in real time
+    rig_epipolar_px: float | None = None   # the rig's measured epipolar error (StereoTracker), px
 
 
 @dataclass(frozen=True, slots=True)
@@ -526,7 +527,8 @@ class TrackingWorker(QObject):
                                 capture_fps_right=cap_r, dropped=dropped,
                                 latency_ms=(t_done - t_available) * 1000.0,
                                 processing_ms=result.processing_ms, playback_speed=playback,
-                                live=reader is not None, paced=reader is None and realtime and not stepping)
+                                live=reader is not None, paced=reader is None and realtime and not stepping,
+                                rig_epipolar_px=tracker.rig_epipolar_px)
             self.latest_stats = stats
             with self._lock:
                 due = self._display_due

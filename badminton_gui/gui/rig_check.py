@@ -1,0 +1,63 @@
+"""Tells the operator when the running tracker finds the stereo calibration off, and what to do.
+
+Why this file exists: a rig whose relative pose is wrong still tracks — the epipolar gate widens
+to what the rig achieves (``StereoTracker.epipolar_tolerance``) — so nothing looked wrong, while
+the 3D points, speeds and landing calls sent to the robot were off and the stereo checks let
+more clutter through. The NYCU rig imported from its ``.cfg`` files is ≈ 10° off: its pairs miss
+each other's epipolar lines by ≈ 30 px, where *Calibration ▸ Refine from tracked shuttle…*
+brings them to ≈ 1.5 px (benchmarks/README.md). The tracker measures this on the shuttle's own
+sure pairs; this turns the figure into a readout and, once per source, an advice line with the
+button that opens the refinement (the same check ROS camera_calibration shows as its epipolar
+error, GUIDE §3).
+
+Plain Python, no Qt: the window feeds it the worker's statistics and shows what it returns.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+# px at 1280 px image width: a rig whose sure pairs miss by more than this (median) is worth
+# refining. Sure pairs of a chessboard-calibrated rig miss by a px or two (the blobs' centroids
+# in two views of a moving shuttle); the demo court's exact rig learns ≈ 1 px.
+REFINE_FROM_PX = 6.0
+# The readout's colour for a rig worth refining (the display's "behind" orange).
+WARN_COLOUR = "#e8a33c"
+
+
+def refine_threshold(image_width: int) -> float:
+    """REFINE_FROM_PX scaled to frames ``image_width`` px wide."""
+    return REFINE_FROM_PX * image_width / 1280.0
+
+
+def readout_text(epipolar_px: float | None, image_width: int) -> str:
+    """The "Stereo rig" readout (rich text): the measured error, in orange with what to do when
+    the rig is worth refining; a dash before enough sure pairs have been seen."""
+    if epipolar_px is None:
+        return "—"
+    if epipolar_px <= refine_threshold(image_width):
+        return f"pairs off their epipolar lines {epipolar_px:.1f} px"
+    return (f"<span style='color:{WARN_COLOUR}'>pairs off their epipolar lines {epipolar_px:.0f} px:"
+            f"<br>Calibration ▸ Refine</span>")
+
+
+@dataclass
+class RigCheck:
+    """Fed the worker's statistics with each display packet; returns an advice sentence once
+    per source when the rig's measured error is above the threshold."""
+
+    advised: bool = False
+
+    def reset(self) -> None:
+        """A new source or a new rig: judge afresh."""
+        self.advised = False
+
+    def update(self, stats, image_width: int) -> str | None:
+        px = getattr(stats, "rig_epipolar_px", None)
+        if self.advised or px is None or px <= refine_threshold(image_width):
+            return None
+        self.advised = True
+        return (f"The two cameras' calibration is off: the shuttle seen by both misses its "
+                f"epipolar lines by {px:.0f} px (median; a good rig stays under "
+                f"{refine_threshold(image_width):.0f} px here), so the 3D points, speeds and "
+                f"landing calls are off too. Refine it from the play itself, no board needed.")

@@ -1,0 +1,97 @@
+"""The stereo calibration check (gui/rig_check.py, ``StereoTracker.rig_epipolar_px``): the
+tracker measures how far the shuttle's sure pairs miss their epipolar lines, the readout shows
+it, and a rig worth refining gets one advice line per source whose button opens the refinement."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.tracker import EPIPOLAR_LEARNT_SAMPLES, StereoTracker
+from badminton_gui.gui.rig_check import REFINE_FROM_PX, RigCheck, readout_text, refine_threshold
+from badminton_gui.io.demo_scene import make_rig
+
+
+def test_the_tracker_reports_the_rigs_error_once_it_has_enough_sure_pairs():
+    tracker = StereoTracker(make_rig("binocular", (1280, 720)), TrackerParams(), parallel=False)
+    for k in range(EPIPOLAR_LEARNT_SAMPLES - 1):
+        tracker._add_epipolar_sample(float(k))
+    assert tracker.rig_epipolar_px is None
+    tracker._add_epipolar_sample(100.0)
+    assert tracker.rig_epipolar_px == 9.5            # the median of 0 … 18 and 100
+    tracker.reset()
+    assert tracker.rig_epipolar_px is None
+    tracker.close()
+
+
+def test_the_readout_and_the_advice_scale_with_the_image_and_come_once():
+    assert refine_threshold(1280) == REFINE_FROM_PX and refine_threshold(2560) == 2 * REFINE_FROM_PX
+    assert readout_text(None, 1280) == "—"
+    assert "Refine" not in readout_text(1.4, 1280) and "1.4 px" in readout_text(1.4, 1280)
+    assert "Refine" in readout_text(31.0, 2048) and "31 px" in readout_text(31.0, 2048)
+    assert "Refine" not in readout_text(9.0, 2048)       # 9 px at 2048 px is 5.6 px at 1280
+
+    check = RigCheck()
+    assert check.update(SimpleNamespace(rig_epipolar_px=None), 2048) is None
+    assert check.update(SimpleNamespace(rig_epipolar_px=1.5), 2048) is None
+    advice = check.update(SimpleNamespace(rig_epipolar_px=31.0), 2048)
+    assert advice is not None and "31 px" in advice
+    assert check.update(SimpleNamespace(rig_epipolar_px=31.0), 2048) is None    # once
+    check.reset()
+    assert check.update(SimpleNamespace(rig_epipolar_px=31.0), 2048) is not None
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs Xvfb (QT_QPA_PLATFORM=xcb)")
+def test_the_banner_advises_a_refit_and_its_button_opens_the_refinement(main_window):
+    from badminton_gui.gui.worker import WorkerStats
+
+    window = main_window(params=TrackerParams())
+    packet = SimpleNamespace(stats=WorkerStats(rig_epipolar_px=31.0),
+                             result=SimpleNamespace(left=SimpleNamespace(image_size=(2048, 1536))))
+    window._check_keep_up(0.0, packet)
+    assert window.banner.isVisible() and window.banner.kind == "advice"
+    assert "calibration is off" in window.banner.text
+    assert window.banner.action_button.text() == "Refine…"
+    window.banner.action_button.click()
+    assert window._refine is not None and window._refine.isVisible()
+    window._refine.close()
+    window._check_keep_up(0.1, packet)
+    assert not window.banner.isVisible()                 # once per source
+
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+RALLY = DATA / "nycu-stereo" / "rally_11-46-04"
+
+
+@pytest.mark.skipif(not (RALLY / "CameraReader_1.mp4").is_file(),
+                    reason="real data (../shared/data) not available")
+def test_the_nycu_rig_imported_from_its_cfg_files_is_found_off():
+    """The rig imported from the recordings' .cfg files is ≈ 10° off in its relative pose: its
+    sure pairs miss by tens of px, well above the threshold (the refit takes them to ≈ 1.5 px)."""
+    from badminton_gui.io.labels import read_timestamps
+    from badminton_gui.io.nycu import rig_from_nycu
+    from badminton_gui.io.presets import load_preset
+    from badminton_gui.io.video import VideoPair
+
+    rig = rig_from_nycu(RALLY / "CameraReader_1.cfg", RALLY / "CameraReader_2.cfg")
+    src = VideoPair(RALLY / "CameraReader_1.mp4", RALLY / "CameraReader_2.mp4",
+                    read_timestamps(RALLY / "CameraReader_1.csv")[1],
+                    read_timestamps(RALLY / "CameraReader_2.csv")[1])
+    tracker = StereoTracker(rig, load_preset("coarse"))
+    try:
+        for _ in range(500):
+            f = src.read()
+            if f is None:
+                break
+            tracker.process(f.left, f.right, f.t_left, f.index, f.index_right, keep_masks=False)
+            if tracker.rig_epipolar_px is not None:
+                break
+    finally:
+        tracker.close()
+        src.close()
+    assert tracker.rig_epipolar_px is not None
+    assert tracker.rig_epipolar_px > 2 * refine_threshold(2048)
