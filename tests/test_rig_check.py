@@ -95,3 +95,16 @@ def test_the_nycu_rig_imported_from_its_cfg_files_is_found_off():
         src.close()
     assert tracker.rig_epipolar_px is not None
     assert tracker.rig_epipolar_px > 2 * refine_threshold(2048)
+
+
+def test_a_file_tracked_with_an_off_rig_says_so_and_one_that_held_does_not(tmp_path):
+    """``track`` and *Process a recording* end with the same note (TrackFileSummary.rig_note)."""
+    from badminton_gui.gui.process_dialog import summary_text
+    from badminton_gui.io.track_file import TrackFileSummary
+
+    off = TrackFileSummary(900, 500, 9.0, tmp_path / "t.csv", False, 31.0, 2048)
+    held = TrackFileSummary(900, 500, 9.0, tmp_path / "t.csv", False, 1.5, 2048)
+    unknown = TrackFileSummary(900, 500, 9.0, tmp_path / "t.csv", False)
+    assert "31 px" in off.rig_note and "refine-calib" in off.rig_note
+    assert held.rig_note == "" and unknown.rig_note == ""
+    assert off.rig_note in summary_text(off) and "\n" not in summary_text(held)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ..core.tracker import configure_opencv_threads
 from ..io.track_file import TrackFileError, track_to_csv
@@ -55,4 +56,6 @@ def run(args: argparse.Namespace) -> int:
         frame_name = "court" if rig.has_court_pose else "left-camera"
         print(f"{n} frame pairs, 3D point in {hits3d} ({100 * hits3d / n:.1f} %), "
               f"{summary.pairs_per_second:.1f} pairs/s (decoding included), {frame_name} frame → {args.output}")
+        if summary.rig_note:
+            print(f"note: {summary.rig_note}", file=sys.stderr)
     return 0

@@ -24,6 +24,18 @@ import numpy as np
 
 _UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-12)
 
+# px at 1280 px image width: a running rig whose sure shuttle pairs miss their epipolar lines by
+# more than this (median, ``StereoTracker.rig_epipolar_px``) is worth refining (``refine-calib``).
+# A chessboard-calibrated rig misses by a px or two there (the blobs' centroids in two views of a
+# moving shuttle), the demo court's exact rig by 0.06 px; the NYCU rig imported from its ``.cfg``
+# files by 29–51 px at 2048 px (refined: ≈ 1.5 px).
+REFINE_FROM_PX = 6.0
+
+
+def refine_threshold(image_width: int) -> float:
+    """REFINE_FROM_PX scaled to frames ``image_width`` px wide."""
+    return REFINE_FROM_PX * image_width / 1280.0
+
 
 class RigError(ValueError):
     """A rig file that cannot be read, or one that does not fit the frames it is used on."""

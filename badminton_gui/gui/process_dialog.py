@@ -104,7 +104,8 @@ def summary_text(summary: TrackFileSummary) -> str:
     head = (f"Cancelled after {summary.pairs:,} pairs: their rows are in" if summary.cancelled
             else f"Done: {summary.pairs:,} pairs, 3D point in {share:.1f} %, "
                  f"{summary.pairs_per_second:.0f} pairs/s →")
-    return f"{head} {summary.output}"
+    note = f"\n{summary.rig_note}" if summary.rig_note and not summary.cancelled else ""
+    return f"{head} {summary.output}{note}"
 
 
 class ProcessDialog(QDialog):

@@ -17,17 +17,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-# px at 1280 px image width: a rig whose sure pairs miss by more than this (median) is worth
-# refining. Sure pairs of a chessboard-calibrated rig miss by a px or two (the blobs' centroids
-# in two views of a moving shuttle); the demo court's exact rig learns ≈ 1 px.
-REFINE_FROM_PX = 6.0
+from ..core.rig import REFINE_FROM_PX, refine_threshold  # noqa: F401  (REFINE_FROM_PX: re-exported)
+
 # The readout's colour for a rig worth refining (the display's "behind" orange).
 WARN_COLOUR = "#e8a33c"
-
-
-def refine_threshold(image_width: int) -> float:
-    """REFINE_FROM_PX scaled to frames ``image_width`` px wide."""
-    return REFINE_FROM_PX * image_width / 1280.0
 
 
 def readout_text(epipolar_px: float | None, image_width: int) -> str:

@@ -18,7 +18,7 @@ from typing import Callable
 
 from ..core.lookahead import StereoLookahead
 from ..core.params import TrackerParams
-from ..core.rig import StereoRig
+from ..core.rig import StereoRig, refine_threshold
 from ..core.tracker import StereoTracker
 from .labels import TRACK_COLUMNS, track_row
 from .track_log import describe_os_error
@@ -42,10 +42,24 @@ class TrackFileSummary:
     seconds: float          # wall time, decoding included
     output: Path
     cancelled: bool         # stopped by ``should_stop`` (the rows so far are in the file)
+    rig_epipolar_px: float | None = None   # how far the rig missed (StereoTracker.rig_epipolar_px)
+    image_width: int = 0
 
     @property
     def pairs_per_second(self) -> float:
         return self.pairs / self.seconds if self.seconds > 0 else 0.0
+
+    @property
+    def rig_note(self) -> str:
+        """A sentence for a rig whose sure pairs missed their epipolar lines by more than
+        ``refine_threshold`` (median): its 3D points are off; '' for a rig that held."""
+        px = self.rig_epipolar_px
+        if px is None or px <= refine_threshold(self.image_width):
+            return ""
+        return (f"The shuttle's pairs missed their epipolar lines by {px:.0f} px (median; a good rig "
+                f"stays under {refine_threshold(self.image_width):.0f} px here): the rig's relative pose "
+                f"is off, and so are the 3D points. `badminton-track refine-calib` (or Calibration ▸ "
+                f"Refine from tracked shuttle…) refits it from the play.")
 
 
 def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Path, *,
@@ -95,4 +109,5 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
         raise TrackFileError(f"cannot write the track: {describe_os_error(exc, out_path)}") from None
     finally:
         tracker.close()
-    return TrackFileSummary(n, hits3d, time.perf_counter() - start, out_path, cancelled)
+    return TrackFileSummary(n, hits3d, time.perf_counter() - start, out_path, cancelled,
+                            tracker.rig_epipolar_px, rig.image_size[0])
