@@ -57,5 +57,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"{n} frame pairs, 3D point in {hits3d} ({100 * hits3d / n:.1f} %), "
               f"{summary.pairs_per_second:.1f} pairs/s (decoding included), {frame_name} frame → {args.output}")
         if summary.rig_note:
-            print(f"note: {summary.rig_note}", file=sys.stderr)
+            note = summary.rig_note
+            print(f"note: {note[:1].lower()}{note[1:]}", file=sys.stderr)
     return 0
