@@ -140,19 +140,24 @@ def test_only_a_track_seen_in_the_air_is_held():
 
 
 
+def _landed(tracker, flown=(4,), flown_at=0.5):
+    """Tracklet 4 reported at x 100 at t 1.0 with a 3D point just after a low flight point, the
+    tracklets in ``flown`` seen in the air at ``flown_at``: a landed hold can start next frame."""
+    for ident in flown:
+        tracker._note_flown(0, ident, flown_at if ident == 4 else 0.9)
+    tracker._last_point = (1.0, 0.0)
+    shuttle = _cand(100)
+    tracker._hold_landed(0, CameraResult(shuttle, (shuttle,), image_size=(1280, 720)), shuttle, 1.0)
+    tracker._held[0][4] = True
+
+
 def test_a_shoe_walking_past_does_not_take_the_report_from_the_landed_shuttle():
     """After the landing the association's readout jumps to a track never seen in the air (a
     player's white shoe, tracklet 9) with no stereo partner above the floor: the shuttle lying
     where it landed (tracklet 4) stays the report while the hold lasts, then the shoe is. A
     track that flew, or a pair above the floor (a new serve), takes the report at once."""
     def run(tracker, shoe_flew=False, paired=False, frames=4):
-        tracker._note_flown(0, 4, 0.5)
-        if shoe_flew:
-            tracker._note_flown(0, 9, 0.9)
-        tracker._last_point = (1.0, 0.0)
-        shuttle = _cand(100)
-        tracker._hold_landed(0, CameraResult(shuttle, (shuttle,), image_size=(1280, 720)), shuttle, 1.0)
-        tracker._held[0][4] = True
+        _landed(tracker, flown=(4, 9) if shoe_flew else (4,))
         out = []
         for k in range(1, frames + 1):
             lying = _cand(100 + 0.5 * k, "motion")
@@ -219,12 +224,7 @@ def test_the_shoes_pair_is_no_3d_point_once_the_hold_takes_the_report_back():
     hold to take the report back (no flight before), the pair stays as it was."""
     def run(flew):
         tracker = _tracker(landed_frames=10)
-        if flew:
-            tracker._note_flown(0, 4, 0.5)
-        tracker._last_point = (1.0, 0.0)
-        shuttle = _cand(100)
-        tracker._hold_landed(0, CameraResult(shuttle, (shuttle,), image_size=(1280, 720)), shuttle, 1.0)
-        tracker._held[0][4] = True
+        _landed(tracker, flown=(4,) if flew else ())
         lying = _cand(100.5, "motion")
         shoe = dataclasses.replace(_cand(400), tracklet=9)
         other = dataclasses.replace(_cand(380), tracklet=2)
