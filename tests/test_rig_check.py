@@ -11,8 +11,9 @@ from types import SimpleNamespace
 import pytest
 
 from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.rig import REFINE_FROM_PX, refine_threshold
 from badminton_gui.core.tracker import EPIPOLAR_LEARNT_SAMPLES, StereoTracker
-from badminton_gui.gui.rig_check import REFINE_FROM_PX, RigCheck, readout_text, refine_threshold
+from badminton_gui.gui.rig_check import RigCheck, readout_text
 from badminton_gui.io.demo_scene import make_rig
 
 

@@ -16,8 +16,8 @@ import numpy as np
 from .params import BackgroundParams, BinarizeParams
 
 
-# Inside the box around the last report (``BackgroundModel.protect``) a pixel is foreground from
-# this fraction of ``binarize.diff_threshold``.
+# Inside the box around a held landed shuttle (``BackgroundModel.protect``) a pixel is foreground
+# from this fraction of ``binarize.diff_threshold``.
 PROTECT_THRESHOLD = 0.5
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.rig import REFINE_FROM_PX, refine_threshold  # noqa: F401  (REFINE_FROM_PX: re-exported)
+from ..core.rig import refine_threshold
 
 # The readout's colour for a rig worth refining (the display's "behind" orange).
 WARN_COLOUR = "#e8a33c"
