@@ -95,8 +95,22 @@ def test_only_the_followed_tracklet_gets_the_long_pause():
     assert out[1][2] < 0       # the other one: its 2-frame allowance is over
 
 
-def test_followed_pause_is_off_by_default():
-    assert TrackerParams().association.followed_pause_frames == 0
+def test_default_rests_only_the_followed_tracklet_for_long():
+    """The default's two allowances (10 frames for any tracklet, 40 for the followed one):
+    30 frames after two tracklets flew and stopped, the followed one (a shuttle lying where it
+    landed) may still be reported, the other (clutter that moved and came to rest) may not."""
+    p = TrackerParams()
+    assert p.association.pause_frames < p.association.followed_pause_frames
+    assoc = TrackletAssociator(p.motion, p.association)
+    out = []
+    for i in range(40):
+        step = min(i, 10)   # 30 px per frame for 10 frames, then still
+        pos = np.array([[100.0 + 30 * step, 300.0], [100.0 + 30 * step, 500.0]])
+        out = assoc.update(i / FPS, pos, np.array([0.9, 0.9]))
+        if i == 5:
+            assoc.select(out[0][0])
+    assert out[0][2] >= 0
+    assert out[1][2] < 0
 
 
 def _far_court_flight(n=50, small=range(25, 29)):

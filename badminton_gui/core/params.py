@@ -255,9 +255,14 @@ class AssociationParams(ParamGroup):
                                help="Minimum travel is measured as the net displacement over this many hits")
     flight_travel: float = param(100.0, 0.0, 5000.0, step=5.0, unit="px", label="Flight travel",
                                  help="A tracklet that has travelled this far may pause (apex, far court)")
-    pause_frames: int = param(40, 0, 1000, step=1, unit="frames", label="Pause allowance",
+    # Two allowances: the shuttle being followed slows at an apex or lies where it landed for
+    # long, while another tracklet that travelled and stopped is mostly clutter that moved (a
+    # shoe that stepped, a hand that came to rest): after rally_11-48-00 (left 733–744, labels:
+    # nothing visible) a tracklet resting at a player's hand held the readout for 12 frames
+    # under the shared 40-frame allowance.
+    pause_frames: int = param(10, 0, 1000, step=1, unit="frames", label="Pause allowance",
                               help="How long such a tracklet may stay below the minimum travel")
-    followed_pause_frames: int = param(0, 0, 100000, step=1, unit="frames", label="Pause allowance, followed",
+    followed_pause_frames: int = param(40, 0, 100000, step=1, unit="frames", label="Pause allowance, followed",
                                        help="The pause allowance of the tracklet being followed, when larger "
                                             "(0 = the same as the others)")
     min_track_quality: float = param(0.15, 0.0, 1.0, step=0.01, label="Tracklet quality ≥",
