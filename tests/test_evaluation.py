@@ -30,3 +30,36 @@ def test_missing_predictions_count_as_not_detected_and_extra_frames_are_ignored(
     assert out == Outcomes(fn=1, tn=1)
     assert (out + out).total == 4
     assert math.isnan(Outcomes().accuracy)
+
+
+def test_one_frame_outcome_agrees_with_the_array_protocol():
+    import numpy as np
+
+    from badminton_gui.core.evaluation import classify, classify_one
+    cases = [((True, 103, 104), (True, 100, 100)), ((True, 120, 100), (True, 100, 100)),
+             ((True, 5, 5), (False, 0, 0)), ((False, 0, 0), (True, 50, 50)),
+             ((False, 0, 0), (False, 0, 0)), ((True, 105, 100), (True, 100, 100))]
+    for pred, label in cases:
+        expected = classify(np.array([pred[0]]), np.array([pred[1:]]), np.array([label[0]]),
+                            np.array([label[1:]]), 5.0)[0]
+        assert classify_one(pred[0], pred[1], pred[2], label, 5.0) == expected
+
+
+def test_live_score_counts_each_camera_skips_unlabelled_frames_and_resets():
+    from badminton_gui.core.evaluation import LiveScore
+    from badminton_gui.core.types import Candidate
+
+    def report(x, y):
+        return Candidate(x=x, y=y, length=30.0, short_side=4.0, whiteness=200.0, area=20.0,
+                         motion=0.0, score=1.0)
+
+    score = LiveScore(image_width=1280)          # 10 px tolerance
+    assert score.add(0, report(100, 100), (True, 104.0, 103.0)) == "TP"
+    assert score.add(0, report(100, 100), (True, 130.0, 100.0)) == "FP1"
+    assert score.add(0, None, (False, 0.0, 0.0)) == "TN"
+    assert score.add(0, report(1, 1), None) is None         # an unlabelled frame is not scored
+    assert score.add(1, None, (True, 5.0, 5.0)) == "FN"
+    assert score.outcomes(0) == Outcomes(tp=1, fp1=1, tn=1)
+    assert score.outcomes(1) == Outcomes(fn=1)
+    score.reset()
+    assert score.outcomes(0).total == 0 and score.outcomes(1).total == 0

@@ -186,7 +186,8 @@ def test_the_window_slows_its_court_views_and_says_so_while_the_cameras_drop_pai
                                     processing_fps=107.0, capture_fps_left=119.0)
             window.worker.output.put(SimpleNamespace(stats=stats_now, result=SimpleNamespace(left=None, right=None),
                                                      left=None, right=None, display_scale=1.0,
-                                                     trail_left=None, trail_right=None))
+                                                     trail_left=None, trail_right=None,
+                                                     label_left=None, label_right=None))
             window._refresh_display()
             clock[0] += mw.DISPLAY_INTERVAL_MS / 1000.0
     finally:

@@ -1,5 +1,7 @@
 """Frame sources: video pairs and live cameras share one protocol and fail with clear sentences."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -161,3 +163,38 @@ def test_a_video_seek_lands_on_the_frame_a_sequential_decode_gives(tmp_path):
             assert hashlib.md5(frame.tobytes()).hexdigest() == decoded[i], (path.name, i)
             assert video.next_index == i + 1
         video.close()
+
+
+def test_a_labelled_video_pair_carries_its_truth_and_bad_labels_are_named(tmp_path):
+    """Label files (or timestamp files that carry labels, as the NYCU recordings') reach the
+    opened source as its truth for the live score; a broken or half-given pair is one sentence."""
+    pytest.importorskip("PySide6")
+    from badminton_gui.gui.settings import SourceSpec
+    from badminton_gui.gui.sources import open_spec
+
+    from .test_cli import make_rig_for
+    frames, centres = moving_dot_frames(6)
+    write_video(tmp_path / "l.avi", frames)
+    write_video(tmp_path / "r.avi", frames)
+    make_rig_for().save(tmp_path / "rig.yaml")
+    labels = tmp_path / "labels.csv"
+    labels.write_text("Frame,Visibility,X,Y,Timestamp\n" + "".join(
+        f"{i},1,{x},{y},{i / 30}\n" for i, (x, y) in enumerate(centres)), encoding="utf-8")
+    base = SourceSpec("video", str(tmp_path / "l.avi"), str(tmp_path / "r.avi"), str(tmp_path / "rig.yaml"))
+    for spec in (dataclasses.replace(base, left_labels=str(labels), right_labels=str(labels)),
+                 dataclasses.replace(base, left_times=str(labels), right_times=str(labels))):
+        source, _ = open_spec(spec)
+        try:
+            frame = source.read()
+            assert source.frame_truth.for_frame(frame)[0] == (True, *map(float, centres[0]))
+        finally:
+            source.close()
+    source, _ = open_spec(base)                  # no labels: no truth
+    source.close()
+    assert source.frame_truth is None
+    with pytest.raises(SourceError, match="both videos"):
+        open_spec(dataclasses.replace(base, left_labels=str(labels)))
+    broken = tmp_path / "broken.csv"
+    broken.write_text("Frame,Visible\n0,1\n", encoding="utf-8")
+    with pytest.raises(SourceError, match="broken.csv.*without a score"):
+        open_spec(dataclasses.replace(base, left_labels=str(broken), right_labels=str(broken)))

@@ -9,6 +9,7 @@ scaled with the image width (10 px at 1280, 16 px at 2048).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -88,3 +89,52 @@ def evaluate(pred: dict[int, tuple[bool, float, float]], labels: dict[int, tuple
     return Outcomes(tp=int((codes == "TP").sum()), tn=int((codes == "TN").sum()),
                     fp1=int((codes == "FP1").sum()), fp2=int((codes == "FP2").sum()),
                     fn=int((codes == "FN").sum()))
+
+
+# One camera's truth for one frame: (visible, x, y) in full-resolution pixels; None: the frame
+# has no label (outside a label file's rows), so it is not scored.
+Label = tuple[bool, float, float]
+
+
+def classify_one(detected: bool, x: float, y: float, label: Label, tolerance: float) -> str:
+    """One frame's outcome ('TP', 'TN', 'FP1', 'FP2', 'FN'): :func:`classify` without arrays,
+    for the live score (a call per camera and frame on the tracking thread)."""
+    visible, lx, ly = label
+    if detected:
+        if not visible:
+            return "FP2"
+        return "TP" if math.hypot(x - lx, y - ly) <= tolerance else "FP1"
+    return "FN" if visible else "TN"
+
+
+class LiveScore:
+    """The readout scored frame by frame against a known truth, both cameras, since a reset.
+
+    Why: an operator tuning the filters on a labelled recording (or on the demo court, whose
+    truth is exact) sees at once what a slider did, in the same protocol as the benchmarks,
+    instead of judging by eye. The owner resets it when the parameters change, so the figure
+    always belongs to the settings on screen.
+    """
+
+    def __init__(self, image_width: int) -> None:
+        self.tolerance = tolerance_px(image_width)
+        self._counts = [dict.fromkeys(("TP", "TN", "FP1", "FP2", "FN"), 0) for _ in range(2)]
+
+    def reset(self) -> None:
+        for counts in self._counts:
+            for key in counts:
+                counts[key] = 0
+
+    def add(self, camera: int, detection, label: Label | None) -> str | None:
+        """Score one camera's report (a Candidate or None) against its label; None: unlabelled."""
+        if label is None:
+            return None
+        found = detection is not None
+        code = classify_one(found, detection.x if found else 0.0, detection.y if found else 0.0,
+                            label, self.tolerance)
+        self._counts[camera][code] += 1
+        return code
+
+    def outcomes(self, camera: int) -> Outcomes:
+        c = self._counts[camera]
+        return Outcomes(tp=c["TP"], tn=c["TN"], fp1=c["FP1"], fp2=c["FP2"], fn=c["FN"])

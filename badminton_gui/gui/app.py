@@ -32,6 +32,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--right-times", help="CSV with Frame,Timestamp for the right video")
     p.add_argument("--video-times", action="store_true",
                    help="pair a video pair by the files' own frame timestamps (cameras that dropped frames)")
+    p.add_argument("--left-labels", help="CSV with Frame,Visibility,X,Y for the left video: the readouts "
+                                         "score the tracking against it live (timestamp files that carry "
+                                         "these columns are used without this)")
+    p.add_argument("--right-labels", help="the same for the right video")
     p.add_argument("--preset", help="parameter preset name or .json file")
     p.add_argument("--fast", action="store_true", help="process files as fast as possible (no real-time pacing)")
     p.add_argument("--screenshot", metavar="PATH", help="save a screenshot of the window before quitting")
@@ -77,7 +81,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.source:
         spec = st.SourceSpec(args.source, args.left or "", args.right or "", args.calib or "",
                              args.left_times or "", args.right_times or "", not args.fast,
-                             video_times=args.video_times)
+                             video_times=args.video_times, left_labels=args.left_labels or "",
+                             right_labels=args.right_labels or "")
     elif args.fast:
         spec = st.SourceSpec(realtime=False)
     window = MainWindow(params=params, spec=spec)

@@ -16,11 +16,14 @@ from PySide6.QtCore import QLineF, QPointF, QRectF, QSize, Qt
 from PySide6.QtGui import QColor, QFont, QFontMetrics, QImage, QPainter, QPen
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
+from ..core.evaluation import Label
 from ..core.types import CameraResult
-from .overlays import DETECTION_COLOUR, REJECT_STYLE, TRAIL_COLOUR, WINDOW_COLOUR, reject_style
+from .overlays import (DETECTION_COLOUR, LABEL_COLOUR, REJECT_STYLE, TRAIL_COLOUR, WINDOW_COLOUR,
+                       reject_style)
 from .worker import TRAIL_SECONDS
 
 CIRCLE_RADIUS = 11.0     # widget px: clearly visible at any zoom
+LABEL_GAP, LABEL_ARM = 4.0, 16.0   # widget px: the truth's cross, its arms reaching past the circle
 TRAIL_LEVELS = 8         # opacity steps of the fading trail
 _BACKGROUND = QColor(20, 20, 24)
 
@@ -82,6 +85,8 @@ class FeedView(QWidget):
         self._display_scale = 1.0
         self._camera: CameraResult | None = None
         self._trail = np.zeros((0, 3))
+        self._label: Label | None = None
+        self.show_labels = True
         self._message = "no source"
         self._title_cache: dict[tuple, QImage] = {}
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
@@ -93,8 +98,9 @@ class FeedView(QWidget):
 
     # ---- data ------------------------------------------------------------------------------
     def set_frame(self, image: np.ndarray, display_scale: float, camera: CameraResult | None,
-                  trail: np.ndarray) -> None:
-        """Show a BGRA (fast) or BGR display image; overlay coordinates are full-resolution pixels."""
+                  trail: np.ndarray, label: Label | None = None) -> None:
+        """Show a BGRA (fast) or BGR display image; overlay coordinates are full-resolution pixels.
+        ``label``: where the source's truth puts the shuttle (drawn when ``show_labels``)."""
         h, w = image.shape[:2]
         self._image = image            # keeps the buffer alive while the QImage wraps it
         fmt = QImage.Format.Format_RGB32 if image.ndim == 3 and image.shape[2] == 4 else QImage.Format.Format_BGR888
@@ -102,6 +108,7 @@ class FeedView(QWidget):
         self._display_scale = display_scale
         self._camera = camera
         self._trail = trail
+        self._label = label
         self._message = ""
         self.update()
 
@@ -160,6 +167,8 @@ class FeedView(QWidget):
             if self.show_rejected and self._camera is not None:
                 self._paint_rejected(p)
             self._paint_trail(p)
+            if self.show_labels:
+                self._paint_label(p)
             self._paint_detection(p)
             if self.show_rejected and self.show_legend:
                 self._paint_legend(p)
@@ -227,6 +236,18 @@ class FeedView(QWidget):
             pen.setStyle(Qt.PenStyle.DashLine)
         p.setPen(pen)
         p.drawEllipse(c, CIRCLE_RADIUS, CIRCLE_RADIUS)
+
+    def _paint_label(self, p: QPainter) -> None:
+        """The truth's shuttle as a green cross with a gap in the middle: the red circle around
+        it says the tracker agrees, a lone cross that it missed, a lone circle a false report."""
+        if self._label is None or not self._label[0]:
+            return
+        c = self.image_to_widget(self._label[1], self._label[2])
+        for colour, width in ((QColor(0, 0, 0, 170), 3.6), (LABEL_COLOUR, 1.8)):
+            p.setPen(QPen(colour, width))
+            for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+                p.drawLine(QPointF(c.x() + dx * LABEL_GAP, c.y() + dy * LABEL_GAP),
+                           QPointF(c.x() + dx * LABEL_ARM, c.y() + dy * LABEL_ARM))
 
     def _to_widget(self, xy: np.ndarray) -> np.ndarray:
         """(N, 2) full-resolution pixels → (N, 2) widget coordinates, in one numpy step."""

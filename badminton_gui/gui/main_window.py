@@ -28,6 +28,7 @@ from PySide6.QtWidgets import (QDockWidget, QFileDialog, QFrame, QGridLayout, QH
                                QLabel, QMainWindow, QMessageBox, QPushButton, QSizePolicy,
                                QSplitter, QVBoxLayout, QWidget)
 
+from ..core.evaluation import Outcomes
 from ..core.params import TrackerParams
 from ..core.rig import StereoRig
 from ..io.presets import load_preset
@@ -143,6 +144,30 @@ def distance_text(measured: float | None, predicted: float | None) -> str:
     return "—"
 
 
+def score_text(left: Outcomes | None, right: Outcomes | None, truth_name: str) -> str:
+    """The live score: each camera's accuracy against the source's truth (GUIDE §6's protocol)
+    since the parameters last changed, or why there is none."""
+    if left is None or right is None:
+        return "<span style='color:#888'>no labels for this source</span>"
+    frames = max(left.total, right.total)
+    if frames == 0:
+        return f"{truth_name}: no labelled frame yet"
+
+    def pct(o: Outcomes) -> str:
+        return "—" if o.total == 0 else f"{100.0 * o.accuracy:.1f} %"
+    return (f"L {pct(left)} · R {pct(right)}<br><span style='font-size:small; color:#aaa'>"
+            f"{truth_name} · {frames:,} frames</span>")
+
+
+def score_tooltip(left: Outcomes | None, right: Outcomes | None, truth_name: str) -> str:
+    if left is None or right is None:
+        return ("Open a video pair with label files (Source ▸ Stereo video pair…), or the demo "
+                "court, to score the tracking against the truth while you tune.")
+    return (f"Accuracy of each camera's report against the {truth_name}, with the benchmarks' "
+            f"protocol (TrackNet's five outcomes), over the frames since the parameters last "
+            f"changed.\nLeft:  {left.summary()}\nRight: {right.summary()}")
+
+
 class Readouts(QWidget):
     """The numbers: distance (mm), speed, shot peak speed, rates, drops, latency, landing."""
 
@@ -159,7 +184,7 @@ class Readouts(QWidget):
                 ("landing", "Landing"), ("call", "Call"), (None, None),
                 ("capture", "Capture fps L / R"), ("processing", "Processing"),
                 ("display", "Display"), ("dropped", "Dropped frames"), ("latency", "Latency"),
-                ("playback", "Playback"), ("rig", "Stereo rig")]
+                ("playback", "Playback"), ("rig", "Stereo rig"), ("score", "Against the truth")]
         for r, (key, text) in enumerate(rows):
             if key is None:
                 line = QFrame(self)
@@ -220,6 +245,8 @@ class Readouts(QWidget):
         v["latency"].setText(f"{s.latency_ms:.1f} ms")
         v["playback"].setText(f"{s.playback_speed:.2f}× real time")
         v["rig"].setText(rig_readout_text(s.rig_epipolar_px, r.left.image_size[0]))
+        v["score"].setText(score_text(s.score_left, s.score_right, s.truth_name))
+        v["score"].setToolTip(score_tooltip(s.score_left, s.score_right, s.truth_name))
 
 
 class MainWindow(QMainWindow):
@@ -388,6 +415,11 @@ class MainWindow(QMainWindow):
         self.mask_action = self._action(view, "Foreground &mask", self._overlays_changed, "M", checkable=True)
         self.rejected_action = self._action(view, "&Rejected candidates", self._overlays_changed, "C",
                                             checkable=True)
+        # The truth's cross (labels, the demo's shuttle): on by default, it costs nothing
+        # where the source has no truth.
+        self.labels_action = self._action(view, "&Truth (labels)", self._overlays_changed, "L",
+                                          checkable=True)
+        self.labels_action.setChecked(True)
         view.addAction(self.link_dock.toggleViewAction())
 
         tools = menu.addMenu("&Tools")
@@ -693,6 +725,7 @@ class MainWindow(QMainWindow):
         for feed in (self.left_feed, self.right_feed):
             feed.show_rejected = self.rejected_action.isChecked()
             feed.show_window = self.rejected_action.isChecked() or self.mask_action.isChecked()
+            feed.show_labels = self.labels_action.isChecked()
             feed.update()
 
     def set_params(self, params: TrackerParams) -> None:
@@ -844,8 +877,10 @@ class MainWindow(QMainWindow):
         self.display_refreshes += 1
         self._display_rate.tick(now)
         r = packet.result
-        self.left_feed.set_frame(packet.left, packet.display_scale, r.left, packet.trail_left)
-        self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right)
+        self.left_feed.set_frame(packet.left, packet.display_scale, r.left, packet.trail_left,
+                                 packet.label_left)
+        self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right,
+                                  packet.label_right)
         return True
 
     def _slow_views(self) -> list[tuple[str, QWidget, Callable[[DisplayPacket], None]]]:

@@ -14,6 +14,7 @@ from ..core.types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHO
 DETECTION_COLOUR = QColor(255, 0, 0)          # the paper's red circle
 TRAIL_COLOUR = QColor(255, 60, 60)
 WINDOW_COLOUR = QColor(80, 220, 255)          # the windowed-tracking box (core/window.py)
+LABEL_COLOUR = QColor(60, 230, 90)            # the source's truth: a label or the demo's shuttle
 
 # (colour, legend text) per rejecting filter.
 REJECT_STYLE: dict[str, tuple[QColor, str]] = {

@@ -39,6 +39,8 @@ class SourceSpec:
     right_times: str = ""
     realtime: bool = True              # pace file / demo sources to their fps
     video_times: bool = False          # pair a video pair by the files' own frame timestamps
+    left_labels: str = ""              # optional label CSVs (Frame,Visibility,X,Y): live score
+    right_labels: str = ""
 
     def describe(self) -> str:
         if self.kind == "demo":

@@ -32,8 +32,10 @@ def open_spec(spec: SourceSpec, context: OpeningContext | None = None) -> tuple[
             from ..io.demo_scene import DemoScene
         except ImportError as exc:
             raise SourceError(f"the demo court is not available in this installation ({exc})") from None
+        from ..io.truth import DemoTruth
         scene = DemoScene()
         rig = StereoRig.load(spec.calib) if spec.calib else scene.rig
+        scene.frame_truth = DemoTruth(scene)
         return scene, rig
     if spec.kind == "video":
         from ..io.labels import CsvFormatError, read_timestamps
@@ -57,7 +59,9 @@ def open_spec(spec: SourceSpec, context: OpeningContext | None = None) -> tuple[
         # Decoded on a reader thread a few pairs ahead (io/prefetch.py), as `track` does: FFmpeg
         # releases the GIL, so decoding overlaps tracking instead of taking turns with it.
         from ..io.prefetch import PrefetchingReader
-        return PrefetchingReader(VideoPair(spec.left, spec.right, lt, rt)), rig
+        reader = PrefetchingReader(VideoPair(spec.left, spec.right, lt, rt))
+        reader.frame_truth = _label_truth(spec)
+        return reader, rig
     if spec.kind == "cameras":
         from ..io.cameras import CameraPair
         if not spec.calib:
@@ -65,6 +69,23 @@ def open_spec(spec: SourceSpec, context: OpeningContext | None = None) -> tuple[
         rig = StereoRig.load(spec.calib)
         return CameraPair(spec.left, spec.right), rig
     raise SourceError(f"unknown source kind {spec.kind!r}")
+
+
+def _label_truth(spec: SourceSpec):
+    """The pair's labels for the live score (io/truth.py), or None: the label files named in the
+    spec, else the timestamp files when they carry labels too (the NYCU recordings' CSVs)."""
+    from ..io.labels import CsvFormatError
+    from ..io.truth import LabelTruth, has_label_columns
+    if spec.left_labels or spec.right_labels:
+        if not (spec.left_labels and spec.right_labels):
+            raise SourceError("give label files for both videos or for neither")
+        try:
+            return LabelTruth.read(spec.left_labels, spec.right_labels)
+        except CsvFormatError as exc:
+            raise SourceError(f"{exc} (clear the label files to play the videos without a score)") from None
+    if spec.left_times and spec.right_times and all(map(has_label_columns, (spec.left_times, spec.right_times))):
+        return LabelTruth.read(spec.left_times, spec.right_times)
+    return None
 
 
 def _file_row(parent: QWidget, edit: QLineEdit, caption: str, filter_: str) -> QWidget:
@@ -85,7 +106,7 @@ def _file_row(parent: QWidget, edit: QLineEdit, caption: str, filter_: str) -> Q
 
 
 class VideoPairDialog(QDialog):
-    """Two video files, the rig file, optional timestamp CSVs."""
+    """Two video files, the rig file, optional timestamp and label CSVs."""
 
     def __init__(self, spec: SourceSpec, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -105,6 +126,13 @@ class VideoPairDialog(QDialog):
         csvs = "CSV (*.csv);;All files (*)"
         form.addRow("Left timestamps (optional)", _file_row(self, self.left_times, "Left timestamps", csvs))
         form.addRow("Right timestamps (optional)", _file_row(self, self.right_times, "Right timestamps", csvs))
+        self.left_labels = QLineEdit(prev.left_labels)
+        self.right_labels = QLineEdit(prev.right_labels)
+        for side, edit in (("Left", self.left_labels), ("Right", self.right_labels)):
+            edit.setToolTip("Frame,Visibility,X,Y per frame of this camera (TrackNet's format): the "
+                            "readouts then score the tracking against them live. Timestamp files "
+                            "that carry these columns are used as labels without being named here.")
+            form.addRow(f"{side} labels (optional)", _file_row(self, edit, f"{side} labels", csvs))
         self.video_times = QCheckBox("Without timestamp files, pair by the videos' own frame times")
         self.video_times.setToolTip("For recordings whose cameras dropped frames: frame i of one file was "
                                     "then not taken with frame i of the other. Costs one decoding pass "
@@ -122,7 +150,9 @@ class VideoPairDialog(QDialog):
         return SourceSpec("video", self.left.text().strip(), self.right.text().strip(),
                           self.calib.text().strip(), self.left_times.text().strip(),
                           self.right_times.text().strip(), realtime,
-                          video_times=self.video_times.isChecked())
+                          video_times=self.video_times.isChecked(),
+                          left_labels=self.left_labels.text().strip(),
+                          right_labels=self.right_labels.text().strip())
 
 
 class _CameraScan(QObject):

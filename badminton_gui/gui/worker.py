@@ -44,6 +44,7 @@ import cv2
 import numpy as np
 from PySide6.QtCore import QObject, Signal
 
+from ..core.evaluation import Label, LiveScore, Outcomes
 from ..core.params import ParamError, TrackerParams
 from ..core.rig import RigError, StereoRig
 from ..core.tracker import StereoTracker
@@ -174,6 +175,11 @@ class WorkerStats:
     live: bool = False               # a camera pair: newest frame wins, drops counted
     paced: bool = False              # a file or the demo played in real time
     rig_epipolar_px: float | None = None   # the rig's measured epipolar error (StereoTracker), px
+    # The readout scored against the source's truth (io/truth.py) since the parameters last
+    # changed: None without a truth; ``truth_name`` says which ("demo truth", "labels").
+    score_left: Outcomes | None = None
+    score_right: Outcomes | None = None
+    truth_name: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -189,6 +195,8 @@ class DisplayPacket:
     flight: np.ndarray | None        # (N, 4) t, x, y, z of the current flight
     predicted: np.ndarray | None     # (M, 3) predicted path to the floor
     stats: WorkerStats
+    label_left: Label | None = None  # this pair's truth per camera (visible, x, y), when known
+    label_right: Label | None = None
 
 
 SourceOpener = Callable[..., tuple[FrameSource, StereoRig]]
@@ -432,6 +440,8 @@ class TrackingWorker(QObject):
         speed_meter: collections.deque[tuple[float, float]] = collections.deque(maxlen=60)
         frames = 0
         unshown = None          # the newest result that was not made a packet (shown at the end)
+        truth = getattr(source, "frame_truth", None)
+        score = LiveScore(source.image_size[0]) if truth is not None else None
         while not self._abort.is_set():
             with self._lock:
                 params, self._pending_params = self._pending_params, None
@@ -446,6 +456,8 @@ class TrackingWorker(QObject):
                 try:
                     tracker.set_params(params)
                     self._params_in_use = params
+                    if score is not None:
+                        score.reset()       # the score belongs to the settings on screen
                 except USER_ERRORS as exc:   # e.g. a classifier model that is not there
                     tracker.set_params(self._params_in_use)
                     self.warning.emit("Parameters not applied: " + _one_sentence(exc))
@@ -509,6 +521,11 @@ class TrackingWorker(QObject):
                     except USER_ERRORS as exc:
                         self.link_error = _one_sentence(exc)
 
+            labels = (None, None)
+            if score is not None:
+                labels = truth.for_frame(frame)
+                score.add(0, result.left.detection, labels[0])
+                score.add(1, result.right.detection, labels[1])
             for trail, cam in zip(trails, (result.left, result.right)):
                 if cam.detection is not None:
                     trail.append((frame.t_left, cam.detection.x, cam.detection.y))
@@ -528,14 +545,17 @@ class TrackingWorker(QObject):
                                 latency_ms=(t_done - t_available) * 1000.0,
                                 processing_ms=result.processing_ms, playback_speed=playback,
                                 live=reader is not None, paced=reader is None and realtime and not stepping,
-                                rig_epipolar_px=tracker.rig_epipolar_px)
+                                rig_epipolar_px=tracker.rig_epipolar_px,
+                                score_left=None if score is None else score.outcomes(0),
+                                score_right=None if score is None else score.outcomes(1),
+                                truth_name="" if truth is None else truth.name)
             self.latest_stats = stats
             with self._lock:
                 due = self._display_due
                 wanted = stepping or (due is not None and t_done >= due)
                 if wanted:
                     self._display_due = None
-            unshown = (frame, result, stats, show_mask, display_box)
+            unshown = (frame, result, stats, show_mask, display_box, labels)
             if wanted:
                 self._publish(unshown, trails, tracker)
                 unshown = None
@@ -558,8 +578,9 @@ class TrackingWorker(QObject):
     def _publish(self, unshown, trails, tracker: StereoTracker) -> None:
         """Build the display packet of (frame, result, stats, show_mask, box) and hand it over."""
         if unshown is not None:
-            frame, result, stats, show_mask, display_box = unshown
-            self.output.put(self._packet(frame, result, trails, tracker, stats, show_mask, display_box))
+            frame, result, stats, show_mask, display_box, labels = unshown
+            self.output.put(self._packet(frame, result, trails, tracker, stats, show_mask, display_box,
+                                         labels))
             self.packets_built += 1
 
     def _sleep_until(self, due: float) -> None:
@@ -571,7 +592,8 @@ class TrackingWorker(QObject):
 
     @staticmethod
     def _packet(frame, result: TrackResult, trails, tracker: StereoTracker, stats: WorkerStats,
-                show_mask: bool, display_box: tuple[int, int]) -> DisplayPacket:
+                show_mask: bool, display_box: tuple[int, int],
+                labels: tuple[Label | None, Label | None] = (None, None)) -> DisplayPacket:
         h, w = frame.left.shape[:2]
         scale = min(1.0, display_box[0] / float(w), display_box[1] / float(h))
         images = []
@@ -596,7 +618,7 @@ class TrackingWorker(QObject):
             trail_right=np.array(trails[1], dtype=float).reshape(-1, 3),
             flight=None if flight is None else np.asarray(flight, dtype=float),
             predicted=None if predicted is None else np.asarray(predicted, dtype=float),
-            stats=stats)
+            stats=stats, label_left=labels[0], label_right=labels[1])
 
 
 def _shrink(img: np.ndarray, width: int, height: int) -> np.ndarray:
