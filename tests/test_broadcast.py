@@ -255,3 +255,15 @@ def test_exit_margin_is_off_by_default():
     assert TrackerParams().association.exit_margin == 0.0
     assert load_preset("default").association.exit_margin == 0.0
     assert load_preset("coarse").association.exit_margin == 0.0
+
+
+def test_only_the_top_edge_is_an_exit():
+    """A shuttle-like dot leaving through the bottom edge (a racket, a near player's hand on
+    TV) does not stop the reports: players and rackets cross the side and bottom edges."""
+    p = load_preset("broadcast").with_value("classifier.enabled", False)
+    frames, _ = _clear_out_of_the_top()
+    frames = [np.ascontiguousarray(img[::-1]) for img in frames]   # out through the bottom
+    det = CameraDetector(p)
+    reported = [det.process(img, i / FPS, keep_mask=False).detection is not None
+                for i, img in enumerate(frames)]
+    assert all(reported[22:50])

@@ -422,11 +422,12 @@ class CameraDetector:
                         links: list[tuple[int, float, float]]) -> list[tuple[int, float, float]]:
         """Hold every report back while the shuttle is out of the picture (``exit_margin``).
 
-        A track that could supply the detection last frame, seen within the margin of the edge
-        it was moving towards and now missing with its prediction outside the image, is the
-        shuttle leaving the picture (on TV: a clear or a lob above the top edge). Out there it
-        cannot be seen, so whatever the association offers meanwhile (a player in white, a
-        shoe, a logo) is not the shuttle; it can only come back across an edge. So until a
+        A track that could supply the detection last frame, seen within the margin of the top
+        edge while rising and now missing with its prediction above the image, is the shuttle
+        leaving the picture (on TV: a clear or a lob; players and rackets cross the other
+        edges, not this one). Out there it cannot be seen, so whatever the association offers
+        meanwhile (a player in white, a shoe, a logo) is not the shuttle; it can only come back
+        across an edge. So until a
         track born after the exit whose first point lies within ``entry_margin`` of an edge may
         supply the detection (the shuttle coming back in; its first frames back may be missed,
         so its track can start some way inside), or ``exit_timeout`` has passed (a new shuttle
@@ -436,11 +437,11 @@ class CameraDetector:
         margin = ap.exit_margin * w / 1280.0
         entry = max(ap.entry_margin, ap.exit_margin) * w / 1280.0
         for tr in a.tracklets:
+            # Through the top edge only: players, rackets and shoes cross the side and bottom
+            # edges of a TV picture, never its top (they stand on the court below it).
             if (not tr.hit_now and tr.misses == 1 and tr.ident in self._eligible
-                    and tr.velocity_known
-                    and _leaving_edge(tr.x, tr.y, (tr.vx, tr.vy), w, h, margin)):
-                px, py = tr.predict(t)
-                if not (-0.5 <= px < w - 0.5 and -0.5 <= py < h - 0.5):
+                    and tr.velocity_known and tr.vy < 0 and tr.y + 0.5 < margin):
+                if tr.predict(t)[1] < -0.5:
                     # The followed shuttle is the one that left: no clutter keeps the hysteresis.
                     self._outside = (t, a._next_id)
                     a.select(tr.ident)

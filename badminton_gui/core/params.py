@@ -322,9 +322,9 @@ class AssociationParams(ParamGroup):
     min_quality: float = param(0.0, 0.0, 1.0, step=0.01, label="Minimum candidate quality",
                                help="Candidates below this shape/contrast score are not associated")
     exit_margin: float = param(0.0, 0.0, 200.0, step=1.0, unit="px", label="Left the image within",
-                               help="A shuttle-like track last seen this close to the image edge it was moving "
-                                    "towards, and then gone, has left the picture (a clear above a TV camera's "
-                                    "top edge): until a new track comes in from an edge ('... back in within'), "
+                               help="A shuttle-like track last seen rising this close to the top edge, and then "
+                                    "gone, has left the picture (a clear above a TV camera's top edge): until a "
+                                    "new track comes in from an edge ('... back in within'), "
                                     "or '... for at most' has passed, nothing is reported (px at 1280 wide; 0 = off)")
     entry_margin: float = param(120.0, 0.0, 1000.0, step=5.0, unit="px", label="... back in within",
                                 help="After the shuttle left the picture, a new track may be reported once its "
