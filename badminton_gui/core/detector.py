@@ -118,6 +118,7 @@ class CameraDetector:
         # detection in the last frame.
         self._outside: tuple[float, int] | None = None
         self._eligible: set[int] = set()
+        self._left_picture = -1   # the tracklet that left the picture this frame (-1: none)
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -366,6 +367,7 @@ class CameraDetector:
             def blind(x: float, y: float) -> bool:
                 return self._background.is_blind(x * ms_x, y * ms_y)
         links = self._associator.update(t, positions, qualities, blind)
+        self._left_picture = -1
         if p.association.exit_margin > 0:
             links = self._out_of_picture(t, w, h, links)
         self._tracklet_of = {}
@@ -416,7 +418,8 @@ class CameraDetector:
         return CameraResult(detection=None, candidates=tuple(candidates),
                             mask=mask if keep_mask else None,
                             mask_scale=mask.shape[1] / w, image_size=(w, h),
-                            window=None if window is None else tuple(int(v) for v in window))
+                            window=None if window is None else tuple(int(v) for v in window),
+                            left_picture=self._left_picture)
 
     def _out_of_picture(self, t: float, w: int, h: int,
                         links: list[tuple[int, float, float]]) -> list[tuple[int, float, float]]:
@@ -445,6 +448,7 @@ class CameraDetector:
                     # The followed shuttle is the one that left: no clutter keeps the hysteresis.
                     self._outside = (t, a._next_id)
                     a.select(tr.ident)
+                    self._left_picture = tr.ident
                     break
         self._eligible = {ident for ident, _, merit in links if merit >= 0}
         if self._outside is None:
