@@ -195,3 +195,89 @@ def test_dark_threshold_is_off_by_default_and_on_in_the_broadcast_preset():
     assert TrackerParams().background.dark_threshold == 0
     assert load_preset("default").background.dark_threshold == 0
     assert load_preset("broadcast").background.dark_threshold == 30
+
+
+def _clear_out_of_the_top(n=75, out=range(20, 50)):
+    """A TV-sized flight (1280×720 at 30 fps): the shuttle (a 3 px dot) rises 30 px a frame and
+    leaves through the top edge after frame 19, is out of the picture in the ``out`` frames and
+    comes back down through the top edge; meanwhile a second, dimmer dot (a player's shoe, say)
+    crawls across the court at 6 px a frame. Returns the frames and the shuttle's position per
+    frame (None while out)."""
+    rng = np.random.default_rng(7)
+    frames, truth = [], []
+    for i in range(n):
+        img = np.clip(rng.normal(60, 2, (720, 1280, 3)), 0, 255).astype(np.uint8)
+        cv2.circle(img, (100 + 6 * i, 500), 3, (150, 150, 150), -1)
+        if i < out.start:
+            pos = (640, 590 - 30 * i)
+        elif i >= out.stop:
+            pos = (700, 5 + 20 * (i - out.stop))
+        else:
+            pos = None
+        if pos is not None:
+            cv2.circle(img, pos, 3, (240, 240, 240), -1)
+        frames.append(img)
+        truth.append(pos)
+    return frames, truth
+
+
+@pytest.mark.parametrize("margin", [0.0, None])
+def test_nothing_is_reported_while_the_shuttle_is_out_of_the_picture(margin):
+    """The broadcast preset's ``association.exit_margin``: a shuttle-like track that leaves
+    through the edge it moves towards (a clear above the TV picture) is out of sight; whatever
+    else the association offers meanwhile is not the shuttle, until a new track comes in from
+    an edge. Off (``margin=0``, the preset before) the crawling dot takes the report."""
+    p = load_preset("broadcast")
+    assert p.association.exit_margin == 40.0
+    # The hand-made quality (contrast and size: the dimmer dot scores lower), not the TV
+    # classifier, whose scores of synthetic dots mean nothing.
+    p = p.with_value("classifier.enabled", False)
+    if margin is not None:
+        p = p.with_value("association.exit_margin", margin)
+    frames, truth = _clear_out_of_the_top()
+    det = CameraDetector(p)
+    reported_out, back = [], []
+    for i, img in enumerate(frames):
+        d = det.process(img, i / FPS, keep_mask=False).detection
+        if i in range(16, 20):
+            assert d is not None and math.hypot(d.x - truth[i][0], d.y - truth[i][1]) <= 5
+        if 22 <= i < 50:
+            reported_out.append(d is not None)
+        if i >= 55:
+            back.append(d is not None and math.hypot(d.x - truth[i][0], d.y - truth[i][1]) <= 5)
+    if margin is None:
+        assert not any(reported_out)
+        assert all(back)
+    else:
+        assert all(reported_out)   # the crawling dot, while the shuttle is out
+        assert not any(back)       # ... and after: it keeps the lead it took
+
+
+def test_the_shuttle_out_of_the_picture_is_given_up_after_the_timeout():
+    """A shuttle that never comes back (a new one brought into play off screen): after
+    ``exit_timeout`` the association reports again."""
+    p = (load_preset("broadcast").with_value("association.exit_timeout", 0.5)
+         .with_value("classifier.enabled", False))
+    frames, _ = _clear_out_of_the_top(n=50, out=range(20, 60))
+    det = CameraDetector(p)
+    reported = [det.process(img, i / FPS, keep_mask=False).detection is not None
+                for i, img in enumerate(frames)]
+    assert not any(reported[22:34]) and all(reported[40:])
+
+
+def test_exit_margin_is_off_by_default():
+    assert TrackerParams().association.exit_margin == 0.0
+    assert load_preset("default").association.exit_margin == 0.0
+    assert load_preset("coarse").association.exit_margin == 0.0
+
+
+def test_only_the_top_edge_is_an_exit():
+    """A shuttle-like dot leaving through the bottom edge (a racket, a near player's hand on
+    TV) does not stop the reports: players and rackets cross the side and bottom edges."""
+    p = load_preset("broadcast").with_value("classifier.enabled", False)
+    frames, _ = _clear_out_of_the_top()
+    frames = [np.ascontiguousarray(img[::-1]) for img in frames]   # out through the bottom
+    det = CameraDetector(p)
+    reported = [det.process(img, i / FPS, keep_mask=False).detection is not None
+                for i, img in enumerate(frames)]
+    assert all(reported[22:50])

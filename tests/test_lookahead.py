@@ -1,6 +1,7 @@
 """The look-ahead readout (core/lookahead.py) on synthetic candidate streams, and `--lookahead` in the CLI."""
 
 import csv
+import dataclasses
 import math
 
 import numpy as np
@@ -227,3 +228,28 @@ def test_cli_rejects_a_negative_lookahead(tmp_path, capsys):
     write_video(tmp_path / "l.avi", frames)
     assert main(["detect", str(tmp_path / "l.avi"), "-o", str(tmp_path / "x.csv"), "--quiet",
                  "--lookahead", "-1"]) == 2
+
+
+def test_a_tracklet_that_left_the_picture_takes_its_last_frames():
+    """``CameraResult.left_picture`` (the detector's ``association.exit_margin``): tracklet 5
+    rose out through the top edge after frame 7 while the online readout stayed on a player
+    (tracklet 2). Tracklet 5 was the shuttle: the held-back frames back to its last gap take it;
+    a frame before that gap keeps the online choice."""
+    stream = []
+    for i in range(10):
+        cands = [cand(700.0, 300.0, 2)]
+        if i in (2, 4, 5, 6, 7):
+            cands.append(cand(700.0, 200.0 - 25 * i, 5))
+        res = frame(cands, 2 if i < 8 else None)
+        if i == 8:
+            res = CameraResult(detection=None, candidates=res.candidates, image_size=(1280, 720),
+                               left_picture=5)
+        stream.append(res)
+    out, la = run(stream, params(4))
+    assert [r.detection.tracklet if r.detection else None for r in out] == (
+        [2, 2, 2, 2, 5, 5, 5, 5, None, None])
+    assert la.changes["exit"] == 4
+    plain = [dataclasses.replace(r, left_picture=-1) for r in stream]
+    out, la = run(plain, params(4))
+    assert [r.detection.tracklet if r.detection else None for r in out][4:8] == [2] * 4
+    assert la.changes["exit"] == 0

@@ -113,6 +113,12 @@ class CameraDetector:
         # part's model-pixel origin and the whole model's shape (split_min_length).
         self._previous_gray: tuple[np.ndarray, int, int, tuple[int, int]] | None = None
         self.last_split = 0   # candidates split off merged blobs in the last frame
+        # ``association.exit_margin``: (time the shuttle left the picture, first tracklet ident
+        # born after that) while it is out, else None; the tracklets that could supply the
+        # detection in the last frame.
+        self._outside: tuple[float, int] | None = None
+        self._eligible: set[int] = set()
+        self._left_picture = -1   # the tracklet that left the picture this frame (-1: none)
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -132,6 +138,8 @@ class CameraDetector:
         self._areas = {}
         self._previous_gray = None
         self._previous_positions = np.zeros((0, 2))
+        self._outside = None
+        self._eligible = set()
 
     @property
     def tracking(self) -> bool:
@@ -359,6 +367,9 @@ class CameraDetector:
             def blind(x: float, y: float) -> bool:
                 return self._background.is_blind(x * ms_x, y * ms_y)
         links = self._associator.update(t, positions, qualities, blind)
+        self._left_picture = -1
+        if p.association.exit_margin > 0:
+            links = self._out_of_picture(t, w, h, links)
         self._tracklet_of = {}
         width_frames = int(p.colour.head_lead_width_frames)
         edge_exit = p.colour.edge_exit > 0
@@ -396,7 +407,7 @@ class CameraDetector:
             self._areas = {k: v for k, v in self._areas.items() if k in alive}
         # The followed shuttle crossing a light or a white line leaves no blob: its track's
         # prediction stands in (flagged, never triangulated) until it shows again.
-        coast = self._associator.coasting(t, blind)
+        coast = self._associator.coasting(t, blind) if self._outside is None else None
         if coast is not None:
             tr, merit = coast
             px, py = tr.predict(t)
@@ -407,7 +418,57 @@ class CameraDetector:
         return CameraResult(detection=None, candidates=tuple(candidates),
                             mask=mask if keep_mask else None,
                             mask_scale=mask.shape[1] / w, image_size=(w, h),
-                            window=None if window is None else tuple(int(v) for v in window))
+                            window=None if window is None else tuple(int(v) for v in window),
+                            left_picture=self._left_picture)
+
+    def _out_of_picture(self, t: float, w: int, h: int,
+                        links: list[tuple[int, float, float]]) -> list[tuple[int, float, float]]:
+        """Hold every report back while the shuttle is out of the picture (``exit_margin``).
+
+        A track that could supply the detection last frame, seen within the margin of the top
+        edge while rising and now missing with its prediction above the image, is the shuttle
+        leaving the picture (on TV: a clear or a lob; players and rackets cross the other
+        edges, not this one). Out there it cannot be seen, so whatever the association offers
+        meanwhile (a player in white, a shoe, a logo) is not the shuttle; it can only come back
+        across an edge. So until a
+        track born after the exit whose first point lies within ``entry_margin`` of an edge may
+        supply the detection (the shuttle coming back in; its first frames back may be missed,
+        so its track can start some way inside), or ``exit_timeout`` has passed (a new shuttle
+        brought into play), every candidate is held back (``merit`` -1).
+        """
+        a, ap = self._associator, self.params.association
+        margin = ap.exit_margin * w / 1280.0
+        entry = max(ap.entry_margin, ap.exit_margin) * w / 1280.0
+        for tr in a.tracklets:
+            # Through the top edge only: players, rackets and shoes cross the side and bottom
+            # edges of a TV picture, never its top (they stand on the court below it).
+            if (not tr.hit_now and tr.misses == 1 and tr.ident in self._eligible
+                    and tr.velocity_known and tr.vy < 0 and tr.y + 0.5 < margin):
+                if tr.predict(t)[1] < -0.5:
+                    # The followed shuttle is the one that left: no clutter keeps the hysteresis.
+                    self._outside = (t, a._next_id)
+                    a.select(tr.ident)
+                    self._left_picture = tr.ident
+                    break
+        self._eligible = {ident for ident, _, merit in links if merit >= 0}
+        if self._outside is None:
+            return links
+        t_exit, first = self._outside
+        if t - t_exit > ap.exit_timeout:
+            self._outside = None
+            return links
+        by_id = {tr.ident: tr for tr in a.tracklets}
+        out, entered = [], False
+        for ident, motion, merit in links:
+            tr = by_id.get(ident)
+            if merit >= 0 and not (tr is not None and ident >= first and tr.recent
+                                   and _near_edge(*tr.recent[0], w, h, entry)):
+                merit = -1.0
+            entered = entered or merit >= 0
+            out.append((ident, motion, merit))
+        if entered:
+            self._outside = None
+        return out
 
     def _split_merged(self, gray: np.ndarray, mask: np.ndarray, contours, length_all: np.ndarray,
                       t: float, w: int, sx: float, sy: float, fresh: tuple[int, int, int, int]):
@@ -752,6 +813,11 @@ def _leaving_edge(x: float, y: float, velocity: tuple[float, float], w: int, h: 
     vx, vy = velocity
     return ((vx < 0 and x + 0.5 < margin) or (vx > 0 and w - 0.5 - x < margin)
             or (vy < 0 and y + 0.5 < margin) or (vy > 0 and h - 0.5 - y < margin))
+
+
+def _near_edge(x: float, y: float, w: int, h: int, margin: float) -> bool:
+    """True when (x, y) lies within ``margin`` px of any image edge."""
+    return min(x + 0.5, y + 0.5, w - 0.5 - x, h - 0.5 - y) < margin
 
 
 def model_scale(background, width: int) -> float:

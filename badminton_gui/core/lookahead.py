@@ -52,6 +52,9 @@ class _Frame:
     # tracklet id → the frame's (real, associated) candidate on it
     on: dict[int, Candidate]
     followed: int              # tracklet of the online detection (-1: none or on no tracklet)
+    # A tracklet seen leaving the picture just after this frame, on it without a break since
+    # (``CameraResult.left_picture``): it was the shuttle, whatever the readout followed.
+    left: int = -1
 
 
 class CameraLookahead:
@@ -61,7 +64,7 @@ class CameraLookahead:
         self.params = params or TrackerParams()
         self._buffer: deque[_Frame] = deque()
         self._past: _Frame | None = None   # the last frame handed out (velocity of a back-fill)
-        self.changes = {"backfill": 0, "switch": 0}
+        self.changes = {"backfill": 0, "switch": 0, "exit": 0}
         # id(decided CameraResult) → the taken candidate's measured centroid (before the lead to
         # the cork), for the stereo re-triangulation; read and removed by StereoLookahead.
         self.centroids: dict[int, tuple[float, float]] = {}
@@ -83,6 +86,14 @@ class CameraLookahead:
         if det is not None and det.tracklet >= 0 and not det.predicted:
             on[det.tracklet] = det
         followed = det.tracklet if det is not None else -1
+        if result.left_picture >= 0:
+            # The tracklet that left through the top edge was the shuttle (the online readout
+            # may have followed a player meanwhile): its candidates of the held-back frames,
+            # back to its last gap, are the detections.
+            for f in reversed(self._buffer):
+                if result.left_picture not in f.on:
+                    break
+                f.left = result.left_picture
         self._buffer.append(_Frame(t, result, on, followed))
         out = []
         while len(self._buffer) > self.frames:
@@ -116,6 +127,9 @@ class CameraLookahead:
         """The candidate that replaces frame's online detection, or None to keep it."""
         lp = self.params.lookahead
         det = frame.result.detection
+        if frame.left >= 0 and (det is None or det.tracklet != frame.left):
+            self.changes["exit"] += 1
+            return self._lead(frame, frame.on[frame.left])
         if not future or (det is not None and det.tracklet < 0):
             # Nothing to look at, or the online readout came from the 3D flight (a guided spot):
             # the stereo tracker knew something the tracklets do not.

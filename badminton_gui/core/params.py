@@ -326,6 +326,18 @@ class AssociationParams(ParamGroup):
                                    "those near a live tracklet first, then the strongest differences")
     min_quality: float = param(0.0, 0.0, 1.0, step=0.01, label="Minimum candidate quality",
                                help="Candidates below this shape/contrast score are not associated")
+    exit_margin: float = param(0.0, 0.0, 200.0, step=1.0, unit="px", label="Left the image within",
+                               help="A shuttle-like track last seen rising this close to the top edge, and then "
+                                    "gone, has left the picture (a clear above a TV camera's top edge): until a "
+                                    "new track comes in from an edge ('... back in within'), "
+                                    "or '... for at most' has passed, nothing is reported (px at 1280 wide; 0 = off)")
+    entry_margin: float = param(120.0, 0.0, 1000.0, step=5.0, unit="px", label="... back in within",
+                                help="After the shuttle left the picture, a new track may be reported once its "
+                                     "first point lies this close to an edge (its first frames back may be missed; "
+                                     "px at 1280 wide, at least 'Left the image within')")
+    exit_timeout: float = param(3.0, 0.0, 30.0, step=0.1, unit="s", label="... for at most",
+                                help="How long the shuttle may stay out of the picture before any track may be "
+                                     "reported again")
 
 
 @dataclass(frozen=True, slots=True)

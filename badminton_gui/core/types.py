@@ -114,6 +114,9 @@ class CameraResult:
     # only part of this frame processed, None when the whole frame was. The views draw it, so a
     # mask that is empty outside it reads as "not looked at", not as "nothing moved".
     window: tuple[int, int, int, int] | None = None
+    # ``association.exit_margin``: the tracklet that was seen leaving the picture through its top
+    # edge this frame (-1: none). It was the shuttle: the look-ahead gives it its last frames.
+    left_picture: int = -1
 
     @property
     def visible(self) -> bool:
