@@ -625,3 +625,47 @@ def test_a_source_without_truth_says_so_in_the_readouts():
     assert "label files" in score_tooltip(None, None, "")
     text = score_text(Outcomes(tp=90, tn=5, fn=5), Outcomes(tp=99, tn=1), "labels")
     assert text.startswith("L 95.0 % · R 100.0 %") and "labels · 100 frames" in text
+
+
+def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window, qtbot, tmp_path, monkeypatch):
+    """Source ▸ One video (TV broadcast)…: the picture in the left feed, the right one says why it
+    is empty, the broadcast preset is in use, the live score covers the one camera, and no rig,
+    3D point or landing call is invented."""
+    from badminton_gui.gui import main_window as mw
+
+    from .test_cli import moving_dot_frames, write_video
+    frames, centres = moving_dot_frames(150)           # 5 s played in real time: still open below
+    write_video(tmp_path / "tv.avi", frames, fps=30.0)
+    labels = tmp_path / "tv_ball.csv"
+    labels.write_text("Frame,Visibility,X,Y\n" + "".join(
+        f"{i},1,{x},{y}\n" for i, (x, y) in enumerate(centres)), encoding="utf-8")
+
+    class Chosen(mw.SingleVideoDialog):
+        def exec(self) -> int:
+            self.video.setText(str(tmp_path / "tv.avi"))
+            self.labels.setText(str(labels))
+            return 1
+
+    monkeypatch.setattr(mw, "SingleVideoDialog", Chosen)
+    window = main_window()
+    window.realtime_action.setChecked(True)
+    window.choose_single_video()
+    assert window.spec.kind == "single"
+    qtbot.waitUntil(lambda: window.worker is not None and window.worker.latest_stats is not None
+                    and window.worker.latest_stats.frames >= 20, timeout=WAIT_MS)
+    assert window.params.association.exit_margin > 0           # the broadcast preset's own rule
+    assert window.worker.params_in_use == window.params
+    assert window.rig is None and window.worker.rig_in_use is None
+    assert window.right_feed._message == mw.ONE_CAMERA_TEXT and window.right_feed._qimage is None
+    assert window.left_feed.title == "Camera"
+    assert "no second camera" in window.status_source.text()
+    qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)
+    packet = window.latest_packet
+    assert packet.right is None and packet.result.point is None and packet.result.flight.prediction is None
+    stats = window.worker.latest_stats
+    assert stats.score_left.total >= 20 and stats.score_right.total == 0
+    text = mw.score_text(stats.score_left, stats.score_right, stats.truth_name)
+    assert text.startswith("L ") and "· R" not in text
+    # A rig cannot be applied to one camera: said, and tracking goes on.
+    window.worker.set_rig(make_rig())
+    qtbot.waitUntil(lambda: "one camera" in window.banner.text, timeout=WAIT_MS)

@@ -23,8 +23,9 @@ GIL_SWITCH_INTERVAL = 0.001
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="badminton-gui", description="Courtside stereo shuttlecock tracker.")
-    p.add_argument("--source", choices=("demo", "video", "cameras"),
-                   help="what to track (default: the last source, else the demo court)")
+    p.add_argument("--source", choices=("demo", "video", "single", "cameras"),
+                   help="what to track (default: the last source, else the demo court); 'single': one "
+                        "camera's video given as --left (a TV clip: add --preset broadcast)")
     p.add_argument("--left", help="left video file / camera index")
     p.add_argument("--right", help="right video file / camera index")
     p.add_argument("--calib", help="rig file (OpenCV FileStorage YAML)")

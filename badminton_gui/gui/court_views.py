@@ -215,7 +215,14 @@ class CourtGLView:
         self._in_court_frame = True
         self._key: tuple | None = None
 
-    def set_rig(self, rig: StereoRig) -> None:
+    def set_rig(self, rig: StereoRig | None) -> None:
+        """Draw ``rig``'s cameras (and the court when it has a court pose); None: a source with
+        one camera and no rig, whose flight cannot be known (the cameras are hidden)."""
+        if rig is None:
+            self._key = None
+            for item in self._cameras:
+                item.setData(pos=np.zeros((0, 3)))
+            return
         self._in_court_frame = rig.has_court_pose
         self._key = None
         for item in (self._court, self._net, self._floor):

@@ -112,6 +112,12 @@ class FeedView(QWidget):
         self._message = ""
         self.update()
 
+    def show_text(self, text: str) -> None:
+        """No picture, only a line of text (this view has no camera for the source)."""
+        self._image = self._qimage = self._camera = self._label = None
+        self._trail = np.zeros((0, 3))
+        self.set_message(text)
+
     def set_message(self, text: str) -> None:
         """Replace the picture by a line of text (no source, source ended)."""
         self._message = text

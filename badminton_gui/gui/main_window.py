@@ -31,6 +31,7 @@ from PySide6.QtWidgets import (QDockWidget, QFileDialog, QFrame, QGridLayout, QH
 from ..core.evaluation import Outcomes
 from ..core.params import TrackerParams
 from ..core.rig import StereoRig
+from ..io.sources import SourceError
 from ..io.presets import load_preset
 from ..io.track_log import RecordingError, TrackRecorder
 from . import settings as st
@@ -39,10 +40,12 @@ from .feed_view import FeedView
 from .keep_up import FAST_PRESET, DisplayYield, KeepUpWatch
 from .rig_check import RigCheck, readout_text as rig_readout_text
 from .robot_panel import RobotLinkPanel
-from .sources import CameraPairDialog, VideoPairDialog, open_spec
+from .sources import CameraPairDialog, SingleVideoDialog, VideoPairDialog, open_spec
 from .worker import LIVE_BUFFER_PAIRS, DisplayPacket, RateMeter, SourceOpener, TrackingWorker
 
 DISPLAY_INTERVAL_MS = 33          # feeds: ≈30 Hz, whatever the tracking rate
+ONE_CAMERA_TEXT = ("One camera's video: no second view.\n"
+                   "The shuttle is followed in the picture only (no 3D, distance, speed or landing).")
 # The worker is asked for a result finished at least this long before the next tick, so the
 # packet is ready when the tick comes, even with some timer jitter.
 DISPLAY_LEAD_S = 0.016
@@ -153,9 +156,10 @@ def score_text(left: Outcomes | None, right: Outcomes | None, truth_name: str) -
     if frames == 0:
         return f"{truth_name}: no labelled frame yet"
 
-    def pct(o: Outcomes) -> str:
-        return "—" if o.total == 0 else f"{100.0 * o.accuracy:.1f} %"
-    return (f"L {pct(left)} · R {pct(right)}<br><span style='font-size:small; color:#aaa'>"
+    # A camera without a single labelled frame (one camera's video) is left out.
+    cameras = " · ".join(f"{side} {100.0 * o.accuracy:.1f} %"
+                         for side, o in (("L", left), ("R", right)) if o.total)
+    return (f"{cameras}<br><span style='font-size:small; color:#aaa'>"
             f"{truth_name} · {frames:,} frames</span>")
 
 
@@ -380,6 +384,7 @@ class MainWindow(QMainWindow):
             st.SourceSpec("demo", realtime=self.realtime_action.isChecked())), "Ctrl+D")
         self._action(src, "Two &cameras…", self.choose_cameras)
         self._action(src, "Stereo &video pair…", self.choose_videos, "Ctrl+O")
+        self._action(src, "&One video (TV broadcast)…", self.choose_single_video)
         src.addSeparator()
         self._action(src, "&Restart source", lambda: self.start_spec(self.spec), "Ctrl+R")
         self.stop_action = self._action(src, "S&top", self.stop_source, "Ctrl+.")
@@ -650,11 +655,22 @@ class MainWindow(QMainWindow):
         for feed in (self.left_feed, self.right_feed):
             feed.set_message(text)
 
-    def _on_opened(self, name: str, rig: StereoRig) -> None:
+    def _on_opened(self, name: str, rig: StereoRig | None) -> None:
         self.rig = rig
         self._keep_up.reset()
         self._rig_check.reset()
         self._display_yield.reset()
+        self.left_feed.title = "Camera" if rig is None else "Left camera"
+        if rig is None:
+            # One camera's video: its picture in the left feed, 2D only.
+            self.setWindowTitle(f"Badminton shuttle tracker — {name}")
+            self.status_source.setText(f"{name} — no second camera: the shuttle in the picture only, "
+                                       f"no 3D, distance, speed or landing")
+            self.right_feed.show_text(ONE_CAMERA_TEXT)
+            if self.gl_view is not None:
+                self.gl_view.set_rig(None)
+            self.sourceOpened.emit(name)
+            return
         if self._restart_rig is not None:
             restarted, self._restart_rig = self._restart_rig is rig, None
             if restarted:
@@ -688,6 +704,13 @@ class MainWindow(QMainWindow):
     def choose_videos(self) -> None:
         dialog = VideoPairDialog(self.spec, self)
         if dialog.exec():
+            self.start_spec(dialog.spec(self.realtime_action.isChecked()))
+
+    def choose_single_video(self) -> None:
+        dialog = SingleVideoDialog(self.spec, self)
+        if dialog.exec():
+            if dialog.broadcast.isChecked():
+                self.use_preset("broadcast")
             self.start_spec(dialog.spec(self.realtime_action.isChecked()))
 
     # ---- controls --------------------------------------------------------------------------
@@ -764,9 +787,14 @@ class MainWindow(QMainWindow):
         self.stop_worker()
         save_dir = rig_save_dir()
         saved: list[str] = []
-        wizard = CalibrationWizard(lambda: open_spec(dataclasses.replace(spec, calib=""))[0]
-                                   if spec.kind == "demo" else open_spec(spec)[0],
-                                   parent=self, save_dir=save_dir)
+        def calibration_source():
+            if spec.kind == "single":
+                raise SourceError("a stereo calibration needs two cameras: the source is one video "
+                                  "(choose two cameras or use folders of chessboard images)")
+            return (open_spec(dataclasses.replace(spec, calib=""))[0] if spec.kind == "demo"
+                    else open_spec(spec)[0])
+
+        wizard = CalibrationWizard(calibration_source, parent=self, save_dir=save_dir)
         wizard.rigSaved.connect(saved.append)
         wizard.exec()
         if saved:
@@ -879,8 +907,9 @@ class MainWindow(QMainWindow):
         r = packet.result
         self.left_feed.set_frame(packet.left, packet.display_scale, r.left, packet.trail_left,
                                  packet.label_left)
-        self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right,
-                                  packet.label_right)
+        if packet.right is not None:
+            self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right,
+                                      packet.label_right)
         return True
 
     def _slow_views(self) -> list[tuple[str, QWidget, Callable[[DisplayPacket], None]]]:

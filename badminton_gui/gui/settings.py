@@ -31,7 +31,7 @@ def open_settings() -> QSettings:
 class SourceSpec:
     """What to open: the demo court, a video pair with its rig, or two cameras with their rig."""
 
-    kind: str = "demo"                 # "demo" / "video" / "cameras"
+    kind: str = "demo"                 # "demo" / "video" / "single" (one camera's video) / "cameras"
     left: str = ""                     # video path or camera index / URL
     right: str = ""
     calib: str = ""                    # rig file; optional for the demo (it knows its own rig)
@@ -47,6 +47,8 @@ class SourceSpec:
             return "Demo court"
         if self.kind == "video":
             return f"Videos {os.path.basename(self.left)} + {os.path.basename(self.right)}"
+        if self.kind == "single":
+            return f"Video {os.path.basename(self.left)} (one camera)"
         return f"Cameras {self.left} + {self.right}"
 
 

@@ -62,6 +62,21 @@ def open_spec(spec: SourceSpec, context: OpeningContext | None = None) -> tuple[
         reader = PrefetchingReader(VideoPair(spec.left, spec.right, lt, rt))
         reader.frame_truth = _label_truth(spec)
         return reader, rig
+    if spec.kind == "single":
+        # One camera's video (a TV broadcast): tracked in 2D by the one-camera tracker, no rig.
+        from ..io.labels import CsvFormatError, read_point_labels
+        from ..io.prefetch import PrefetchingReader
+        from ..io.truth import LabelTruth
+        from ..io.video import SingleVideo
+        truth = None
+        if spec.left_labels:
+            try:
+                truth = LabelTruth(read_point_labels(spec.left_labels).as_dict(), {})
+            except CsvFormatError as exc:
+                raise SourceError(f"{exc} (clear the label file to play the video without a score)") from None
+        reader = PrefetchingReader(SingleVideo(spec.left))
+        reader.frame_truth = truth
+        return reader, None
     if spec.kind == "cameras":
         from ..io.cameras import CameraPair
         if not spec.calib:
@@ -153,6 +168,45 @@ class VideoPairDialog(QDialog):
                           video_times=self.video_times.isChecked(),
                           left_labels=self.left_labels.text().strip(),
                           right_labels=self.right_labels.text().strip())
+
+
+class SingleVideoDialog(QDialog):
+    """One camera's video (a TV broadcast clip), optional labels, and whether to switch to the
+    broadcast preset (the default preset is made for fixed high-speed cameras)."""
+
+    def __init__(self, spec: SourceSpec, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("One video (TV broadcast)")
+        self.setMinimumWidth(560)
+        prev = spec if spec.kind == "single" else SourceSpec()
+        self.video = QLineEdit(prev.left)
+        self.labels = QLineEdit(prev.left_labels)
+        self.labels.setToolTip("Frame,Visibility,X,Y per frame (TrackNet's format, as the broadcast "
+                               "clips' *_ball.csv): the readouts then score the tracking live.")
+        form = QFormLayout()
+        form.addRow("Video", _file_row(self, self.video, "Video",
+                                       "Videos (*.mp4 *.avi *.mov *.mkv);;All files (*)"))
+        form.addRow("Labels (optional)", _file_row(self, self.labels, "Labels", "CSV (*.csv);;All files (*)"))
+        self.broadcast = QCheckBox("Track with the broadcast preset")
+        self.broadcast.setToolTip("Bigger steps between frames at 30 fps, a panning picture, the "
+                                  "shuttle leaving through the top edge: the preset made for TV clips")
+        self.broadcast.setChecked(True)
+        form.addRow("", self.broadcast)
+        note = QLabel("One view gives the shuttle's path in the picture only: no distance, speed, "
+                      "3D flight or landing call.")
+        note.setWordWrap(True)
+        note.setStyleSheet("color: #888;")
+        form.addRow("", note)
+        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Open | QDialogButtonBox.StandardButton.Cancel)
+        buttons.accepted.connect(self.accept)
+        buttons.rejected.connect(self.reject)
+        lay = QVBoxLayout(self)
+        lay.addLayout(form)
+        lay.addWidget(buttons)
+
+    def spec(self, realtime: bool) -> SourceSpec:
+        return SourceSpec("single", self.video.text().strip(), realtime=realtime,
+                          left_labels=self.labels.text().strip())
 
 
 class _CameraScan(QObject):

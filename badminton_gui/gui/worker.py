@@ -47,6 +47,7 @@ from PySide6.QtCore import QObject, Signal
 from ..core.evaluation import Label, LiveScore, Outcomes
 from ..core.params import ParamError, TrackerParams
 from ..core.rig import RigError, StereoRig
+from ..core.mono import MonoTracker
 from ..core.tracker import StereoTracker
 from ..core.types import TrackResult
 from ..io.sources import FrameSource, SourceError
@@ -187,7 +188,7 @@ class DisplayPacket:
     """One result with what the GUI needs to draw it (arrays only; never widgets)."""
 
     left: np.ndarray                 # BGRA display image sized for the feed (and mask-tinted)
-    right: np.ndarray
+    right: np.ndarray | None         # None: a one-camera source
     display_scale: float             # display pixel = full-resolution pixel × scale
     result: TrackResult
     trail_left: np.ndarray           # (N, 3) t, x, y of recent detections (full-res px)
@@ -403,8 +404,13 @@ class TrackingWorker(QObject):
         try:
             source, rig = _call_opener(self._open_source,
                                        OpeningContext(self._abort, self.opening.emit))
-            rig.check_image_size(*source.image_size, what="the source's frames")
-            tracker = self._tracker = StereoTracker(rig, self._params_in_use)
+            if getattr(source, "cameras", 2) == 1:
+                # One view (a TV clip): the per-camera detector alone, no rig, no 3D.
+                tracker = self._tracker = MonoTracker(self._params_in_use)
+                rig = None
+            else:
+                rig.check_image_size(*source.image_size, what="the source's frames")
+                tracker = self._tracker = StereoTracker(rig, self._params_in_use)
             self._rig_in_use = rig
             self.opened.emit(getattr(source, "name", "source"), rig)
             if source.fps is None:
@@ -491,7 +497,8 @@ class TrackingWorker(QObject):
                 t_available = time.perf_counter()
                 if frame is None:
                     self._publish(unshown, trails, tracker)
-                    self.ended.emit("end of the videos: choose Source ▸ Restart to play again")
+                    what = "video" if getattr(source, "cameras", 2) == 1 else "videos"
+                    self.ended.emit(f"end of the {what}: choose Source ▸ Restart to play again")
                     return
                 src_left_rate.tick(frame.t_left)
                 src_right_rate.tick(frame.t_right)
@@ -563,6 +570,9 @@ class TrackingWorker(QObject):
     def _switch_rig(self, tracker: StereoTracker, rig: StereoRig, source: FrameSource) -> StereoTracker:
         """A new tracker on ``rig`` in place of ``tracker``; the old one when the rig does not fit
         the source's frames (said in the banner)."""
+        if isinstance(tracker, MonoTracker):
+            self.warning.emit("Rig not applied: the source has one camera (no stereo rig to use)")
+            return tracker
         try:
             rig.check_image_size(*source.image_size, what="the source's frames")
             new = StereoTracker(rig, self._params_in_use)
@@ -598,6 +608,9 @@ class TrackingWorker(QObject):
         scale = min(1.0, display_box[0] / float(w), display_box[1] / float(h))
         images = []
         for img, cam in ((frame.left, result.left), (frame.right, result.right)):
+            if img is None:          # a one-camera source: no right view
+                images.append(None)
+                continue
             if scale < 1.0:
                 img = _shrink(img, int(round(w * scale)), int(round(h * scale)))
             if show_mask and cam.mask is not None:

@@ -216,3 +216,40 @@ class VideoPair:
     def close(self) -> None:
         self.left_file.close()
         self.right_file.close()
+
+
+class SingleVideo:
+    """One camera's video (a TV broadcast, a phone at the court side) as a source of one view.
+
+    Its frames carry ``right=None``: the one-camera tracker (core/mono.py) follows the shuttle in
+    2D, as `badminton-track detect` does; there is no 3D without a second camera.
+    """
+
+    cameras = 1
+
+    def __init__(self, path: str | Path) -> None:
+        self.file = VideoFile(path)
+        self.name = f"Video {self.file.path.name} (one camera)"
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        return self.file.width, self.file.height
+
+    @property
+    def fps(self) -> float | None:
+        return self.file.fps
+
+    @property
+    def frame_count(self) -> int:
+        return self.file.frame_count
+
+    def read(self) -> StereoFrame | None:
+        i = self.file.next_index
+        frame = self.file.read()
+        if frame is None:
+            return None
+        t = i / self.file.fps
+        return StereoFrame(frame, None, t, t, i)
+
+    def close(self) -> None:
+        self.file.close()
