@@ -291,6 +291,9 @@ class TuningDialog(QDialog):
     # ---- preview ---------------------------------------------------------------------------
     def show_preview(self, packet: DisplayPacket) -> None:
         cam = packet.result.left if self.preview_camera.currentIndex() == 0 else packet.result.right
+        if self.preview_camera.currentIndex() == 1 and packet.right is None:
+            self.preview.set_message("This source has one camera: choose the left one")
+            return
         if cam.mask is None:
             self.preview.set_message("The tracker kept no mask for this frame")
             return
