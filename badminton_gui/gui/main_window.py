@@ -240,7 +240,8 @@ class Readouts(QWidget):
             reason = r.flight.withheld_reason
             v["landing"].setText(f"withheld:<br>{reason}" if reason else "—")
             v["call"].setText("—")
-        v["capture"].setText(f"{s.capture_fps_left:.0f} / {s.capture_fps_right:.0f}")
+        v["capture"].setText(f"{s.capture_fps_left:.0f} / "
+                             + ("—" if packet.right is None else f"{s.capture_fps_right:.0f}"))
         v["processing"].setText(f"{s.processing_fps:.0f} fps  ({s.processing_ms:.1f} ms/pair)")
         v["display"].setText(f"{display_hz:.0f} Hz" if slowed_views_hz is None else
                              f"{display_hz:.0f} Hz<br><span style='color:#e8a33c'>court views "

@@ -501,7 +501,8 @@ class TrackingWorker(QObject):
                     self.ended.emit(f"end of the {what}: choose Source ▸ Restart to play again")
                     return
                 src_left_rate.tick(frame.t_left)
-                src_right_rate.tick(frame.t_right)
+                if frame.right is not None:      # (a one-camera source has no right frames)
+                    src_right_rate.tick(frame.t_right)
                 if realtime and not stepping:
                     if pace_wall is None or frame.t_left < pace_src:
                         pace_wall, pace_src = t_available, frame.t_left
