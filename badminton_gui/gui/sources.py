@@ -103,6 +103,16 @@ def _label_truth(spec: SourceSpec):
     return None
 
 
+def _open_cancel_layout(dialog: QDialog, form: QFormLayout) -> None:
+    """A source dialog's layout: its form above Open and Cancel."""
+    buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Open | QDialogButtonBox.StandardButton.Cancel)
+    buttons.accepted.connect(dialog.accept)
+    buttons.rejected.connect(dialog.reject)
+    lay = QVBoxLayout(dialog)
+    lay.addLayout(form)
+    lay.addWidget(buttons)
+
+
 def _file_row(parent: QWidget, edit: QLineEdit, caption: str, filter_: str) -> QWidget:
     row = QWidget(parent)
     lay = QHBoxLayout(row)
@@ -154,12 +164,7 @@ class VideoPairDialog(QDialog):
                                     "when the pair opens.")
         self.video_times.setChecked(prev.video_times)
         form.addRow("", self.video_times)
-        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Open | QDialogButtonBox.StandardButton.Cancel)
-        buttons.accepted.connect(self.accept)
-        buttons.rejected.connect(self.reject)
-        lay = QVBoxLayout(self)
-        lay.addLayout(form)
-        lay.addWidget(buttons)
+        _open_cancel_layout(self, form)
 
     def spec(self, realtime: bool) -> SourceSpec:
         return SourceSpec("video", self.left.text().strip(), self.right.text().strip(),
@@ -197,12 +202,7 @@ class SingleVideoDialog(QDialog):
         note.setWordWrap(True)
         note.setStyleSheet("color: #888;")
         form.addRow("", note)
-        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Open | QDialogButtonBox.StandardButton.Cancel)
-        buttons.accepted.connect(self.accept)
-        buttons.rejected.connect(self.reject)
-        lay = QVBoxLayout(self)
-        lay.addLayout(form)
-        lay.addWidget(buttons)
+        _open_cancel_layout(self, form)
 
     def spec(self, realtime: bool) -> SourceSpec:
         return SourceSpec("single", self.video.text().strip(), realtime=realtime,
@@ -243,12 +243,7 @@ class CameraPairDialog(QDialog):
         form.addRow("Right camera", self.right)
         form.addRow("Rig file", _file_row(self, self.calib, "Rig file", "Rig (*.yaml *.yml *.xml);;All files (*)"))
         form.addRow("", self.found)
-        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Open | QDialogButtonBox.StandardButton.Cancel)
-        buttons.accepted.connect(self.accept)
-        buttons.rejected.connect(self.reject)
-        lay = QVBoxLayout(self)
-        lay.addLayout(form)
-        lay.addWidget(buttons)
+        _open_cancel_layout(self, form)
         self._scan = _CameraScan(self)
         self._scan.done.connect(self._show_found)
         self._scan.start()
