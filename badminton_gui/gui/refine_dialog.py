@@ -353,8 +353,10 @@ class RefineCalibrationDialog(QDialog):
                      + f" — {need - n} more needed before a refit can succeed")
         self.count_label.setText(count)
         if size is None:
-            self.spread_label.setText(_coloured("Nothing is tracking: choose a source in the "
-                                                "Source menu.", AMBER))
+            # (no rig: nothing is tracking, or one camera's video, which has no stereo pose)
+            self.spread_label.setText(_coloured("No two cameras are tracking: choose the demo court, "
+                                                "a stereo video pair or two cameras in the Source "
+                                                "menu.", AMBER))
         elif n < 2:
             self.spread_label.setText("Coverage: no pairs yet. A pair needs the shuttle followed "
                                       "in both cameras for a few frames.")
