@@ -11,6 +11,8 @@ import pytest
 from badminton_gui.core.types import StereoFrame
 from badminton_gui.io.truth import DemoTruth, LabelTruth, has_label_columns
 
+from .conftest_data import NYCU_DIR, requires_data
+
 
 def _write(path, rows, header="Frame,Visibility,X,Y,Timestamp"):
     path.write_text(header + "\n" + "\n".join(rows) + "\n", encoding="utf-8")
@@ -53,3 +55,65 @@ def test_the_demo_truth_is_the_scene_projection_where_visible():
                 assert label[1:] == pytest.approx(uv)
                 seen += 1
     assert seen > 20
+
+
+RALLY = NYCU_DIR / "rally_11-46-04"
+
+
+@requires_data
+def test_the_live_score_is_the_benchmarks_figure_on_a_real_rally(tmp_path):
+    """The GUI's live score (LiveScore fed by the worker with each result and its labels) counts
+    what the benchmarks count from `track --lookahead 0`'s CSV: the same outcomes per camera on
+    the serve and first rally shots of a NYCU rally (labels from its timestamp CSVs)."""
+    import csv
+
+    from badminton_gui.core.evaluation import LiveScore, evaluate, tolerance_px
+    from badminton_gui.core.tracker import StereoTracker
+    from badminton_gui.io.labels import read_point_labels, read_timestamps
+    from badminton_gui.io.nycu import rig_from_nycu
+    from badminton_gui.io.presets import load_preset
+    from badminton_gui.io.track_file import track_to_csv
+    from badminton_gui.io.video import VideoPair
+
+    rig = rig_from_nycu(RALLY / "CameraReader_1.cfg", RALLY / "CameraReader_2.cfg")
+    params = load_preset(None).with_value("lookahead.frames", 0)
+    times = [read_timestamps(RALLY / f"CameraReader_{k}.csv")[1] for k in (1, 2)]
+    labels = [RALLY / f"CameraReader_{k}.csv" for k in (1, 2)]
+    first, count = 280, 220              # the serve (labelled from frame 301) and what follows
+
+    def pairs():
+        source = VideoPair(RALLY / "CameraReader_1.mp4", RALLY / "CameraReader_2.mp4", *times)
+        for _ in range(first):
+            source.read()
+        return source
+
+    source = pairs()
+    try:
+        track_to_csv(source, rig, params, tmp_path / "track.csv", max_frames=count)
+    finally:
+        source.close()
+    with (tmp_path / "track.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    from_csv = []
+    for side, frame_col, key in (("L", "Frame", 0), ("R", "FrameR", 1)):
+        pred = {int(r[frame_col]): (r[f"Vis{side}"] == "1", float(r[f"X{side}"] or 0), float(r[f"Y{side}"] or 0))
+                for r in rows}
+        truth = {f: v for f, v in read_point_labels(labels[key]).as_dict().items() if f in pred}
+        from_csv.append(evaluate(pred, truth, tolerance_px(2048)))
+
+    truth = LabelTruth.read(*labels)
+    score = LiveScore(2048)
+    tracker = StereoTracker(rig, params)
+    source = pairs()
+    try:
+        for _ in range(count):
+            frame = source.read()
+            result = tracker.process(frame.left, frame.right, frame.t_left, frame.index, frame.index_right)
+            left, right = truth.for_frame(frame)
+            score.add(0, result.left.detection, left)
+            score.add(1, result.right.detection, right)
+    finally:
+        source.close()
+        tracker.close()
+    assert score.outcomes(0) == from_csv[0] and score.outcomes(1) == from_csv[1]
+    assert from_csv[0].tp > 100 and from_csv[1].tp > 100
