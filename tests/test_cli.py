@@ -115,6 +115,29 @@ def test_track_pairs_by_timestamps(tmp_path):
     assert int(rows[0]["FrameR"]) == 0
 
 
+def test_track_scores_itself_against_labels_its_timestamp_files_carry(tmp_path, capsys):
+    """NYCU-style CSVs (Frame,Visibility,X,Y,Timestamp) are timestamps and labels at once: the
+    summary gives each camera's accuracy with the benchmarks' protocol; plain ones give none."""
+    frames_l, truth_l = moving_dot_frames()
+    frames_r, truth_r = moving_dot_frames(offset=-10.0)
+    write_video(tmp_path / "l.avi", frames_l)
+    write_video(tmp_path / "r.avi", frames_r)
+    make_rig_for().save(tmp_path / "rig.yaml")
+    for name, truth in (("l.csv", truth_l), ("r.csv", truth_r)):
+        with open(tmp_path / name, "w") as fh:
+            fh.write("Frame,Visibility,X,Y,Timestamp\n")
+            for i, (x, y) in enumerate(truth):
+                fh.write(f"{i},1,{x},{y},{i / 30.0}\n")
+    common = ["track", "--left", str(tmp_path / "l.avi"), "--right", str(tmp_path / "r.avi"),
+              "--calib", str(tmp_path / "rig.yaml"), "-o", str(tmp_path / "t.csv"),
+              "--left-times", str(tmp_path / "l.csv"), "--right-times", str(tmp_path / "r.csv")]
+    assert main(common) == 0
+    line = [s for s in capsys.readouterr().out.splitlines() if s.startswith("against the labels")]
+    assert len(line) == 1 and "left " in line[0] and "right " in line[0]
+    accuracy_left = float(line[0].split("left ")[1].split(" %")[0])
+    assert accuracy_left >= 90.0           # the dot is found from its second or third frame
+
+
 def test_track_pairs_by_the_videos_own_frame_times(tmp_path, capsys):
     """--video-times: the right camera recorded every other frame (15 fps against 30), as a camera
     that drops frames does; frame i of the left file was taken with right frame i / 2, not i."""

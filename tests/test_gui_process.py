@@ -107,3 +107,28 @@ def test_closing_the_dialog_mid_job_cancels_it_cleanly(qtbot, recording, tmp_pat
     assert thread.isFinished()
     qtbot.waitUntil(lambda: not dialog.running, timeout=10_000)
     assert _rows(tmp_path / "closed.csv")[0][0] == "Frame"   # a valid CSV of what was done
+
+
+def test_a_labelled_recording_ends_with_its_score(qtbot, tmp_path):
+    """A pair opened with labels (here its label files) ends with each camera's accuracy against
+    them, the file commands' figure (look-ahead 4); the rows are those of an unlabelled run."""
+    from .test_cli import W, moving_dot_frames
+    write_pair(tmp_path, 60)
+    for name, offset in (("l.csv", 0.0), ("r.csv", -12.0)):
+        _, truth = moving_dot_frames(60, offset=offset)
+        (tmp_path / name).write_text("Frame,Visibility,X,Y\n" + "".join(     # (visible while in the picture)
+            f"{i},{int(0 <= x < W)},{x},{y}\n" for i, (x, y) in enumerate(truth)), encoding="utf-8")
+    spec = SourceSpec("video", str(tmp_path / "l.avi"), str(tmp_path / "r.avi"), str(tmp_path / "rig.yaml"),
+                      left_labels=str(tmp_path / "l.csv"), right_labels=str(tmp_path / "r.csv"))
+    dialog = ProcessDialog(spec, TrackerParams())
+    qtbot.addWidget(dialog)
+    dialog.output.setText(str(tmp_path / "gui.csv"))
+    dialog.start()
+    qtbot.waitUntil(lambda: not dialog.running, timeout=60_000)
+    summary = dialog.last_summary
+    assert summary.score_left.total == 60 and summary.score_right.total == 60
+    assert summary.score_left.accuracy > 0.9
+    assert "Against the labels: left " in dialog.status.text()
+    assert main(["track", "--left", spec.left, "--right", spec.right, "--calib", spec.calib,
+                 "-o", str(tmp_path / "cli.csv"), "--quiet"]) == 0
+    assert _rows(tmp_path / "gui.csv") == _rows(tmp_path / "cli.csv")

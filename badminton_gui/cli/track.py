@@ -37,10 +37,11 @@ def run(args: argparse.Namespace) -> int:
         from ..io.robot_link import RobotLink
         link = RobotLink(args.robot, args.baud)
     configure_opencv_threads()
+    truth = _labels_in_times(args)
     progress = Progress(total, "track")
     try:
         summary = track_to_csv(source, rig, params, args.output, max_frames=args.max_frames, link=link,
-                               progress=None if args.quiet else progress.update)
+                               progress=None if args.quiet else progress.update, truth=truth)
     except TrackFileError as exc:
         raise UserError(str(exc)) from None
     finally:
@@ -56,7 +57,19 @@ def run(args: argparse.Namespace) -> int:
         frame_name = "court" if rig.has_court_pose else "left-camera"
         print(f"{n} frame pairs, 3D point in {hits3d} ({100 * hits3d / n:.1f} %), "
               f"{summary.pairs_per_second:.1f} pairs/s (decoding included), {frame_name} frame → {args.output}")
+        if summary.score_text:
+            print(summary.score_text + " (the timestamp files' labels)")
         if summary.rig_note:
             note = summary.rig_note
             print(f"note: {note[:1].lower()}{note[1:]}", file=sys.stderr)
     return 0
+
+
+def _labels_in_times(args):
+    """The labels the timestamp files carry (the NYCU recordings' CSVs do): the summary then
+    scores the rows against them; None for plain timestamp files."""
+    from ..io.truth import LabelTruth, has_label_columns
+    if args.left_times and args.right_times and has_label_columns(args.left_times) \
+            and has_label_columns(args.right_times):
+        return LabelTruth.read(args.left_times, args.right_times)
+    return None

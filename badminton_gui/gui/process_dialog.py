@@ -105,7 +105,10 @@ def summary_text(summary: TrackFileSummary) -> str:
             else f"Done: {summary.pairs:,} pairs, 3D point in {share:.1f} %, "
                  f"{summary.pairs_per_second:.0f} pairs/s →")
     note = f"\n{summary.rig_note}" if summary.rig_note and not summary.cancelled else ""
-    return f"{head} {summary.output}{note}"
+    score = summary.score_text
+    if score:
+        score = f"\n{score[:1].upper()}{score[1:]}."
+    return f"{head} {summary.output}{score}{note}"
 
 
 class ProcessDialog(QDialog):

@@ -50,8 +50,11 @@ class LabelTruth:
         return cls(read_point_labels(left_path).as_dict(), read_point_labels(right_path).as_dict())
 
     def for_frame(self, frame: StereoFrame) -> tuple[Label | None, Label | None]:
-        right_index = frame.index_right if frame.index_right >= 0 else frame.index
-        return self._left.get(frame.index), self._right.get(right_index)
+        return self.for_indices(frame.index, frame.index_right)
+
+    def for_indices(self, index: int, index_right: int = -1) -> tuple[Label | None, Label | None]:
+        """The labels of left frame ``index`` and right frame ``index_right`` (-1: the same)."""
+        return self._left.get(index), self._right.get(index_right if index_right >= 0 else index)
 
 
 def has_label_columns(path: str | Path) -> bool:
