@@ -669,3 +669,15 @@ def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window,
     # A rig cannot be applied to one camera: said, and tracking goes on.
     window.worker.set_rig(make_rig())
     qtbot.waitUntil(lambda: "one camera" in window.banner.text, timeout=WAIT_MS)
+
+
+def test_labels_of_another_recording_are_named_in_the_banner(main_window, qtbot, tmp_path):
+    from .test_cli import moving_dot_frames, write_video
+    frames, _ = moving_dot_frames(40)
+    write_video(tmp_path / "tv.avi", frames, fps=30.0)
+    labels = tmp_path / "other_ball.csv"
+    labels.write_text("Frame,Visibility,X,Y\n" + "".join(f"{i},0,,\n" for i in range(759)), encoding="utf-8")
+    window = main_window()
+    window.start_spec(SourceSpec("single", str(tmp_path / "tv.avi"), left_labels=str(labels)))
+    qtbot.waitUntil(lambda: "another recording" in window.banner.text, timeout=WAIT_MS)
+    assert "759" in window.banner.text and "40" in window.banner.text

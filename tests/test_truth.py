@@ -117,3 +117,11 @@ def test_the_live_score_is_the_benchmarks_figure_on_a_real_rally(tmp_path):
         tracker.close()
     assert score.outcomes(0) == from_csv[0] and score.outcomes(1) == from_csv[1]
     assert from_csv[0].tp > 100 and from_csv[1].tp > 100
+
+
+def test_labels_of_another_recording_are_said_to_be_so(tmp_path):
+    labels = _write(tmp_path / "l.csv", [f"{i},1,10,20,{i / 30}" for i in range(100)])
+    truth = LabelTruth.read(labels, labels)
+    assert truth.mismatch(100) == "" and truth.mismatch(104) == ""
+    assert "another recording" in truth.mismatch(759)
+    assert truth.mismatch(0) == ""          # a source that does not know its length

@@ -448,6 +448,11 @@ class TrackingWorker(QObject):
         unshown = None          # the newest result that was not made a packet (shown at the end)
         truth = getattr(source, "frame_truth", None)
         score = LiveScore(source.image_size[0]) if truth is not None else None
+        mismatch = getattr(truth, "mismatch", None)
+        if mismatch is not None:
+            text = mismatch(getattr(source, "frame_count", 0) or 0)
+            if text:
+                self.warning.emit(text[:1].upper() + text[1:])
         while not self._abort.is_set():
             with self._lock:
                 params, self._pending_params = self._pending_params, None

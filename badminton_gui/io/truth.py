@@ -52,6 +52,17 @@ class LabelTruth:
     def for_frame(self, frame: StereoFrame) -> tuple[Label | None, Label | None]:
         return self.for_indices(frame.index, frame.index_right)
 
+    def mismatch(self, frame_count: int) -> str:
+        """A sentence when the left labels' rows do not fit a video of ``frame_count`` frames
+        (label files of another recording score garbage), else ''."""
+        if frame_count <= 0 or not self._left:
+            return ""
+        rows = max(self._left) + 1
+        if abs(rows - frame_count) <= max(10, 0.05 * frame_count):
+            return ""
+        return (f"the left labels have {rows:,} frames and the video {frame_count:,}: they may "
+                f"belong to another recording, and the score against them would mean nothing")
+
     def for_indices(self, index: int, index_right: int = -1) -> tuple[Label | None, Label | None]:
         """The labels of left frame ``index`` and right frame ``index_right`` (-1: the same)."""
         return self._left.get(index), self._right.get(index_right if index_right >= 0 else index)
