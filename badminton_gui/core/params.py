@@ -324,7 +324,10 @@ class AssociationParams(ParamGroup):
     # 64, not 32: at a rally's start dozens of clutter tracklets are live and more blobs lie near
     # one of them than 32, so the serve's faint streak went unmeasured and the shuttle's new
     # track could not be born for 5–8 frames (rally_11-48-00 left 64–71: 62 blobs, 38 near a
-    # tracklet). Costs ≈ 0.3 ms a pair (4 %) with the default preset; coarse keeps 16.
+    # tracklet). Costs ≈ 0.3 ms a pair of CPU, 10 % of the default's rate at 2048 px from a
+    # rally's start (speed.py --long 0: 215.6 → 189–191 pairs/s, p99 8.2 → 10.5 ms); coarse keeps
+    # 16. Measuring 64 only after a frame in which the followed tracklet found nothing fixed none
+    # of the serves (the followed tracklet goes on with the racket instead of missing).
     max_measured: int = param(64, 1, 500, step=1, label="Blobs measured",
                               help="At most this many blobs per frame get the full-resolution measurement: "
                                    "those near a live tracklet first, then the strongest differences")
