@@ -681,3 +681,16 @@ def test_labels_of_another_recording_are_named_in_the_banner(main_window, qtbot,
     window.start_spec(SourceSpec("single", str(tmp_path / "tv.avi"), left_labels=str(labels)))
     qtbot.waitUntil(lambda: "another recording" in window.banner.text, timeout=WAIT_MS)
     assert "759" in window.banner.text and "40" in window.banner.text
+
+
+def test_a_stereo_source_opened_with_the_broadcast_preset_offers_the_default(main_window, qtbot):
+    """Parameters outlive the source: after a TV clip the window says so when two cameras open,
+    and its button brings the default preset back."""
+    from badminton_gui.io.presets import load_preset
+    window = main_window(params=load_preset("broadcast"))
+    window.start_opener(_demo_opener, "demo")
+    qtbot.waitUntil(lambda: "TV broadcast" in window.banner.text, timeout=WAIT_MS)
+    assert window.banner.kind == "advice" and window.banner.action_button.text() == "Use default"
+    window.banner.action_button.click()
+    assert window.params == load_preset("default") and not window.banner.isVisible()
+    qtbot.waitUntil(lambda: window.worker.params_in_use == load_preset("default"), timeout=WAIT_MS)

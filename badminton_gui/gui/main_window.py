@@ -681,6 +681,14 @@ class MainWindow(QMainWindow):
                                    f"{', court pose' if rig.has_court_pose else ', no court pose'}")
         if self.gl_view is not None:
             self.gl_view.set_rig(rig)
+        if self.params.association.exit_margin > 0:
+            # The parameters are remembered across sources and restarts: after a TV clip the
+            # broadcast preset would silently track two fixed cameras (the demo court: ≈ 95
+            # against 99 %). Its rule for a shuttle leaving a TV picture marks it.
+            self.banner.show_message(
+                "Tracking with parameters made for a TV broadcast (the broadcast preset, or one "
+                "derived from it): fixed cameras track better with the default preset.",
+                kind="advice", action=("Use default", lambda: self.use_preset("default")))
         self.sourceOpened.emit(name)
 
     def _on_error(self, message: str) -> None:
