@@ -79,18 +79,24 @@ def test_broadcast_preset_on_a_real_tv_rally():
     assert out.accuracy >= 0.85, out.summary()
 
 
-def test_only_the_followed_tracklet_gets_the_long_pause():
-    """Two tracklets fly, then stop; after the short allowance only the followed one may rest."""
-    p = (TrackerParams().with_value("association.pause_frames", 2)
-         .with_value("association.followed_pause_frames", 100))
+def _fly_then_stop(p: TrackerParams, frames: int):
+    """Two tracklets fly 30 px a frame for 10 frames, then stay still; the first is followed.
+    Returns the last frame's (tracklet, motion, merit) of each."""
     assoc = TrackletAssociator(p.motion, p.association)
     out = []
-    for i in range(30):
-        step = min(i, 10)   # 30 px per frame for 10 frames, then still
+    for i in range(frames):
+        step = min(i, 10)
         pos = np.array([[100.0 + 30 * step, 300.0], [100.0 + 30 * step, 500.0]])
         out = assoc.update(i / FPS, pos, np.array([0.9, 0.9]))
         if i == 5:
             assoc.select(out[0][0])
+    return out
+
+
+def test_only_the_followed_tracklet_gets_the_long_pause():
+    """Two tracklets fly, then stop; after the short allowance only the followed one may rest."""
+    out = _fly_then_stop(TrackerParams().with_value("association.pause_frames", 2)
+                         .with_value("association.followed_pause_frames", 100), 30)
     assert out[0][2] >= 0      # followed: still within its long allowance
     assert out[1][2] < 0       # the other one: its 2-frame allowance is over
 
@@ -101,14 +107,7 @@ def test_default_rests_only_the_followed_tracklet_for_long():
     landed) may still be reported, the other (clutter that moved and came to rest) may not."""
     p = TrackerParams()
     assert p.association.pause_frames < p.association.followed_pause_frames
-    assoc = TrackletAssociator(p.motion, p.association)
-    out = []
-    for i in range(40):
-        step = min(i, 10)   # 30 px per frame for 10 frames, then still
-        pos = np.array([[100.0 + 30 * step, 300.0], [100.0 + 30 * step, 500.0]])
-        out = assoc.update(i / FPS, pos, np.array([0.9, 0.9]))
-        if i == 5:
-            assoc.select(out[0][0])
+    out = _fly_then_stop(p, 40)
     assert out[0][2] >= 0
     assert out[1][2] < 0
 
