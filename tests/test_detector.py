@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from badminton_gui.core.association import TrackletAssociator
-from badminton_gui.core.classifier import load_classifier, train_mlp
-from badminton_gui.core.detector import FEATURE_NAMES, CameraDetector
+from badminton_gui.core.classifier import load_classifier, train_ensemble, train_mlp
+from badminton_gui.core.detector import (FEATURE_NAMES, PATCH_CELLS, PATCH_HALF, PATCH_NAMES, CameraDetector,
+                                         patch_features)
 from badminton_gui.core.params import TrackerParams
 from badminton_gui.core.types import REJECT_REASONS
 
@@ -172,6 +173,82 @@ def test_mlp_training_separates_a_simple_rule(tmp_path):
     clf.save(tmp_path / "m.json")
     again = load_classifier(str(tmp_path / "m.json"))
     assert np.allclose(again.probability(x[:5]), clf.probability(x[:5]))
+
+
+def test_ensemble_is_the_mean_of_its_members_logits():
+    rng = np.random.default_rng(2)
+    x = rng.normal(size=(800, 4))
+    y = x[:, 0] - x[:, 2] > 0.0
+    ens = train_ensemble(x, y, members=3, hidden=6, epochs=60, seed=4)
+    members = [train_mlp(x, y, hidden=6, epochs=60, seed=4000 + k) for k in range(3)]
+    logit = np.mean([np.log(m.probability(x) / (1 - m.probability(x))) for m in members], axis=0)
+    assert ens.weights[0].shape == (4, 18)
+    assert np.allclose(ens.probability(x), 1 / (1 + np.exp(-logit)), atol=1e-9)
+
+
+def test_patch_features_are_the_area_averaged_luma_around_the_point():
+    rng = np.random.default_rng(5)
+    frame = rng.integers(0, 256, (720, 1280, 3), dtype=np.uint8)
+    x, y = 400.4, 300.6
+    got = patch_features(frame, np.array([x]), np.array([y]))[0]
+    # The reference: OpenCV's luma of the 16 × 16 px square, area-averaged to 8 × 8, normalised.
+    square = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32)  # rounds to integers
+    xi, yi = round(x), round(y)
+    crop = square[yi - PATCH_HALF:yi + PATCH_HALF, xi - PATCH_HALF:xi + PATCH_HALF]
+    cells = cv2.resize(crop, (PATCH_CELLS, PATCH_CELLS), interpolation=cv2.INTER_AREA).ravel()
+    ref = (cells - np.median(cells)) / max(cells.max() - np.median(cells), 8.0)
+    assert got.shape == (len(PATCH_NAMES),)
+    assert np.abs(got - ref).max() < 0.02       # cvtColor rounds each pixel to an integer
+
+
+def test_patch_features_tell_a_spot_from_a_line_and_survive_the_border():
+    frame = np.full((720, 1280, 3), 40, np.uint8)
+    cv2.circle(frame, (300, 300), 3, (255, 255, 255), -1)
+    cv2.line(frame, (600, 200), (600, 400), (255, 255, 255), 3)
+    cv2.circle(frame, (2, 3), 3, (255, 255, 255), -1)
+    spot, line, corner, flat = patch_features(frame, np.array([300.0, 600.0, 2.0, 900.0]),
+                                              np.array([300.0, 300.0, 3.0, 600.0]))
+    grid = spot.reshape(PATCH_CELLS, PATCH_CELLS)
+    assert grid[3:5, 3:5].min() > 0.5 and grid[0].max() < 0.05 and grid[:, 0].max() < 0.05
+    column = line.reshape(PATCH_CELLS, PATCH_CELLS)[:, 3:5]
+    assert column.min() > 0.3                    # bright from the top of the patch to its bottom
+    assert np.isfinite(corner).all() and corner.max() == pytest.approx(1.0)
+    assert np.allclose(flat, 0.0)                # nothing brighter: no shape invented
+    # The square scales with the frame: at 2560 px width it spans twice the pixels.
+    big = cv2.resize(frame, (2560, 1440), interpolation=cv2.INTER_NEAREST)
+    assert np.abs(patch_features(big, np.array([600.0]), np.array([600.0]))[0] - spot).max() < 0.1
+
+
+def test_a_classifier_trained_with_patches_reads_them():
+    """The detector appends each blob's patch to its features only for a classifier that was
+    trained on them (the shipped TV classifier is one), in PATCH_NAMES order."""
+    frames, _ = _scene(12)
+
+    class Spy:
+        def __init__(self, names):
+            self.name, self.feature_names, self.seen = "spy", names, []
+
+        def probability(self, features):
+            self.seen.append(np.array(features))
+            return np.full(len(features), 0.9)
+
+    for names in (FEATURE_NAMES, FEATURE_NAMES + PATCH_NAMES):
+        det = CameraDetector(_params())
+        det._classifier = Spy(names)
+        det._needs_patches = len(names) > len(FEATURE_NAMES)
+        for i, img in enumerate(frames):
+            det.process(img, i / FPS)
+        seen = det._classifier.seen[-1]
+        assert seen.shape[1] == len(names)
+        if len(names) > len(FEATURE_NAMES):
+            xs = np.array([f[0] for f in det.last_features])
+            ys = np.array([f[1] for f in det.last_features])
+            assert np.allclose(seen[:, len(FEATURE_NAMES):], patch_features(frames[-1], xs, ys))
+    broadcast = load_classifier("candidate_classifier_broadcast")
+    assert broadcast.feature_names == FEATURE_NAMES + PATCH_NAMES
+    det = CameraDetector(_params(classifier__enabled=True, classifier__model="candidate_classifier_broadcast"))
+    assert det._needs_patches
+    assert not CameraDetector(_params(classifier__enabled=True))._needs_patches
 
 
 @pytest.mark.parametrize("method", ["mog2", "frame_diff", "bright_diff"])

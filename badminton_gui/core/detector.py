@@ -72,6 +72,12 @@ APPEARANCE_NAMES = ("contrast", "background", "log_bright_area", "spill", "white
 N_APPEARANCE = len(APPEARANCE_NAMES)
 # Shape features from the contour, then the appearance features: the classifier's input.
 FEATURE_NAMES = ("log_length", "log_short_side", "log_area", "aspect") + APPEARANCE_NAMES
+# A classifier may also read the blob's look itself: the grey patch around its centroid
+# (``PATCH_HALF`` px either side at 1280 px width, scaled with the frame), averaged down to
+# PATCH_CELLS × PATCH_CELLS and normalised (``patch_features``), after FEATURE_NAMES.
+PATCH_HALF = 8
+PATCH_CELLS = 8
+PATCH_NAMES = tuple(f"patch_{r}{c}" for r in range(PATCH_CELLS) for c in range(PATCH_CELLS))
 
 
 class Segmented(NamedTuple):
@@ -151,6 +157,9 @@ class CameraDetector:
             self._classifier = None
         elif self._classifier is None or self._classifier.name != cp.model:
             self._classifier = load_classifier(cp.model)
+        # A classifier trained with the patch features reads them after FEATURE_NAMES.
+        self._needs_patches = (self._classifier is not None
+                               and len(self._classifier.feature_names) > len(FEATURE_NAMES))
 
     # ---- the whole chain for one camera (CLI `detect`) --------------------------------------
     def process(self, frame_bgr: np.ndarray, t: float, keep_mask: bool = True) -> CameraResult:
@@ -347,6 +356,9 @@ class CameraDetector:
                          long_side / max(short_side, 1e-3))
             measured.append([x, y, length, short_side, whiteness, area, 0.0, reason, feats])
         if measured:
+            if self._needs_patches:
+                features = np.hstack([features, patch_features(
+                    frame_bgr, np.array([m[0] for m in measured]), np.array([m[1] for m in measured]))])
             qualities = self._qualities(np.array([m[2] for m in measured]), features[:, 4], features)
             for m, quality in zip(measured, qualities.tolist()):
                 m[6] = quality
@@ -837,6 +849,41 @@ def model_scale(background, width: int) -> float:
     if 0 < int(background.coarse_from_width) <= width:
         scale *= 0.5
     return scale
+
+
+def patch_features(frame: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """(N, PATCH_CELLS²) normalised grey patches around the points (xs, ys), full-res px.
+
+    Each patch is the square of ``2 × PATCH_HALF`` px (at 1280 px width; scaled with the frame,
+    the image border repeated) around the rounded point, in luma (0.299 R + 0.587 G + 0.114 B),
+    averaged over PATCH_CELLS × PATCH_CELLS cells, minus the patch's median cell, divided by
+    its peak above that median (at least 8 grey levels, so a flat patch stays flat). The
+    hand-made features say how bright, white and small a blob is; the patch says what shape
+    its brightness has around it — a cork with its skirt, a line, a shoe's edge, a logo's
+    letter — which on TV clips told the shuttle from clutter in ≈ 10 % more frames
+    (benchmarks/README.md, sixteenth round).
+    """
+    xs = np.asarray(xs, dtype=float)
+    ys = np.asarray(ys, dtype=float)
+    n = len(xs)
+    if n == 0:
+        return np.zeros((0, PATCH_CELLS * PATCH_CELLS), np.float32)
+    h, w = frame.shape[:2]
+    half = max(PATCH_CELLS // 2, int(round(PATCH_HALF * w / 1280.0)))
+    size = 2 * half
+    offsets = np.arange(-half, half)
+    cols = np.clip(np.rint(xs).astype(np.int64)[:, None] + offsets, 0, w - 1)
+    rows = np.clip(np.rint(ys).astype(np.int64)[:, None] + offsets, 0, h - 1)
+    pixels = frame[rows[:, :, None], cols[:, None, :]].astype(np.float32)   # (n, size, size, 3)
+    luma = pixels @ np.array([0.114, 0.587, 0.299], np.float32)
+    starts = (np.arange(PATCH_CELLS) * size) // PATCH_CELLS
+    counts = np.diff(np.append(starts, size)).astype(np.float32)
+    cells = np.add.reduceat(np.add.reduceat(luma, starts, axis=1), starts, axis=2)
+    cells /= counts[None, :, None] * counts[None, None, :]
+    flat = cells.reshape(n, -1)
+    median = np.median(flat, axis=1, keepdims=True)
+    peak = np.maximum(flat.max(axis=1, keepdims=True) - median, 8.0)
+    return ((flat - median) / peak).astype(np.float32)
 
 
 def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: float,
