@@ -464,6 +464,13 @@ class Trajectory:
             # new track's points already agree on a path; without a guide the cameras lose a
             # shuttle that merges with a player right after the hit, and the track never gets
             # the points that would confirm it.
+            if tent.speed < MIN_FLIGHT_SPEED:
+                # A track that does not move is no shot: a shuttle lying on the floor (never
+                # promoted, its points go on for as long as it lies there) or held. Carried on,
+                # its state falls through the floor, and once the shuttle was taken away the
+                # cameras' coasting reported that fall under a player walking past (demo court
+                # seed 0, 1020–1030: 11 frames after the rally, max_gap after its last point).
+                return None
             f = tent
         elif (f is None or len(f.points) < p.min_points or t - f.t > p.max_gap
                 or (tent is not None and len(tent.points) >= 3)):
