@@ -427,3 +427,21 @@ def test_a_new_shot_being_confirmed_guides_the_cameras():
             assert guide is None
         else:
             assert guide is not None and np.linalg.norm(guide[0] - truth[k + 1]) < 0.05
+
+
+def test_a_shuttle_lying_on_the_floor_guides_no_camera():
+    """The points of a shuttle lying still grow a tentative track that is never promoted (no
+    speed); it is no shot to guide the cameras by: carried on after the shuttle was taken away,
+    its state fell through the floor and the cameras reported that fall (demo court seed 0
+    1020–1030, seed 2 1235–1236). Judged by its points: the fit's own speed is biased (a
+    gravity model fit to still points sinks; here 1.4 m/s)."""
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.05), court_frame=True)
+    rng = np.random.default_rng(3)
+    dt = 1.0 / 120.0
+    for k in range(48):
+        traj.update(k * dt, (0.45 + rng.normal(0, 0.003), -2.34 + rng.normal(0, 0.003),
+                             -0.02 + rng.normal(0, 0.003)))
+    assert traj._tentative is not None and len(traj._tentative.points) >= 40
+    assert traj._flight is None and traj._tentative.speed > 1.0
+    for lag in (1, 10, 20, 29):
+        assert traj.guide((47 + lag) * dt) is None

@@ -310,6 +310,14 @@ def _chi2_999(dof: int) -> float:
     return dof * (1.0 - a + 3.090 * math.sqrt(a)) ** 3
 
 
+def _points_travel(f: _Filter) -> bool:
+    """The track's points, first to last, moved at least MIN_FLIGHT_SPEED on average."""
+    if len(f.points) < 2:
+        return False
+    (t0, *p0), (t1, *p1) = f.points[0], f.points[-1]
+    return t1 > t0 and math.dist(p0, p1) >= MIN_FLIGHT_SPEED * (t1 - t0)
+
+
 def _velocity_is_sure(f: _Filter) -> bool:
     """Is the filter's velocity known well enough to be shown as the speed (σ ≤ 10 %, or 0.5 m/s)?"""
     var = float(f.P[3, 3] + f.P[4, 4] + f.P[5, 5]) / 3.0
@@ -464,6 +472,15 @@ class Trajectory:
             # new track's points already agree on a path; without a guide the cameras lose a
             # shuttle that merges with a player right after the hit, and the track never gets
             # the points that would confirm it.
+            if not _points_travel(tent):
+                # A track whose points do not move is no shot: a shuttle lying on the floor
+                # (never promoted, its points go on for as long as it lies there) or held.
+                # Carried on, its state falls through the floor, and once the shuttle was taken
+                # away the cameras' coasting reported that fall under a player walking past
+                # (demo court seed 0 1020–1030, seed 2 1235–1236: up to max_gap after its last
+                # point). Its points, not its state: a drag-and-gravity fit to still points
+                # settles on a sinking velocity (≈ 1 m/s on the demo court, MIN_FLIGHT_SPEED).
+                return None
             f = tent
         elif (f is None or len(f.points) < p.min_points or t - f.t > p.max_gap
                 or (tent is not None and len(tent.points) >= 3)):
