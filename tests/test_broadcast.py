@@ -282,49 +282,6 @@ def test_only_the_top_edge_is_an_exit():
     assert all(reported[22:50])
 
 
-def _followed_then(p: TrackerParams, pos: list[list[float]], scores: list[float]):
-    """A shuttle-like tracklet followed along a row (10 px a frame), then one frame of ``pos``."""
-    assoc = TrackletAssociator(p.motion, p.association)
-    for i in range(12):
-        out = assoc.update(i / FPS, np.array([[100.0 + 10 * i, 300.0]]), np.array([0.9]))
-    followed = out[0][0]
-    assoc.select(followed)
-    # Its prediction is (220, 300); the blobs are compared with its gate there.
-    return followed, assoc.update(12 / FPS, np.array(pos), np.array(scores))
-
-
-@pytest.mark.parametrize("hop", [0.0, 30.0])
-def test_a_shuttle_like_tracklet_does_not_hop_onto_a_far_blob_that_does_not_look_like_one(hop):
-    """``association.hop_distance``: a step 40 px off the followed tracklet's prediction onto a
-    blob scoring 0.1 (the racket that struck, a hand) is not the shuttle: the tracklet misses
-    instead and the blob starts a tracklet of its own. Off (0), the tracklet takes it."""
-    p = (TrackerParams().with_value("association.hop_distance", hop)
-         .with_value("motion.base_radius", 40.0))
-    followed, (racket,) = _followed_then(p, [[220.0, 340.0]], [0.1])
-    if hop:
-        assert racket[0] != followed and racket[2] < 0
-    else:
-        assert racket[0] == followed
-
-
-def test_a_far_step_onto_a_shuttle_like_blob_is_a_hit():
-    """The same step onto a blob that looks like a shuttle (≥ ``hop_min_quality``) is a racket
-    hit: the tracklet takes it; a near step onto a dull blob is taken too."""
-    p = (TrackerParams().with_value("association.hop_distance", 30.0)
-         .with_value("motion.base_radius", 40.0))
-    followed, (shuttle,) = _followed_then(p, [[220.0, 340.0]], [0.8])
-    assert shuttle[0] == followed and shuttle[2] >= 0
-    followed, (near,) = _followed_then(p, [[222.0, 310.0]], [0.1])
-    assert near[0] == followed
-
-
-def test_hop_distance_is_off_by_default_and_on_in_the_broadcast_preset():
-    assert TrackerParams().association.hop_distance == 0.0
-    assert load_preset("default").association.hop_distance == 0.0
-    assert load_preset("coarse").association.hop_distance == 0.0
-    assert load_preset("broadcast").association.hop_distance == 30.0
-
-
 def test_the_broadcast_preset_swaps_the_followed_tracklet_to_the_shuttle_after_a_hit():
     """The default's ``followed_swap_margin`` (0.6 there), measured on the TV clips since the
     fifteenth round's second pass: 0.4 in the broadcast preset (0.2-0.5 gave the same)."""

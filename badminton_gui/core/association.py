@@ -173,10 +173,7 @@ class TrackletAssociator:
             # Only pairs inside the tracklet's gate can be taken: drop the others before the
             # Python loop (it used to visit all tracklets × candidates, ~800 pairs a frame, to
             # take a dozen), keeping the cost order; stop once either side is used up.
-            inside = d <= gates[:, None]
-            if p.hop_distance > 0:
-                inside &= ~self._hops(d, scores)
-            in_gate = inside.ravel()[order]
+            in_gate = (d <= gates[:, None]).ravel()[order]
             used_t = set()
             used_c = set()
             n_tracklets = len(self.tracklets)
@@ -232,31 +229,6 @@ class TrackletAssociator:
                 # frame's own score tells sooner which candidate looks like the shuttle now.
                 merit += p.candidate_weight * float(scores[j])
             out.append((ids[j], motion[j], merit))
-        return out
-
-    def _hops(self, d: np.ndarray, scores: np.ndarray) -> np.ndarray:
-        """(tracklets × candidates) True where a step would be a hop (``hop_distance``).
-
-        A shuttle in flight lands within a few px of its tracklet's prediction from one frame
-        to the next; a step far off it is a racket hit (the shuttle leaves on a new path) or the
-        tracklet hopping onto something else inside its wide gate (the racket that struck, a
-        hand, a shoe). Only the first leaves a blob that looks like a shuttle: a shuttle-like
-        tracklet may not take a far step onto a blob that does not (it misses instead, and the
-        blob starts a tracklet of its own). On the broadcast clips a reported step ≥ 30 px off
-        the prediction was right 23 times, onto blobs scoring 0.59–1.0 but two, and wrong 17
-        times, onto blobs scoring 0.0–0.43.
-        """
-        p = self.params
-        out = np.zeros(d.shape, dtype=bool)
-        low = scores < p.hop_min_quality
-        if not low.any():
-            return out
-        for i, tr in enumerate(self.tracklets):
-            # Only a tracklet that may be the shuttle (its prediction means something, its
-            # blobs looked like one): clutter tracklets hop between clutter blobs as before
-            # (on every tracklet, 1_02_01 lost 2 frames at a hit).
-            if tr.velocity_known and tr.quality >= p.min_track_quality:
-                out[i] = (d[i] > p.hop_distance) & low
         return out
 
     def _coasts(self, tr: Tracklet, t: float, blind) -> bool:

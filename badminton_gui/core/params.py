@@ -309,14 +309,6 @@ class AssociationParams(ParamGroup):
                                                help="The swap only while the followed tracklet's running quality is at "
                                                     "least this (it was on the shuttle until the hit, not sliding over "
                                                     "clutter after the shuttle left the view)")
-    hop_distance: float = param(0.0, 0.0, 2000.0, step=1.0, unit="px", label="Hop beyond",
-                                help="A step this far from the prediction of a tracklet that may be the shuttle is a "
-                                     "racket hit or a hop onto something else (the racket, a hand): the tracklet "
-                                     "takes it only onto a candidate scoring at least '... unless quality ≥' "
-                                     "(0 = off)")
-    hop_min_quality: float = param(0.5, 0.0, 1.0, step=0.01, label="... unless quality ≥",
-                                   help="A far step (see 'Hop beyond') onto a candidate this shuttle-like is a hit: "
-                                        "the tracklet takes it")
     hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
