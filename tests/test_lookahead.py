@@ -10,8 +10,8 @@ import pytest
 from badminton_gui.cli import main
 from badminton_gui.core.lookahead import CameraLookahead, StereoLookahead
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.io.presets import load_preset
 from badminton_gui.core.types import REJECT_MOTION, REJECT_SCORE, CameraResult, Candidate, TrackResult
+from badminton_gui.io.presets import load_preset
 
 from .test_cli import make_rig_for, moving_dot_frames, write_video
 
