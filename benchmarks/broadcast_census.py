@@ -18,6 +18,7 @@ candidates and mask at the label:
 
     .venv/bin/python benchmarks/broadcast_census.py                       # tuned-on clips, look-ahead 4
     .venv/bin/python benchmarks/broadcast_census.py --lookahead 0 --frames  # online, one line per error
+    .venv/bin/python benchmarks/broadcast_census.py --set association.hop_distance=0  # one value changed
 
 Held-out clips are refused unless --held-out is given (they are for the final measurement only).
 """
@@ -75,8 +76,11 @@ def label_cause(det: CameraDetector, result, x: float, y: float, tol: float) -> 
     return "inside a large blob" if area > LARGE_AREA else "in mask, no candidate"
 
 
-def census(clip, preset: str, lookahead: int, frames_out: list[str] | None) -> collections.Counter:
+def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
+           overrides: tuple[tuple[str, str], ...] = ()) -> collections.Counter:
     params = load_preset(preset).with_value("lookahead.frames", lookahead)
+    for path, value in overrides:
+        params = params.with_value(path, value)
     det, la = CameraDetector(params), CameraLookahead(params)
     labels = read_point_labels(clip.labels).as_dict()
     video = VideoFile(clip.video)
@@ -128,6 +132,12 @@ def dataclass_without_mask(result):
     return dataclasses.replace(result, mask=None)
 
 
+def summary(total: collections.Counter) -> str:
+    n = sum(total[k] for k in ("TP", "TN", "FP1", "FP2", "FN"))
+    return (f"{n} frames, accuracy {(total['TP'] + total['TN']) / n:.4f}  (TP {total['TP']} TN {total['TN']} "
+            f"FP1 {total['FP1']} FP2 {total['FP2']} FN {total['FN']})")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description="why each wrong broadcast frame is wrong")
     ap.add_argument("--only", default=None, help="regex on clip names (default: the tuned-on clips)")
@@ -135,7 +145,10 @@ def main() -> int:
     ap.add_argument("--preset", default="broadcast", help="preset name or .json")
     ap.add_argument("--lookahead", type=int, default=4, help="frames of look-ahead (0 = online)")
     ap.add_argument("--frames", action="store_true", help="also print one line per wrong frame")
+    ap.add_argument("--set", action="append", default=[], metavar="GROUP.NAME=VALUE",
+                    help="override one preset value (repeatable), e.g. association.hop_distance=25")
     args = ap.parse_args()
+    overrides = tuple(tuple(s.split("=", 1)) for s in args.set)
     clips = [c for c in broadcast_clips() if args.held_out or not c.held_out]
     if args.only:
         clips = [c for c in clips if re.search(args.only, c.name)]
@@ -144,15 +157,17 @@ def main() -> int:
         return 1
     total = collections.Counter()
     lines: list[str] | None = [] if args.frames else None
+    per_clip = []
     for clip in clips:
-        total += census(clip, args.preset, args.lookahead, lines)
+        counts = census(clip, args.preset, args.lookahead, lines, overrides)
+        per_clip.append(f"{clip.name} {summary(counts)}")
+        total += counts
     if lines:
         print("\n".join(lines))
         print()
-    n = sum(total[k] for k in ("TP", "TN", "FP1", "FP2", "FN"))
-    print(f"{', '.join(c.name for c in clips)}: {n} frames, accuracy "
-          f"{(total['TP'] + total['TN']) / n:.4f}  (TP {total['TP']} TN {total['TN']} FP1 {total['FP1']} "
-          f"FP2 {total['FP2']} FN {total['FN']})")
+    print(f"{', '.join(c.name for c in clips)}: {summary(total)}")
+    if len(clips) > 1:
+        print("  per clip: " + "; ".join(per_clip))
     rows = sorted(((k, v) for k, v in total.items() if isinstance(k, tuple)), key=lambda kv: -kv[1])
     for (outcome, cause), count in rows:
         print(f"  {count:4d}  {outcome:3s}  {cause}")

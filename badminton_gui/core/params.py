@@ -296,6 +296,10 @@ class AssociationParams(ParamGroup):
                                       help="A path break also forgets the tracklet's prediction residual: a "
                                            "shuttle leaving the racket on a clutter tracklet (a racket head, a "
                                            "hand) is not held back for ~10 frames by that tracklet's old misses")
+    jump_quality: float = param(0.0, 0.0, 2000.0, step=1.0, unit="px", label="Quality restarts at a step of",
+                                help="A step this far from the tracklet's prediction restarts its running quality "
+                                     "from the new blob's score: the tracklet hopped onto something else, or took "
+                                     "over the shuttle (0 = off)")
     jump_anchor_quality: float = param(0.8, 0.0, 1.0, step=0.01, label="... keeps its start from quality",
                                        help="A path break of the followed tracklet onto a candidate at least this "
                                             "shuttle-like (a shuttle leaving the racket) keeps the point before the "
@@ -309,6 +313,10 @@ class AssociationParams(ParamGroup):
                                                help="The swap only while the followed tracklet's running quality is at "
                                                     "least this (it was on the shuttle until the hit, not sliding over "
                                                     "clutter after the shuttle left the view)")
+    followed_claim_quality: float = param(1.0, 0.0, 1.0, step=0.01, label="Followed claims blobs from quality",
+                                          help="Inside its gate the followed tracklet takes a blob at least this "
+                                               "shuttle-like before a clutter tracklet (running quality below the "
+                                               "minimum) that is nearer in cost (1 = never)")
     hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
@@ -568,6 +576,10 @@ class LookaheadParams(ParamGroup):
     switch_needs_alive: bool = flag(True, label="... from a tracklet still seen",
                                     help="Switch only when the tracklet left is still seen at the handover (a "
                                          "racket, a hand), not when it was lost")
+    path_jump: float = param(0.0, 0.0, 2000.0, step=1.0, unit="px", label="Taken from a path without jumps of",
+                             help="A tracklet whose path over the look-ahead steps farther than this off its own "
+                                  "straight line is not taken (it took the shuttle over by a jump: before it, it "
+                                  "was something else); 0 = the association's path break (jump_residual)")
     min_speed: float = param(400.0, 0.0, 20000.0, step=50.0, unit="px/s", label="Taken from image speed",
                              help="A candidate is taken only when its tracklet moves at least this fast from it "
                                   "(a shuttle held still before the serve is not yet in play)")
