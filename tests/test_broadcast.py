@@ -311,33 +311,3 @@ def test_the_claim_is_off_by_default_and_on_in_the_broadcast_preset():
     assert TrackerParams().association.followed_claim_quality == 1.0
     assert load_preset("default").association.followed_claim_quality == 1.0
     assert load_preset("broadcast").association.followed_claim_quality == 0.5
-
-
-def _hop_onto_the_racket(jump_quality: float) -> tuple[float, float]:
-    """A shuttle-like tracklet flies 20 px a frame (blobs scoring 0.9), then takes a blob 45 px
-    off its prediction that scores 0.1 (the racket that struck: bwf_00025 105, 232). Returns the
-    tracklet's running quality and merit after that step."""
-    p = (load_preset("broadcast").with_value("association.jump_quality", jump_quality)
-         .with_value("association.followed_claim_quality", 1.0))
-    assoc = TrackletAssociator(p.motion, p.association)
-    for i in range(10):
-        out = assoc.update(i / FPS, np.array([[100.0 + 20 * i, 300.0]]), np.array([0.9]))
-    assoc.select(out[0][0])
-    out = assoc.update(10 / FPS, np.array([[300.0, 345.0]]), np.array([0.1]))
-    tr = next(tr for tr in assoc.tracklets if tr.ident == out[0][0])
-    assert out[0][1] == pytest.approx(45.0)     # the same tracklet took the far blob
-    return tr.quality, out[0][2]
-
-
-def test_a_far_step_restarts_the_tracklets_quality():
-    quality, merit = _hop_onto_the_racket(0.0)
-    assert quality > 0.7 and merit >= 0         # off: the shuttle's memory carries the racket
-    quality, merit = _hop_onto_the_racket(30.0)
-    assert quality == pytest.approx(0.1)        # on: it is judged by what it follows now
-    assert merit < 0                            # below min_track_quality: not reportable
-
-
-def test_the_quality_restart_is_off_by_default_and_30_px_in_the_broadcast_preset():
-    assert TrackerParams().association.jump_quality == 0.0
-    assert load_preset("default").association.jump_quality == 0.0
-    assert load_preset("broadcast").association.jump_quality == 30.0

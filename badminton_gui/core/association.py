@@ -327,12 +327,6 @@ class TrackletAssociator:
         # Plain mean over the first hits, then an exponential memory of ~5 frames.
         tr.quality += (score - tr.quality) * max(0.2, 1.0 / (tr.hits + 1))
         tr.x, tr.y, tr.t = x, y, t
-        if predicted and 0 < self.params.jump_quality < dist:
-            # A step far off the prediction: the tracklet follows something else now (the racket
-            # that struck, the hitter's body, or the shuttle a clutter tracklet picked up), so
-            # what it followed before says nothing about how shuttle-like it is: its running
-            # quality restarts from this blob's score.
-            tr.quality = score
         if predicted and self.params.jump_residual > 0 and dist > self.params.jump_residual:
             # The step left the predicted path (a racket hit, or a tracklet hopping between
             # clutter blobs inside its wide gates): the travel before it says nothing about

@@ -296,10 +296,6 @@ class AssociationParams(ParamGroup):
                                       help="A path break also forgets the tracklet's prediction residual: a "
                                            "shuttle leaving the racket on a clutter tracklet (a racket head, a "
                                            "hand) is not held back for ~10 frames by that tracklet's old misses")
-    jump_quality: float = param(0.0, 0.0, 2000.0, step=1.0, unit="px", label="Quality restarts at a step of",
-                                help="A step this far from the tracklet's prediction restarts its running quality "
-                                     "from the new blob's score: the tracklet hopped onto something else, or took "
-                                     "over the shuttle (0 = off)")
     jump_anchor_quality: float = param(0.8, 0.0, 1.0, step=0.01, label="... keeps its start from quality",
                                        help="A path break of the followed tracklet onto a candidate at least this "
                                             "shuttle-like (a shuttle leaving the racket) keeps the point before the "
