@@ -149,36 +149,6 @@ def test_no_switch_from_a_lost_tracklet_or_to_one_closing_in():
     assert [r.detection.tracklet for r in out][:7] == [1] * 7
 
 
-def capture_stream():
-    """The readout follows the shuttle (tracklet 1) until frame 7; a racket's tracklet (2), moving
-    5 px a frame, then takes the shuttle over by a 40 px jump off its path while tracklet 1 goes
-    on with something else, and the readout follows 2 (1_02_01 61, bwf_00025 86)."""
-    stream = []
-    for i in range(14):
-        if i < 7:
-            one, two = (100.0 + 20 * i, 300.0), (200.0 + 5 * i, 340.0)
-        else:
-            one, two = (240.0 - 10 * (i - 7), 380.0), (100.0 + 20 * i, 300.0)
-        stream.append(frame([cand(*one, 1), cand(*two, 2)], 1 if i < 7 else 2))
-    return stream
-
-
-def test_no_switch_to_a_tracklet_that_took_the_shuttle_by_a_jump():
-    # Without a path check (the broadcast preset has no path break: jump_residual 0) frames
-    # 4-6 switch to the racket's candidates; with lookahead.path_jump 20 px they keep the shuttle.
-    p = params(4).with_value("association.jump_residual", 0.0)
-    out, _ = run(capture_stream(), p)
-    assert [r.detection.tracklet for r in out][:7] == [1, 1, 1, 1, 2, 2, 2]
-    out, _ = run(capture_stream(), p.with_value("lookahead.path_jump", 20.0))
-    assert [r.detection.tracklet for r in out][:7] == [1] * 7
-
-
-def test_the_path_jump_is_off_by_default_and_20_px_in_the_broadcast_preset():
-    assert TrackerParams().lookahead.path_jump == 0.0
-    assert load_preset("default").lookahead.path_jump == 0.0
-    assert load_preset("broadcast").lookahead.path_jump == 20.0
-
-
 def test_switch_and_backfill_can_be_turned_off():
     out, la = run(hit_stream(), params(4, switch=False))
     assert la.changes["switch"] == 0 and [r.detection.tracklet for r in out][:7] == [1] * 7

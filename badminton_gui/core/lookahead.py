@@ -176,8 +176,7 @@ class CameraLookahead:
         return self._lead(frame, frame.on[nxt])
 
     def _flies(self, ident: int, until: int) -> bool:
-        """Tracklet ``ident`` moves from the oldest frame on, on a smooth path up to ``until``
-        (``lookahead.path_jump``, else ``association.jump_residual``; 0 for both: no path check).
+        """Tracklet ``ident`` moves from the oldest frame on, on a smooth path up to ``until``.
 
         A tracklet that later holds the shuttle may have been something else before: the
         shuttle held still in the hand before the serve (labelled invisible), or a racket's
@@ -194,14 +193,9 @@ class CameraLookahead:
         (t0, x0, y0), (t1, x1, y1) = path[0], path[1]
         if math.hypot(x1 - x0, y1 - y0) < lp.min_speed * (t1 - t0):
             return False
-        jump = lp.path_jump if lp.path_jump > 0 else self.params.association.jump_residual
+        jump = self.params.association.jump_residual
         if jump <= 0:
             return True
-        if lp.path_jump > 0 and self._past is not None and ident in self._past.on:
-            # The frame before too: a jump onto the shuttle right after the oldest frame shows
-            # only against the path before it (three points make a line and a step off it).
-            c = self._past.on[ident]
-            path.insert(0, (self._past.t, c.x, c.y))
         for (ta, xa, ya), (tb, xb, yb), (tc, xc, yc) in zip(path, path[1:], path[2:]):
             r = (tc - tb) / max(tb - ta, 1e-9)
             if math.hypot(xc - (xb + (xb - xa) * r), yc - (yb + (yb - ya) * r)) > jump:

@@ -572,10 +572,6 @@ class LookaheadParams(ParamGroup):
     switch_needs_alive: bool = flag(True, label="... from a tracklet still seen",
                                     help="Switch only when the tracklet left is still seen at the handover (a "
                                          "racket, a hand), not when it was lost")
-    path_jump: float = param(0.0, 0.0, 2000.0, step=1.0, unit="px", label="Taken from a path without jumps of",
-                             help="A tracklet whose path over the look-ahead steps farther than this off its own "
-                                  "straight line is not taken (it took the shuttle over by a jump: before it, it "
-                                  "was something else); 0 = the association's path break (jump_residual)")
     min_speed: float = param(400.0, 0.0, 20000.0, step=50.0, unit="px/s", label="Taken from image speed",
                              help="A candidate is taken only when its tracklet moves at least this fast from it "
                                   "(a shuttle held still before the serve is not yet in play)")
