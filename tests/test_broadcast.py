@@ -280,34 +280,3 @@ def test_only_the_top_edge_is_an_exit():
     reported = [det.process(img, i / FPS, keep_mask=False).detection is not None
                 for i, img in enumerate(frames)]
     assert all(reported[22:50])
-
-
-def _shuttle_blob_beside_clutter(claim: float) -> tuple[int, int, int]:
-    """The followed shuttle and a clutter tracklet fly side by side, 30 px apart; then the
-    shuttle's blob (scoring 0.9) shows 20 px off the shuttle's prediction and 10 px off the
-    clutter's, so the greedy matching gives it to the clutter tracklet (bwf_00025 103: the
-    shuttle's blob on a 57-hit tracklet of quality 0.19). Returns (shuttle's tracklet,
-    clutter's tracklet, tracklet the blob went to)."""
-    p = TrackerParams().with_value("association.followed_claim_quality", claim)
-    assoc = TrackletAssociator(p.motion, p.association)
-    for i in range(25):
-        out = assoc.update(i / FPS, np.array([[100.0 + 20 * i, 300.0], [100.0 + 20 * i, 330.0]]),
-                           np.array([0.9, 0.05]))
-        if i == 5:
-            assoc.select(out[0][0])
-    shuttle, clutter = out[0][0], out[1][0]
-    last = assoc.update(25 / FPS, np.array([[600.0, 320.0]]), np.array([0.9]))
-    return shuttle, clutter, last[0][0]
-
-
-def test_the_followed_tracklet_claims_a_shuttle_like_blob_before_clutter():
-    shuttle, clutter, taken = _shuttle_blob_beside_clutter(1.0)
-    assert taken == clutter            # off: the nearer prediction wins
-    shuttle, clutter, taken = _shuttle_blob_beside_clutter(0.5)
-    assert taken == shuttle            # on: the followed shuttle claims it
-
-
-def test_the_claim_is_off_by_default_and_on_in_the_broadcast_preset():
-    assert TrackerParams().association.followed_claim_quality == 1.0
-    assert load_preset("default").association.followed_claim_quality == 1.0
-    assert load_preset("broadcast").association.followed_claim_quality == 0.5

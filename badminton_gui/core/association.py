@@ -160,8 +160,6 @@ class TrackletAssociator:
                     if scores[best] - scores[nearest] >= p.followed_swap_margin:
                         cost[i, best] = cost[i, nearest] - 1e-3
                     break
-            if p.followed_claim_quality < 1.0 and self.selected is not None:
-                self._claim(d, gates, cost, scores)
             if p.blind_gate > 0 and blind is not None and self.selected is not None:
                 # The followed shuttle predicted where the detector is blind (a light, a white
                 # line) cannot show there: a blob far from the prediction is something else (a
@@ -232,23 +230,6 @@ class TrackletAssociator:
                 merit += p.candidate_weight * float(scores[j])
             out.append((ids[j], motion[j], merit))
         return out
-
-    def _claim(self, d: np.ndarray, gates: np.ndarray, cost: np.ndarray, scores: np.ndarray) -> None:
-        """The followed tracklet claims the shuttle-like blob in its gate before clutter tracklets."""
-        p = self.params
-        for i, tr in enumerate(self.tracklets):
-            if tr.ident != self.selected:
-                continue
-            if not tr.velocity_known or tr.quality < p.min_track_quality:
-                return
-            ok = (d[i] <= gates[i]) & (scores >= p.followed_claim_quality)
-            if not ok.any():
-                return
-            j = int(np.flatnonzero(ok)[np.argmin(d[i, ok])])
-            rivals = np.flatnonzero((cost[:, j] < cost[i, j]) & (d[:, j] <= gates))
-            if all(self.tracklets[k].quality < p.min_track_quality for k in rivals):
-                cost[i, j] = cost[:, j].min() - 1e-3
-            return
 
     def _coasts(self, tr: Tracklet, t: float, blind) -> bool:
         """The followed, confirmed tracklet is predicted inside a blind spot: keep it."""

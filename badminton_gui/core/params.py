@@ -309,10 +309,6 @@ class AssociationParams(ParamGroup):
                                                help="The swap only while the followed tracklet's running quality is at "
                                                     "least this (it was on the shuttle until the hit, not sliding over "
                                                     "clutter after the shuttle left the view)")
-    followed_claim_quality: float = param(1.0, 0.0, 1.0, step=0.01, label="Followed claims blobs from quality",
-                                          help="Inside its gate the followed tracklet takes a blob at least this "
-                                               "shuttle-like before a clutter tracklet (running quality below the "
-                                               "minimum) that is nearer in cost (1 = never)")
     hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
