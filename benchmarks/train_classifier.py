@@ -48,9 +48,7 @@ def dump(job: tuple[str, str, str, int, bool]) -> tuple[np.ndarray, np.ndarray]:
         data = np.load(key)
         return data["x"], data["y"]
     if video.startswith("demo:"):
-        if patches:
-            raise SystemExit("--patches is not implemented for the demo court's candidates")
-        x, y = dump_demo(int(video.split(":")[1]), preset, max_frames)
+        x, y = dump_demo(int(video.split(":")[1]), preset, max_frames, patches)
     else:
         x, y = dump_video(video, labels_path, preset, max_frames, patches)
     CACHE_DIR.mkdir(exist_ok=True)
@@ -71,7 +69,17 @@ def _pipeline_digest(preset: str) -> str:
     return h.hexdigest()[:10]
 
 
-def dump_demo(seed: int, preset: str, max_frames: int) -> tuple[np.ndarray, np.ndarray]:
+def _rows(frame: np.ndarray, blobs: list, patches: bool) -> list[np.ndarray]:
+    """One feature row per measured blob of ``frame`` (``CameraDetector.last_features``), with
+    its grey patch appended when ``patches``."""
+    if not patches:
+        return [feats for _x, _y, feats, _reason in blobs]
+    looks = patch_features(frame, np.array([b[0] for b in blobs]), np.array([b[1] for b in blobs]))
+    return [np.concatenate([b[2], look]) for b, look in zip(blobs, looks)]
+
+
+def dump_demo(seed: int, preset: str, max_frames: int, patches: bool = False
+              ) -> tuple[np.ndarray, np.ndarray]:
     """Candidates of the synthetic demo court (seeds other than the tests' seed 3)."""
     from badminton_gui.io.demo_scene import DemoScene
     params = load_preset(preset).with_value("classifier.enabled", False)
@@ -87,10 +95,11 @@ def dump_demo(seed: int, preset: str, max_frames: int) -> tuple[np.ndarray, np.n
         for det, img, vis, uv in ((dets[0], frame.left, truth.visible_left, truth.uv_left),
                                   (dets[1], frame.right, truth.visible_right, truth.uv_right)):
             det.process(img, frame.t_left, keep_mask=False)
-            for x, y, feats, _reason in det.last_features:
-                xs.append(feats)
+            xs += _rows(img, det.last_features, patches)
+            for x, y, _feats, _reason in det.last_features:
                 ys.append(bool(vis and uv) and np.hypot(x - uv[0], y - uv[1]) <= tol)
-    return np.asarray(xs, float).reshape(-1, len(FEATURE_NAMES)), np.asarray(ys, bool)
+    width = len(FEATURE_NAMES) + (len(PATCH_NAMES) if patches else 0)
+    return np.asarray(xs, float).reshape(-1, width), np.asarray(ys, bool)
 
 
 def dump_video(video: str, labels_path: str, preset: str, max_frames: int, patches: bool = False
@@ -114,11 +123,8 @@ def dump_video(video: str, labels_path: str, preset: str, max_frames: int, patch
         t = times.get(i, i / fps) if times else i / fps
         res = det.process(frame, t, keep_mask=False)
         vis, lx, ly = labels.get(i, (False, 0.0, 0.0))
-        blobs = det.last_features
-        looks = (patch_features(frame, np.array([b[0] for b in blobs]), np.array([b[1] for b in blobs]))
-                 if patches else np.zeros((len(blobs), 0)))
-        for (x, y, feats, _reason), look in zip(blobs, looks):
-            xs.append(np.concatenate([feats, look]))
+        xs += _rows(frame, det.last_features, patches)
+        for x, y, _feats, _reason in det.last_features:
             ys.append(bool(vis) and np.hypot(x - lx, y - ly) <= tol)
         i += 1
     cap.release()
