@@ -157,9 +157,13 @@ def test_a_path_break_forgets_the_old_residual():
             assert track.residual > 0.5 * jittery
 
 
-def test_shipped_classifier_loads_and_scores_in_unit_interval():
-    clf = load_classifier(TrackerParams().classifier.model)
-    assert clf.mean.shape == (len(FEATURE_NAMES),)
+@pytest.mark.parametrize("model", ["candidate_classifier", "candidate_classifier_broadcast",
+                                   "candidate_classifier_coarse"])
+def test_shipped_classifiers_load_and_score_in_unit_interval(model):
+    clf = load_classifier(model)
+    # Each file names the features it was trained on: the hand-made ones, then the patch.
+    assert clf.feature_names in (FEATURE_NAMES, FEATURE_NAMES + PATCH_NAMES)
+    assert clf.mean.shape == (len(clf.feature_names),)
     p = clf.probability(np.tile(clf.mean, (3, 1)))
     assert np.all((p >= 0) & (p <= 1))
 
@@ -191,14 +195,15 @@ def test_patch_features_are_the_area_averaged_luma_around_the_point():
     frame = rng.integers(0, 256, (720, 1280, 3), dtype=np.uint8)
     x, y = 400.4, 300.6
     got = patch_features(frame, np.array([x]), np.array([y]))[0]
-    # The reference: OpenCV's luma of the 16 × 16 px square, area-averaged to 8 × 8, normalised.
-    square = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32)  # rounds to integers
+    # The reference, plainly: the 16 × 16 px square's luma (0.299 R + 0.587 G + 0.114 B), the
+    # mean of each 2 × 2 block, normalised by the median cell and the peak above it.
     xi, yi = round(x), round(y)
-    crop = square[yi - PATCH_HALF:yi + PATCH_HALF, xi - PATCH_HALF:xi + PATCH_HALF]
-    cells = cv2.resize(crop, (PATCH_CELLS, PATCH_CELLS), interpolation=cv2.INTER_AREA).ravel()
+    crop = frame[yi - PATCH_HALF:yi + PATCH_HALF, xi - PATCH_HALF:xi + PATCH_HALF].astype(float)
+    luma = crop @ [0.114, 0.587, 0.299]
+    cells = luma.reshape(PATCH_CELLS, 2, PATCH_CELLS, 2).mean(axis=(1, 3)).ravel()
     ref = (cells - np.median(cells)) / max(cells.max() - np.median(cells), 8.0)
     assert got.shape == (len(PATCH_NAMES),)
-    assert np.abs(got - ref).max() < 0.02       # cvtColor rounds each pixel to an integer
+    assert np.abs(got - ref).max() < 1e-4
 
 
 def test_patch_features_tell_a_spot_from_a_line_and_survive_the_border():
@@ -244,11 +249,11 @@ def test_a_classifier_trained_with_patches_reads_them():
             xs = np.array([f[0] for f in det.last_features])
             ys = np.array([f[1] for f in det.last_features])
             assert np.allclose(seen[:, len(FEATURE_NAMES):], patch_features(frames[-1], xs, ys))
-    broadcast = load_classifier("candidate_classifier_broadcast")
-    assert broadcast.feature_names == FEATURE_NAMES + PATCH_NAMES
-    det = CameraDetector(_params(classifier__enabled=True, classifier__model="candidate_classifier_broadcast"))
-    assert det._needs_patches
-    assert not CameraDetector(_params(classifier__enabled=True))._needs_patches
+    for model, with_patches in (("candidate_classifier", True), ("candidate_classifier_broadcast", True),
+                                ("candidate_classifier_coarse", False)):
+        assert (load_classifier(model).feature_names == FEATURE_NAMES + PATCH_NAMES) == with_patches
+        det = CameraDetector(_params(classifier__enabled=True, classifier__model=model))
+        assert det._needs_patches == with_patches
 
 
 @pytest.mark.parametrize("method", ["mog2", "frame_diff", "bright_diff"])
