@@ -67,9 +67,13 @@ RALLY = DATA / "nycu-stereo" / "rally_11-48-00"
 @pytest.mark.skipif(not (RALLY / "CameraReader_2.mp4").is_file(),
                     reason="real data (../shared/data) not available")
 def test_coarse_keeps_the_lying_shuttle_through_its_hold_on_the_real_rally():
-    """rally_11-48-00, right camera: the shuttle lands and lies at ≈ (989, 1152); the hold
-    starts at frame 632. Without the protected box the coarse model lost it at 636 (its
-    difference fell to 10 against the threshold 12) and reported nothing to 656."""
+    """rally_11-48-00, right camera: the shuttle lands and lies at ≈ (989, 1152). Without the
+    protected box the coarse model lost it at 636 (its difference fell to 10 against the
+    threshold 12) and reported nothing to 656. With the coarse preset's patch classifier
+    (eighteenth round) it was lost at 636 again two ways: the association kept reporting it
+    itself, so it was never held and never protected (``StereoTracker._lying_landed``), and once
+    held the dimming blob scored 0.0 at 641 and 651, was left out of its track, and ended the
+    hold (the hold now also takes an untracked blob at its spot)."""
     from badminton_gui.core.tracker import StereoTracker
     from badminton_gui.io.labels import read_point_labels, read_timestamps
     from badminton_gui.io.nycu import rig_from_nycu

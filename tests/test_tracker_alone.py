@@ -240,3 +240,42 @@ def test_the_shoes_pair_is_no_3d_point_once_the_hold_takes_the_report_back():
     assert point is None and epi is None
     det, _, point, epi = run(flew=False)
     assert det.tracklet == 9 and point is not None and epi == 2.0
+
+
+def test_the_hold_takes_an_untracked_blob_at_its_spot_but_not_another_tracks():
+    """A lying shuttle dims and a classifier may refuse it before association: the blob at the
+    held spot that no track took (tracklet -1) is still the held shuttle; another track's blob
+    there is not (rally_11-48-00 right 641, coarse preset)."""
+    for tracklet, expected in ((-1, 101.0), (9, None)):
+        t = _tracker(landed_frames=10)
+        t._note_flown(0, 4, 0.5)
+        t._last_point = (1.0, 0.0)
+        c = _cand(100)
+        t._hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, 1.0)
+        t._held[0][4] = True
+        other = dataclasses.replace(_cand(101, "score"), tracklet=tracklet)
+        res, det = t._hold_landed(0, CameraResult(None, (other,), image_size=(1280, 720)), None, 1.01)
+        assert (None if det is None else det.x) == expected
+        t.close()
+
+
+def test_a_reported_landed_shuttle_lying_still_is_protected_in_the_mask():
+    """``_lying_landed``: the report of a track that carried the flight down, barely moving,
+    just after the flight's last point lay near the floor, keeps its pixels in the next mask
+    even while the association reports it itself (no hold); not a moving report, a track never
+    seen in the air, or a flight still above the floor."""
+    def lying(speed=0.0, flown=True, z=0.0, tracklet=4):
+        t = _tracker(landed_frames=10)
+        if flown:
+            t._note_flown(0, 4, 0.5)
+        t._last_point = (1.0, z)
+        c = dataclasses.replace(_cand(100), tracklet=tracklet)
+        t._reports[0].append((1.01, c.x, c.y, (speed, 0.0)))
+        out = t._lying_landed(0, c, 1.01, 1280)
+        t.close()
+        return out
+    assert lying()
+    assert not lying(speed=1000.0)
+    assert not lying(flown=False)
+    assert not lying(z=1.5)
+    assert not lying(tracklet=-1)

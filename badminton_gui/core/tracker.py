@@ -347,9 +347,11 @@ class StereoTracker:
             det_left, det_right = dets
         (res_left, det_left), (res_right, det_right), point_left, epi = self._hold_both(
             (res_left, det_left), (res_right, det_right), point_left, epi, timestamp)
-        # A held landed shuttle stays in its camera's mask (``CameraDetector.protect_report``).
-        self.left.protect_report(det_left if self._held_now[0] else None, left_bgr.shape[1])
-        self.right.protect_report(det_right if self._held_now[1] else None, right_bgr.shape[1])
+        # A landed shuttle lying still stays in its camera's mask (``CameraDetector.protect_report``).
+        self.left.protect_report(det_left if self._lying_landed(0, det_left, timestamp, left_bgr.shape[1])
+                                 else None, left_bgr.shape[1])
+        self.right.protect_report(det_right if self._lying_landed(1, det_right, timestamp, right_bgr.shape[1])
+                                  else None, right_bgr.shape[1])
         # The sources hand out a new array per frame: keeping the reference costs no copy.
         self._previous = (left_bgr, right_bgr)
         # The 2D readout is the cork, not the trailing bright centroid. The 3D point is still
@@ -473,7 +475,10 @@ class StereoTracker:
             return result, None
         step = LANDED_STEP * result.image_size[0] / 1280.0
         for c in result.candidates:
-            if (c.tracklet == state[0] and not c.predicted
+            # Its own track's candidate, or a blob no track took (tracklet -1) at the same spot:
+            # a lying shuttle dims and its look changes, and a classifier may then refuse it
+            # before association (rally_11-48-00 right 641 with the coarse patch classifier).
+            if ((c.tracklet == state[0] or c.tracklet < 0) and not c.predicted
                     and math.hypot(c.x - state[2], c.y - state[3]) <= step):
                 state[1] += 1
                 state[2], state[3] = c.x, c.y
@@ -483,6 +488,25 @@ class StereoTracker:
                                                                     for k in result.candidates)), held
         state[0] = -1
         return result, None
+
+    def _lying_landed(self, cam: int, det: Candidate | None, t: float, width: int) -> bool:
+        """Whether this camera's report is a landed shuttle lying still, whose pixels the next
+        frame's mask should keep: held (``_hold_landed``), or still reported by its own track
+        when that track carried the flight down (``_flown_recently``), the flight's last point
+        lay near the floor (``_landed``) and the track barely moves (``VOUCH_WIDE_IMAGE_SPEED``).
+        Without the second case a lying shuttle whose track the association kept reporting —
+        its classifier score high — was never held, so never protected, and the quarter-scale
+        model lost it when it dimmed (rally_11-48-00 right 636–664 with the coarse preset's
+        patch classifier)."""
+        if det is None or det.predicted:
+            return False
+        if self._held_now[cam]:
+            return True
+        if det.tracklet < 0 or not self._landed(t) or not self._flown_recently(cam, det.tracklet, t):
+            return False
+        velocity = self._reports[cam][-1][3] if self._reports[cam] else None
+        return (velocity is not None
+                and math.hypot(*velocity) <= VOUCH_WIDE_IMAGE_SPEED * width / 1280.0)
 
     def _note_anchor(self, cam: int, det: Candidate | None, has_point: bool) -> None:
         """Whether this camera's report, if it stops next, may start a landed hold: it had a 3D
