@@ -264,8 +264,8 @@ def test_a_reported_landed_shuttle_lying_still_is_protected_in_the_mask():
     just after the flight's last point lay near the floor, keeps its pixels in the next mask
     even while the association reports it itself (no hold); not a moving report, a track never
     seen in the air, or a flight still above the floor."""
-    def lying(speed=0.0, flown=True, z=0.0, tracklet=4):
-        t = _tracker(landed_frames=10)
+    def lying(speed=0.0, flown=True, z=0.0, tracklet=4, landed_frames=10):
+        t = _tracker(landed_frames=landed_frames)
         if flown:
             t._note_flown(0, 4, 0.5)
         t._last_point = (1.0, z)
@@ -279,3 +279,4 @@ def test_a_reported_landed_shuttle_lying_still_is_protected_in_the_mask():
     assert not lying(flown=False)
     assert not lying(z=1.5)
     assert not lying(tracklet=-1)
+    assert not lying(landed_frames=0)       # the hold off: no protection either

@@ -502,6 +502,9 @@ class StereoTracker:
             return False
         if self._held_now[cam]:
             return True
+        # As for the hold itself (``_hold_both``): off with it, and only where heights mean the floor.
+        if self.params.stereo.landed_frames <= 0 or not self.rig.has_court_pose:
+            return False
         if det.tracklet < 0 or not self._landed(t) or not self._flown_recently(cam, det.tracklet, t):
             return False
         velocity = self._reports[cam][-1][3] if self._reports[cam] else None
