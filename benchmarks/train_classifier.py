@@ -157,7 +157,8 @@ def main() -> int:
     # 10,242 NYCU frames against 9,545). Three members' seeds swung the NYCU rallies' online
     # accuracy over 96.75–97.55 %: the default's ensemble has nine. The coarse preset's
     # quarter-scale classifier reads the patch too since the eighteenth round, nine members
-    # (coarse tuned-on rallies 96.45 → 96.96 %, held-out 89.77 → 90.27 %; three members, two
+    # (coarse tuned-on rallies 96.45 → 96.96 %, held-out 89.77 → 90.27 % before the eighteenth
+    # round's landed-hold change, 97.29 / 90.33 % with it; three members, two
     # seeds: tuned-on 97.03 / 96.91 %, held-out 89.69 % for the first — benchmarks/README.md).
     patches = True if args.patches is None else args.patches
     members = args.members or (1 if not patches else 3 if args.kind == "broadcast" else 9)

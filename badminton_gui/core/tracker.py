@@ -507,7 +507,10 @@ class StereoTracker:
             return False
         if det.tracklet < 0 or not self._landed(t) or not self._flown_recently(cam, det.tracklet, t):
             return False
-        velocity = self._reports[cam][-1][3] if self._reports[cam] else None
+        # The track's image velocity as noted for this very report (a later stage may have
+        # replaced the report noted then).
+        last = self._reports[cam][-1] if self._reports[cam] else None
+        velocity = last[3] if last is not None and (last[1], last[2]) == (det.x, det.y) else None
         return (velocity is not None
                 and math.hypot(*velocity) <= VOUCH_WIDE_IMAGE_SPEED * width / 1280.0)
 
