@@ -490,6 +490,21 @@ class StereoParams(ParamGroup):
                                     "there is still reported for this many frames while it stays put (0 = off)")
     landed_max_height: float = param(0.3, 0.0, 5.0, step=0.05, unit="m", label="... landed below",
                                      help="The flight's last 3D point must be this low above the court")
+    # A shuttle cannot stop in mid-air: a flight whose 3D points stop dead above the floor was
+    # caught (by a hand, or on a racket's strings) and is out of play until it is hit again.
+    caught_frames: int = param(10, 0, 1000, step=1, unit="frames", label="Caught after",
+                               help="When a flight's 3D points stop dead above the floor (the flight refuses "
+                                    "them and they stay within the caught radius) for this many frames, the "
+                                    "shuttle was caught: it is not reported, in either camera, while it stays "
+                                    "near the hand, until a new flight starts (0 = off)")
+    caught_radius: float = param(0.10, 0.01, 2.0, step=0.01, unit="m", label="... within",
+                                 help="How far the stopped 3D points may spread")
+    caught_release_speed: float = param(4.0, 0.0, 100.0, step=0.5, unit="m/s", label="... until a flight of",
+                                        help="A caught shuttle is reported again when the 3D flight follows it "
+                                             "at this speed (a serve, a throw back to the server)")
+    caught_hold: float = param(0.5, 0.0, 60.0, step=0.1, unit="s", label="... or for at most",
+                               help="... or when this long has passed since the catch (the shuttle dropped "
+                                    "from the hand for the next serve is reported)")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and

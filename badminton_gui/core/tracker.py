@@ -38,6 +38,7 @@ import cv2
 import numpy as np
 import numpy.ma  # noqa: F401  np.median imports it on its first call: 17 ms in the middle of a rally
 
+from .court import NET_HEIGHT_POSTS
 from .detector import CameraDetector
 from .guided import find_spot, white_near
 from .params import TrackerParams
@@ -93,6 +94,17 @@ EPIPOLAR_LEARNT_SAMPLES = 20
 # (``_flown_recently``): a landed shuttle slides and lies still for up to ~1.5 s before the hold
 # starts; a shoe walked along the floor after the rally was never seen in the air.
 FLOWN_MEMORY = 5.0
+# m/s: how fast the flight must have been followed just before its 3D points stopped dead for
+# ``stereo.caught_frames`` to call it caught (a shuttle held before the serve had no flight).
+CAUGHT_MIN_FLIGHT_SPEED = 3.0
+# s: how long before the first stopped point the flight's last accepted point may lie.
+CAUGHT_FLIGHT_GAP = 0.05
+# m: how near the net's plane (court Y = 0) and above its top a stop counts as the net's, not a
+# hand's: the shuttle hangs in the mesh or falls off the tape in full view.
+CAUGHT_NET_MARGIN = 0.3
+# px at 1280 px width: how far a caught shuttle's report may move from one frame to the next and
+# still be the shuttle in the hand that caught it (a hand carrying it walks, it does not fly).
+CAUGHT_STEP = 12.0
 
 
 class StereoTracker:
@@ -137,6 +149,7 @@ class StereoTracker:
         # Per camera, for ``stereo.landed_frames``: tracklet -> time of its last report with a
         # 3D point above ``landed_max_height`` (within ``FLOWN_MEMORY`` s).
         self._flown: tuple[dict[int, float], dict[int, float]] = ({}, {})
+        self._reset_caught()
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -162,6 +175,17 @@ class StereoTracker:
         self._held_now = [False, False]
         self._last_point = None
         self._flown = ({}, {})
+        self._reset_caught()
+
+    def _reset_caught(self) -> None:
+        """State of ``stereo.caught_frames``: the measured 3D points stopped since the flight's
+        last accepted one [(t, court point)], that flight's (time, speed), and, once the shuttle
+        is caught, each camera's last position of it ([x, y] or None) — None when not caught."""
+        self._stopped: list[tuple[float, tuple[float, float, float]]] = []
+        self._last_flown: tuple[float, float] | None = None
+        self._caught: list[list[float] | None] | None = None
+        self._caught_now = False
+        self._caught_at = 0.0
 
     def epipolar_tolerance(self) -> float:
         """The epipolar gate in use: the configured one, widened to the rig's measured error."""
@@ -384,6 +408,7 @@ class StereoTracker:
         if flight.velocity is not None:
             speed = float(math.sqrt(sum(v * v for v in flight.velocity)))
         point_out = measured
+        caught = self._note_caught(timestamp, measured, speed)
         filtered = self._trajectory.filtered_position()
         if filtered is not None:
             point_out = filtered
@@ -391,6 +416,9 @@ class StereoTracker:
             point_out = None
         elif measured is not None and self.rig.has_court_pose:
             point_out = self._resting_cork(measured)
+        if caught:
+            point_out = None
+            res_left, res_right = self._withhold_caught(res_left, res_right)
         if point_out is not None:
             self._last_point = (timestamp, float(point_out[2]))
         for cam, det in ((0, det_left), (1, det_right)):
@@ -513,6 +541,82 @@ class StereoTracker:
         velocity = last[3] if last is not None and (last[1], last[2]) == (det.x, det.y) else None
         return (velocity is not None
                 and math.hypot(*velocity) <= VOUCH_WIDE_IMAGE_SPEED * width / 1280.0)
+
+    def _note_caught(self, t: float, measured: tuple[float, float, float] | None,
+                     speed: float | None) -> bool:
+        """Whether the shuttle is caught, out of play (``stereo.caught_frames``), after this
+        frame's 3D point went to the flight.
+
+        A shuttle in flight never stops in mid-air. When the flight was followed at
+        ``CAUGHT_MIN_FLIGHT_SPEED`` or more and its next measured 3D points are refused by it and
+        stay within ``caught_radius`` of each other above the floor for ``caught_frames`` frames,
+        a hand or a racket caught it (rally_11-47-02 172: from 5 m/s to still at 0.9 m); the
+        labellers stop marking a shuttle held in the hand, and the robot has nothing to chase. It
+        stays caught until the flight follows a point at ``caught_release_speed`` or more (a
+        serve). An apex is no stop (the flight accepts its points), nor is a hit (its points
+        move fast), nor a shuttle held before a serve with no flight before it.
+        """
+        sp = self.params.stereo
+        if sp.caught_frames <= 0 or not self.rig.has_court_pose:
+            self._caught = None
+            return False
+        if self._caught is not None and t - self._caught_at > sp.caught_hold:
+            self._caught = None
+        accepted = measured is not None and not self._trajectory.point_rejected
+        if accepted:
+            self._stopped.clear()
+            if speed is not None:
+                if self._caught is not None and speed >= sp.caught_release_speed:
+                    self._caught = None
+                if self._caught is None:
+                    self._last_flown = (t, speed)
+            return self._caught is not None
+        if self._caught is not None:
+            return True
+        if measured is None:
+            self._stopped.clear()
+            return False
+        flown = self._last_flown
+        if not self._stopped and (flown is None or t - flown[0] > CAUGHT_FLIGHT_GAP + 1e-9
+                                  or flown[1] < CAUGHT_MIN_FLIGHT_SPEED):
+            return False
+        self._stopped.append((t, measured))
+        if len(self._stopped) < sp.caught_frames:
+            return False
+        points = np.array([p for _, p in self._stopped[-sp.caught_frames:]])
+        centre = points.mean(axis=0)
+        self._stopped.clear()
+        if (float(np.max(np.linalg.norm(points - centre, axis=1))) > sp.caught_radius
+                or centre[2] <= sp.landed_max_height
+                or (abs(centre[1]) <= CAUGHT_NET_MARGIN and centre[2] <= NET_HEIGHT_POSTS + CAUGHT_NET_MARGIN)):
+            # Not caught: lying on the floor (the landed hold's case), or stopped by the net,
+            # where it hangs in the mesh or on the tape in view (rally_11-47-21 879, labelled).
+            return False
+        self._caught, self._caught_now, self._caught_at = [None, None], True, t
+        return True
+
+    def _withhold_caught(self, res_left: CameraResult, res_right: CameraResult
+                         ) -> tuple[CameraResult, CameraResult]:
+        """Each camera's report of the caught shuttle withheld (marked ``REJECT_STEREO``, the
+        association and the flight untouched): the report at the catch, then each report within
+        ``CAUGHT_STEP`` px a frame of the last one withheld (the hand carrying it)."""
+        results = [res_left, res_right]
+        for cam in (0, 1):
+            det = results[cam].detection
+            if det is None or det.predicted:
+                continue
+            last = self._caught[cam]
+            step = CAUGHT_STEP * results[cam].image_size[0] / 1280.0
+            if (last is None and not self._caught_now) or (
+                    last is not None and math.hypot(det.x - last[0], det.y - last[1]) > step):
+                continue
+            self._caught[cam] = [det.x, det.y]
+            results[cam] = dataclasses.replace(
+                results[cam], detection=None,
+                candidates=tuple(dataclasses.replace(c, rejected_by=REJECT_STEREO) if c is det else c
+                                 for c in results[cam].candidates))
+        self._caught_now = False
+        return results[0], results[1]
 
     def _note_anchor(self, cam: int, det: Candidate | None, has_point: bool) -> None:
         """Whether this camera's report, if it stops next, may start a landed hold: it had a 3D

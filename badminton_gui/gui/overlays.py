@@ -22,7 +22,7 @@ REJECT_STYLE: dict[str, tuple[QColor, str]] = {
     REJECT_SHORT_SIDE: (QColor(255, 255, 0), "tilted-rect side"),
     REJECT_WHITENESS: (QColor(0, 200, 255), "not white"),
     REJECT_MOTION: (QColor(200, 80, 255), "motion gate"),
-    REJECT_STEREO: (QColor(0, 255, 120), "no stereo partner"),
+    REJECT_STEREO: (QColor(0, 255, 120), "withheld by stereo"),
     REJECT_SCORE: (QColor(190, 190, 190), "lower score"),
 }
 UNKNOWN_REJECT = (QColor(255, 255, 255), "other")
