@@ -19,7 +19,7 @@ from types import SimpleNamespace
 import pytest
 
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.core.tracker import StereoTracker
+from badminton_gui.core.tracker import CAUGHT_REASON, StereoTracker
 from badminton_gui.core.types import REJECT_STEREO, CameraResult, Candidate
 from badminton_gui.io.demo_scene import make_rig
 from .conftest_data import NYCU_DIR
@@ -135,6 +135,7 @@ def test_the_shuttle_caught_by_hand_on_the_real_rally_is_not_reported():
     labels = read_point_labels(RALLY / "CameraReader_2.csv").as_dict()
     tracker = Tracker(rig, load_preset("default"))
     in_flight = in_hand = 0
+    told = set()
     try:
         while True:
             f = src.read()
@@ -147,8 +148,13 @@ def test_the_shuttle_caught_by_hand_on_the_real_rally_is_not_reported():
                 in_flight += bool(visible and d is not None and math.hypot(d.x - lx, d.y - ly) <= 16)
             elif 182 <= f.index <= 220:
                 in_hand += r.left.detection is not None or r.right.detection is not None
+                if f.index <= 200:
+                    # nothing for the robot to chase: no position, speed or landing
+                    told.add((r.point, r.speed, r.flight.prediction, r.flight.in_flight,
+                              r.flight.withheld_reason))
     finally:
         tracker.close()
         src.close()
     assert in_flight >= 49          # the flight before the catch is still reported
     assert in_hand == 0
+    assert told == {(None, None, None, False, CAUGHT_REASON)}

@@ -102,6 +102,8 @@ CAUGHT_FLIGHT_GAP = 0.05
 # m: how near the net's plane (court Y = 0) and above its top a stop counts as the net's, not a
 # hand's: the shuttle hangs in the mesh or falls off the tape in full view.
 CAUGHT_NET_MARGIN = 0.3
+# What the readout and the robot are told while the shuttle is caught (``FlightInfo.withheld_reason``).
+CAUGHT_REASON = "caught: out of play"
 # px at 1280 px width: how far a caught shuttle's report may move from one frame to the next and
 # still be the shuttle in the hand that caught it (a hand carrying it walks, it does not fly).
 CAUGHT_STEP = 12.0
@@ -417,7 +419,11 @@ class StereoTracker:
         elif measured is not None and self.rig.has_court_pose:
             point_out = self._resting_cork(measured)
         if caught:
-            point_out = None
+            # Out of play: no position, speed or landing for the robot to chase (the flight
+            # filter itself runs on, for the next serve).
+            point_out = speed = None
+            flight = dataclasses.replace(flight, velocity=None, prediction=None, in_flight=False,
+                                         withheld_reason=CAUGHT_REASON)
             res_left, res_right = self._withhold_caught(res_left, res_right)
         if point_out is not None:
             self._last_point = (timestamp, float(point_out[2]))
