@@ -5,13 +5,15 @@ rally where it was found, the coarse model keeping the lying shuttle through its
 from __future__ import annotations
 
 import math
-from pathlib import Path
+from contextlib import closing
 
 import numpy as np
 import pytest
 
 from badminton_gui.core.background import PROTECT_THRESHOLD, BackgroundModel
 from badminton_gui.core.params import TrackerParams
+
+from .conftest_data import NYCU_DIR, tracked_rally
 
 
 def _model():
@@ -60,8 +62,7 @@ def test_no_protection_no_change():
     assert np.array_equal(plain.apply(_dim_spots()), protected.apply(_dim_spots()))
 
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-RALLY = DATA / "nycu-stereo" / "rally_11-48-00"
+RALLY = NYCU_DIR / "rally_11-48-00"
 
 
 @pytest.mark.skipif(not (RALLY / "CameraReader_2.mp4").is_file(),
@@ -74,32 +75,18 @@ def test_coarse_keeps_the_lying_shuttle_through_its_hold_on_the_real_rally():
     itself, so it was never held and never protected (``StereoTracker._lying_landed``), and once
     held the dimming blob scored 0.0 at 641 and 651, was left out of its track, and ended the
     hold (the hold now also takes an untracked blob at its spot)."""
-    from badminton_gui.core.tracker import StereoTracker
-    from badminton_gui.io.labels import read_point_labels, read_timestamps
-    from badminton_gui.io.nycu import rig_from_nycu
-    from badminton_gui.io.presets import load_preset
-    from badminton_gui.io.video import VideoPair
+    from badminton_gui.io.labels import read_point_labels
 
-    rig = rig_from_nycu(RALLY / "CameraReader_1.cfg", RALLY / "CameraReader_2.cfg")
-    src = VideoPair(RALLY / "CameraReader_1.mp4", RALLY / "CameraReader_2.mp4",
-                    read_timestamps(RALLY / "CameraReader_1.csv")[1],
-                    read_timestamps(RALLY / "CameraReader_2.csv")[1])
     labels = read_point_labels(RALLY / "CameraReader_2.csv").as_dict()
-    tracker = StereoTracker(rig, load_preset("coarse"))
     hits = checked = 0
-    try:
-        while True:
-            f = src.read()
-            if f is None or f.index_right > 656:
+    with closing(tracked_rally(RALLY, "coarse")) as pairs:
+        for f, r in pairs:
+            if f.index_right > 656:
                 break
-            r = tracker.process(f.left, f.right, f.t_left, f.index, f.index_right, keep_masks=False)
             if 636 <= f.index_right <= 656:
                 checked += 1
                 visible, lx, ly = labels[f.index_right]
                 d = r.right.detection
                 hits += bool(visible and d is not None and math.hypot(d.x - lx, d.y - ly) <= 16)
-    finally:
-        tracker.close()
-        src.close()
     assert checked >= 20
     assert hits >= checked - 2

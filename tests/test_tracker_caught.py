@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from contextlib import closing
 from types import SimpleNamespace
 
 import pytest
@@ -22,7 +23,7 @@ from badminton_gui.core.params import TrackerParams
 from badminton_gui.core.tracker import CAUGHT_REASON, StereoTracker
 from badminton_gui.core.types import REJECT_STEREO, CameraResult, Candidate
 from badminton_gui.io.demo_scene import make_rig
-from .conftest_data import NYCU_DIR
+from .conftest_data import NYCU_DIR, tracked_rally
 
 DT = 1.0 / 120.0
 
@@ -122,26 +123,15 @@ def test_the_shuttle_caught_by_hand_on_the_real_rally_is_not_reported():
     """rally_11-47-02: the shuttle flies at 5 m/s down to 0.9 m and is caught at frame 172; both
     labellers stop marking it a few frames later (right after 178, left after 185) while both
     cameras reported it in the hand to 205 (left) and 218 (right)."""
-    from badminton_gui.core.tracker import StereoTracker as Tracker
-    from badminton_gui.io.labels import read_point_labels, read_timestamps
-    from badminton_gui.io.nycu import rig_from_nycu
-    from badminton_gui.io.presets import load_preset
-    from badminton_gui.io.video import VideoPair
+    from badminton_gui.io.labels import read_point_labels
 
-    rig = rig_from_nycu(RALLY / "CameraReader_1.cfg", RALLY / "CameraReader_2.cfg")
-    src = VideoPair(RALLY / "CameraReader_1.mp4", RALLY / "CameraReader_2.mp4",
-                    read_timestamps(RALLY / "CameraReader_1.csv")[1],
-                    read_timestamps(RALLY / "CameraReader_2.csv")[1])
     labels = read_point_labels(RALLY / "CameraReader_2.csv").as_dict()
-    tracker = Tracker(rig, load_preset("default"))
     in_flight = in_hand = 0
     told = set()
-    try:
-        while True:
-            f = src.read()
-            if f is None or f.index > 220:
+    with closing(tracked_rally(RALLY, "default")) as pairs:
+        for f, r in pairs:
+            if f.index > 220:
                 break
-            r = tracker.process(f.left, f.right, f.t_left, f.index, f.index_right, keep_masks=False)
             if 120 <= f.index_right <= 170:
                 visible, lx, ly = labels[f.index_right]
                 d = r.right.detection
@@ -152,9 +142,6 @@ def test_the_shuttle_caught_by_hand_on_the_real_rally_is_not_reported():
                     # nothing for the robot to chase: no position, speed or landing
                     told.add((r.point, r.speed, r.flight.prediction, r.flight.in_flight,
                               r.flight.withheld_reason))
-    finally:
-        tracker.close()
-        src.close()
     assert in_flight >= 49          # the flight before the catch is still reported
     assert in_hand == 0
     assert told == {(None, None, None, False, CAUGHT_REASON)}
