@@ -16,7 +16,8 @@ held back passes when the other camera agrees on the epipolar line (``_vouch``);
 lost the shuttle looks where the flight projects (``_guided``) or, before the flight is known,
 where its own image path continues on the other detection's epipolar line (``_stereo_look``);
 nothing is reported where the shuttle has left the camera's view (``stereo.exit_margin``,
-``exit_by_path``, ``out_of_view_weak``).
+``exit_by_path``, ``out_of_view_weak``), nor, in either camera, while a shuttle whose flight
+stopped dead in mid-air is held in the hand that caught it (``stereo.caught_frames``).
 
 Usage::
 
