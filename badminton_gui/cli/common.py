@@ -147,7 +147,7 @@ def open_stereo_videos(args):
         rig.check_image_size(*source.image_size, what="the videos")
     except INPUT_ERRORS as exc:
         raise UserError(str(exc)) from None
-    total = source.frame_count if lt is None else min(len(lt), source.frame_count or len(lt))
+    total = source.frame_count if lt is None else source.step_count
     if args.max_frames:
         total = min(total, args.max_frames) if total else args.max_frames
     return rig, PrefetchingReader(source), total or None

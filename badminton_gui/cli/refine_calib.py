@@ -44,8 +44,7 @@ def run(args: argparse.Namespace) -> int:
             frame = source.read()
             if frame is None:
                 break
-            collector.add(tracker.process(frame.left, frame.right, frame.t_left, frame.index,
-                                          frame.index_right, keep_masks=False))
+            collector.add(tracker.process_frame(frame, keep_masks=False))
             n += 1
             if not args.quiet:
                 progress.update(n)

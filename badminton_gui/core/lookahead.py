@@ -55,6 +55,9 @@ class _Frame:
     # A tracklet seen leaving the picture just after this frame, on it without a break since
     # (``CameraResult.left_picture``): it was the shuttle, whatever the readout followed.
     left: int = -1
+    # Steps after this one that brought no new image from this camera (``StereoFrame.fresh_left``
+    # / ``fresh_right``): each is handed out as this frame's decided result again.
+    repeats: int = 0
 
 
 class CameraLookahead:
@@ -64,6 +67,10 @@ class CameraLookahead:
         self.params = params or TrackerParams()
         self._buffer: deque[_Frame] = deque()
         self._past: _Frame | None = None   # the last frame handed out (velocity of a back-fill)
+        # The last online result pushed and the last decided one: a step that brought no new
+        # image from this camera pushes its last result again (the same object).
+        self._last_online: CameraResult | None = None
+        self._last_decided: CameraResult | None = None
         self.changes = {"backfill": 0, "switch": 0, "exit": 0}
         # id(decided CameraResult) → the taken candidate's measured centroid (before the lead to
         # the cork), for the stereo re-triangulation; read and removed by StereoLookahead.
@@ -77,9 +84,18 @@ class CameraLookahead:
     def reset(self) -> None:
         self._buffer.clear()
         self._past = None
+        self._last_online = self._last_decided = None
 
     def push(self, result: CameraResult, t: float) -> list[CameraResult]:
-        """Add this frame's online result; return the results now decided (0 or 1, in order)."""
+        """Add this frame's online result; return the results now decided, in order (one per
+        push in the end). The same result pushed again (a step with no new image from this
+        camera) is no new frame: it is handed out as that frame's decision, when it is made."""
+        if result is self._last_online:
+            if self._buffer:
+                self._buffer[-1].repeats += 1
+                return []
+            return [self._last_decided]
+        self._last_online = result
         det = result.detection
         on = {c.tracklet: c for c in result.candidates
               if c.tracklet >= 0 and not c.predicted and c is not det}
@@ -97,18 +113,18 @@ class CameraLookahead:
         self._buffer.append(_Frame(t, result, on, followed))
         out = []
         while len(self._buffer) > self.frames:
-            out.append(self._decide())
+            out.extend(self._decide())
         return out
 
     def flush(self) -> list[CameraResult]:
         """The frames still held back (end of the video), decided with what future there is."""
         out = []
         while self._buffer:
-            out.append(self._decide())
+            out.extend(self._decide())
         return out
 
     # ---------------------------------------------------------------------------------------
-    def _decide(self) -> CameraResult:
+    def _decide(self) -> list[CameraResult]:
         frame = self._buffer[0]
         future = [f.followed for f in list(self._buffer)[1:]]
         chosen = self._choice(frame, future)
@@ -121,7 +137,8 @@ class CameraLookahead:
         self._buffer.popleft()
         # Back-fills of the next frames measure their velocity on this frame's candidates.
         self._past = dataclasses.replace(frame, result=result)
-        return result
+        self._last_decided = result
+        return [result] * (1 + frame.repeats)
 
     def _choice(self, frame: _Frame, future: list[int]) -> Candidate | None:
         """The candidate that replaces frame's online detection, or None to keep it."""
@@ -264,6 +281,10 @@ class StereoLookahead:
         self.left.keep_centroids = self.right.keep_centroids = True
         self._tolerance = tolerance or (lambda: float(self.params.stereo.max_epipolar_error))
         self._results: deque[TrackResult] = deque()
+        # Each camera's decided results not yet zipped: with steps that bring one camera's image
+        # only, the two cameras' decisions come out at different pushes.
+        self._lefts: deque[CameraResult] = deque()
+        self._rights: deque[CameraResult] = deque()
         self.retriangulated = 0
 
     @property
@@ -279,8 +300,11 @@ class StereoLookahead:
         return self._zip(self.left.flush(), self.right.flush())
 
     def _zip(self, lefts: list[CameraResult], rights: list[CameraResult]) -> list[TrackResult]:
+        self._lefts.extend(lefts)
+        self._rights.extend(rights)
         out = []
-        for left, right in zip(lefts, rights):
+        while self._lefts and self._rights:
+            left, right = self._lefts.popleft(), self._rights.popleft()
             online = self._results.popleft()
             if left is online.left and right is online.right:
                 out.append(online)

@@ -17,7 +17,7 @@ import numpy as np
 
 from .detector import CameraDetector
 from .params import TrackerParams
-from .types import CameraResult, FlightInfo, TrackResult
+from .types import CameraResult, FlightInfo, StereoFrame, TrackResult
 
 NO_3D = "one camera: no 3D point"
 
@@ -41,6 +41,10 @@ class MonoTracker:
 
     def close(self) -> None:
         """Nothing to release (the stereo tracker's thread pool has no counterpart here)."""
+
+    def process_frame(self, frame: StereoFrame, keep_masks: bool = True) -> TrackResult:
+        """One step of a one-camera source (its frames carry ``right=None``)."""
+        return self.process(frame.left, None, frame.t_left, frame.index, frame.index_right, keep_masks)
 
     def process(self, frame_bgr: np.ndarray, _right: None, timestamp: float, index: int = -1,
                 index_right: int = -1, keep_masks: bool = True) -> TrackResult:

@@ -45,7 +45,7 @@ from .guided import find_spot, white_near
 from .params import TrackerParams
 from .rig import StereoRig
 from .trajectory import Trajectory
-from .types import REJECT_STEREO, CameraResult, Candidate, TrackResult
+from .types import REJECT_STEREO, CameraResult, Candidate, StereoFrame, TrackResult
 
 
 # Time step (s) over which the tracklets' image velocities are followed back to find the
@@ -152,6 +152,9 @@ class StereoTracker:
         # Per camera, for ``stereo.landed_frames``: tracklet -> time of its last report with a
         # 3D point above ``landed_max_height`` (within ``FLOWN_MEMORY`` s).
         self._flown: tuple[dict[int, float], dict[int, float]] = ({}, {})
+        # Each camera's readout of the last step: what a step that brings no new image from that
+        # camera reports for it (``process_frame``).
+        self._last_results: list[CameraResult | None] = [None, None]
         self._reset_caught()
 
     # ---- configuration ---------------------------------------------------------------------
@@ -178,6 +181,7 @@ class StereoTracker:
         self._held_now = [False, False]
         self._last_point = None
         self._flown = ({}, {})
+        self._last_results = [None, None]
         self._reset_caught()
 
     def _reset_caught(self) -> None:
@@ -267,9 +271,25 @@ class StereoTracker:
         return self._trajectory
 
     # ---- the pipeline ----------------------------------------------------------------------
+    def process_frame(self, frame: StereoFrame, keep_masks: bool = True) -> TrackResult:
+        """One step of a source: a pair of new images (``process``), or a new image from one
+        camera only (cameras without a common trigger, ``VideoPair``'s timestamps: ``_process_one``)."""
+        if frame.fresh_left and frame.fresh_right:
+            return self.process(frame.left, frame.right, frame.t_left, frame.index,
+                                frame.index_right, keep_masks, t_right=frame.t_right)
+        if frame.fresh_right:
+            return self._process_one(1, frame.right, frame.t_right, frame.index, frame.index_right,
+                                     keep_masks)
+        return self._process_one(0, frame.left, frame.t_left, frame.index, frame.index_right, keep_masks)
+
     def process(self, left_bgr: np.ndarray, right_bgr: np.ndarray, timestamp: float,
-                index: int = -1, index_right: int = -1, keep_masks: bool = True) -> TrackResult:
+                index: int = -1, index_right: int = -1, keep_masks: bool = True,
+                t_right: float | None = None) -> TrackResult:
+        """Track one pair of images; ``timestamp`` is the pair's (the left image's) time, and
+        ``t_right`` the right image's when it differs (the right detector follows its own clock;
+        None: the same)."""
         start = time.perf_counter()
+        t_r = timestamp if t_right is None else t_right
         if not self._checked_size:
             h, w = left_bgr.shape[:2]
             self.rig.check_image_size(w, h, "the left frames")
@@ -284,18 +304,18 @@ class StereoTracker:
         # first, so a camera's periodic whole frame is never run in turn with the other's.
         self.left.keep_whole, self.right.keep_whole = self._held_now
         in_turn = (self.left.plan_window(left_bgr, timestamp)
-                   & self.right.plan_window(right_bgr, timestamp))
+                   & self.right.plan_window(right_bgr, t_r))
         if self._pool is not None and not in_turn:
             # Only the image half runs side by side (CameraDetector.segment); the measuring
             # half, many small calls each of which hands the GIL over, runs on this thread,
             # the left camera's while the right camera's image half may still be running.
-            fut = self._pool.submit(self.right.segment, right_bgr, timestamp)
+            fut = self._pool.submit(self.right.segment, right_bgr, t_r)
             res_left = self.left.candidates_from(left_bgr, timestamp,
                                                  self.left.segment(left_bgr, timestamp), keep_masks)
-            res_right = self.right.candidates_from(right_bgr, timestamp, fut.result(), keep_masks)
+            res_right = self.right.candidates_from(right_bgr, t_r, fut.result(), keep_masks)
         else:
             res_left = self.left.find_candidates(left_bgr, timestamp, keep_masks)
-            res_right = self.right.find_candidates(right_bgr, timestamp, keep_masks)
+            res_right = self.right.find_candidates(right_bgr, t_r, keep_masks)
 
         if self.params.stereo.stereo_vouch:
             res_left, res_right = self._vouch(res_left, res_right)
@@ -306,7 +326,7 @@ class StereoTracker:
             det_left = self.left.choose(res_left.candidates)
             det_right = self.right.choose(res_right.candidates)
         self.left.commit(det_left, timestamp, res_left.candidates)
-        self.right.commit(det_right, timestamp, res_right.candidates)
+        self.right.commit(det_right, t_r, res_right.candidates)
         sp = self.params.stereo
         # Without override the guided look only serves a camera with no detection: when both
         # have one, skip predicting the flight (an RK4 propagation per frame on the hot path).
@@ -442,11 +462,99 @@ class StereoTracker:
                 guide = self._trajectory.guide(timestamp)
             if guide is not None:
                 predicted_distance = float(np.linalg.norm(self.rig.to_left([guide[0]])[0]))
+        self._last_results = [res_left, res_right]
 
         return TrackResult(
             index=index, timestamp=timestamp, left=res_left, right=res_right, point=point_out,
             in_court_frame=self.rig.has_court_pose, distance=distance, speed=speed,
             epipolar_error=epi, index_right=index_right, measured_point=measured,
+            predicted_distance=predicted_distance,
+            processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
+
+    def _process_one(self, cam: int, frame_bgr: np.ndarray, t: float, index: int, index_right: int,
+                     keep_masks: bool) -> TrackResult:
+        """A step that brings a new image from camera ``cam`` only (the other camera, free-running,
+        had none near this time): that camera's detector runs on it at its own time, the other
+        camera's readout is its last one, and no 3D point is measured (a pair of images taken
+        apart would triangulate the shuttle's motion between them). The one-camera rules of a
+        pair step apply to this camera as they would without a partner: the flight's guided
+        look, the exits from view, the landed hold, the caught shuttle, the limit on reports
+        alone; none of them counts this step for the other camera."""
+        start = time.perf_counter()
+        detector = self.left if cam == 0 else self.right
+        sp = self.params.stereo
+        h, w = frame_bgr.shape[:2]
+        if not self._checked_size:
+            self.rig.check_image_size(w, h, "the left frames" if cam == 0 else "the right frames")
+        other = self._last_results[1 - cam] or CameraResult(detection=None, image_size=(w, h))
+
+        detector.keep_whole = self._held_now[cam]
+        detector.plan_window(frame_bgr, t)
+        result = detector.find_candidates(frame_bgr, t, keep_masks)
+        det = detector.choose(result.candidates)
+        detector.commit(det, t, result.candidates)
+        guide = None
+        weak = self._weak_lone(det, False)
+        if sp.guided_search and (det is None or det.predicted or weak):
+            guide = self._trajectory.guide(t)
+            if guide is not None:
+                found = self._guided(cam, frame_bgr, det, guide, weak)
+                if found is not None:
+                    det = found
+                    result = dataclasses.replace(result, candidates=result.candidates + (found,))
+                if sp.guided_coast:
+                    result, det = self._coast_on_flight(cam, frame_bgr, result, det, guide)
+        if det is not None and not det.predicted:
+            self._reports[cam].append((t, det.x, det.y, detector.tracklet_velocity(det)))
+        if (sp.exit_margin > 0 or sp.out_of_view_weak) and det is not None:
+            border = self._near_border(det, frame_bgr)
+            weak_now = sp.out_of_view_weak and self._weak_lone(det, False)
+            if border or weak_now:
+                if guide is None:
+                    guide = self._trajectory.guide(t)
+                if ((border and sp.exit_by_path and self._path_leaves(cam, frame_bgr, t))
+                        or (guide is not None
+                            and ((border and self._gone_out(cam, det, frame_bgr, guide[0]))
+                                 or (weak_now and self._out_of_view(cam, frame_bgr, guide[0]))))):
+                    det = None
+        self._held_now[cam] = False
+        if sp.landed_frames > 0 and self.rig.has_court_pose:
+            result, det = self._hold_landed(cam, result, det, t)
+        detector.protect_report(det if self._lying_landed(cam, det, t, w) else None, w)
+        previous = list(self._previous)
+        previous[cam] = frame_bgr
+        self._previous = (previous[0], previous[1])
+        result, shown = detector.lead_to_head(result, det)
+        result = CameraDetector.finalise(result, shown)
+
+        flight = self._trajectory.update(t, None)
+        speed = None
+        if flight.velocity is not None:
+            speed = float(math.sqrt(sum(v * v for v in flight.velocity)))
+        if (self._caught is not None and sp.caught_frames > 0
+                and t - self._caught_at <= sp.caught_hold):
+            speed = None
+            flight = dataclasses.replace(flight, velocity=None, prediction=None, in_flight=False,
+                                         withheld_reason=CAUGHT_REASON)
+            pair = [other, other]
+            pair[cam] = result
+            result = self._withhold_caught(*pair, cameras=(cam,))[cam]
+        self._note_anchor(cam, result.detection, False)
+        present = [other.detection is not None] * 2
+        present[cam] = result.detection is not None
+        result = self._limit_alone_camera(cam, result, present, False)
+        predicted_distance = None
+        if flight.in_flight:
+            if guide is None:
+                guide = self._trajectory.guide(t)
+            if guide is not None:
+                predicted_distance = float(np.linalg.norm(self.rig.to_left([guide[0]])[0]))
+        self._last_results[cam] = result
+        left, right = (result, other) if cam == 0 else (other, result)
+        return TrackResult(
+            index=index, timestamp=t, left=left, right=right, point=None,
+            in_court_frame=self.rig.has_court_pose, distance=None, speed=speed,
+            epipolar_error=None, index_right=index_right, measured_point=None,
             predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
 
@@ -602,13 +710,14 @@ class StereoTracker:
         self._caught, self._caught_now, self._caught_at = [None, None], True, t
         return True
 
-    def _withhold_caught(self, res_left: CameraResult, res_right: CameraResult
-                         ) -> tuple[CameraResult, CameraResult]:
+    def _withhold_caught(self, res_left: CameraResult, res_right: CameraResult,
+                         cameras: tuple[int, ...] = (0, 1)) -> tuple[CameraResult, CameraResult]:
         """Each camera's report of the caught shuttle withheld (marked ``REJECT_STEREO``, the
         association and the flight untouched): the report at the catch, then each report within
-        ``CAUGHT_STEP`` px a frame of the last one withheld (the hand carrying it)."""
+        ``CAUGHT_STEP`` px a frame of the last one withheld (the hand carrying it). ``cameras``:
+        those with a new image this step."""
         results = [res_left, res_right]
-        for cam in (0, 1):
+        for cam in cameras:
             det = results[cam].detection
             if det is None or det.predicted:
                 continue
@@ -671,40 +780,46 @@ class StereoTracker:
         kept. Only the readout changes (the detection is marked ``REJECT_STEREO``): the
         association, the flight and the look-ahead's tracklets are left as they were.
         """
-        sp = self.params.stereo
         results = [res_left, res_right]
         present = [r.detection is not None for r in results]
         for cam in (0, 1):
-            state = self._alone[cam]
-            if present[cam] and self._held_now[cam]:
-                # A landed shuttle held on (``_hold_landed``) is reported, but no flight goes on:
-                # what this camera reports after it does not continue the stereo readout, and
-                # the other camera's report beside it is a report alone.
-                state[0] = 0
-                state[1] += 1
-                if state[1] > sp.alone_anchor_gap:
-                    state[2] = False
-                continue
-            if not present[cam]:
-                state[0] = 0
-                state[1] += 1
-                if state[1] > sp.alone_anchor_gap:
-                    state[2] = False
-                continue
-            state[1] = 0
-            if has_point:
-                state[0], state[2] = 0, True
-            elif present[1 - cam] and not self._held_now[1 - cam]:
-                state[0] = 0
-            else:
-                state[0] += 1
-                if sp.alone_limit and not state[2] and state[0] > sp.alone_max_frames:
-                    det = results[cam].detection
-                    results[cam] = dataclasses.replace(
-                        results[cam], detection=None,
-                        candidates=tuple(dataclasses.replace(c, rejected_by=REJECT_STEREO) if c is det else c
-                                         for c in results[cam].candidates))
+            results[cam] = self._limit_alone_camera(cam, results[cam], present, has_point)
         return results[0], results[1]
+
+    def _limit_alone_camera(self, cam: int, result: CameraResult, present: list[bool],
+                            has_point: bool) -> CameraResult:
+        """``_limit_alone`` for one camera; ``present``: whether each camera reports now."""
+        sp = self.params.stereo
+        state = self._alone[cam]
+        if present[cam] and self._held_now[cam]:
+            # A landed shuttle held on (``_hold_landed``) is reported, but no flight goes on:
+            # what this camera reports after it does not continue the stereo readout, and
+            # the other camera's report beside it is a report alone.
+            state[0] = 0
+            state[1] += 1
+            if state[1] > sp.alone_anchor_gap:
+                state[2] = False
+            return result
+        if not present[cam]:
+            state[0] = 0
+            state[1] += 1
+            if state[1] > sp.alone_anchor_gap:
+                state[2] = False
+            return result
+        state[1] = 0
+        if has_point:
+            state[0], state[2] = 0, True
+        elif present[1 - cam] and not self._held_now[1 - cam]:
+            state[0] = 0
+        else:
+            state[0] += 1
+            if sp.alone_limit and not state[2] and state[0] > sp.alone_max_frames:
+                det = result.detection
+                result = dataclasses.replace(
+                    result, detection=None,
+                    candidates=tuple(dataclasses.replace(c, rejected_by=REJECT_STEREO) if c is det else c
+                                     for c in result.candidates))
+        return result
 
     def _vouch(self, res_left: CameraResult, res_right: CameraResult
                ) -> tuple[CameraResult, CameraResult]:

@@ -32,10 +32,16 @@ class StereoFrame:
     t_right: float
     index: int             # left frame index
     index_right: int = -1  # paired right frame index (-1: same as index)
+    # Cameras without a common trigger (io/video.py ``VideoPair``): a step may bring a new
+    # image from one camera only; the other's image is the one it already brought, which its
+    # detector must not see twice (``StereoTracker.process_frame``).
+    fresh_left: bool = True
+    fresh_right: bool = True
 
     @property
     def timestamp(self) -> float:
-        return self.t_left
+        """The step's time: the left image's, or the right one's on a step only it brought."""
+        return self.t_left if self.fresh_left else self.t_right
 
 
 @dataclass(frozen=True, slots=True)

@@ -67,7 +67,9 @@ class ProcessJob(QObject):
             source, rig = open_spec(self.spec, context)
             try:
                 rig.check_image_size(*source.image_size, what="the videos")
-                total = max(int(getattr(source, "frame_count", 0) or 0), 0)
+                # Steps, not left frames: free-running cameras add the right frames no left
+                # frame paired with (``VideoPair.step_count``).
+                total = max(int(getattr(source, "step_count", 0) or getattr(source, "frame_count", 0) or 0), 0)
                 start, last = time.perf_counter(), 0.0
 
                 def report(n: int) -> None:

@@ -266,8 +266,10 @@ class _LiveReader(threading.Thread):
                 if frame is None:
                     self.ended = True
                     break
-                self.left_rate.tick(frame.t_left)
-                self.right_rate.tick(frame.t_right)
+                if frame.fresh_left:
+                    self.left_rate.tick(frame.t_left)
+                if frame.fresh_right:
+                    self.right_rate.tick(frame.t_right)
                 self.slot.put((frame, time.perf_counter()))
                 self.arrived.set()
         except USER_ERRORS as exc:
@@ -505,28 +507,31 @@ class TrackingWorker(QObject):
                     what = "video" if getattr(source, "cameras", 2) == 1 else "videos"
                     self.ended.emit(f"end of the {what}: choose Source ▸ Restart to play again")
                     return
-                src_left_rate.tick(frame.t_left)
-                if frame.right is not None:      # (a one-camera source has no right frames)
+                # A step of free-running cameras may bring one camera's image only
+                # (``StereoFrame.fresh_left``): each rate counts its own new images.
+                if frame.fresh_left:
+                    src_left_rate.tick(frame.t_left)
+                if frame.right is not None and frame.fresh_right:   # (one-camera sources: none)
                     src_right_rate.tick(frame.t_right)
                 if realtime and not stepping:
-                    if pace_wall is None or frame.t_left < pace_src:
-                        pace_wall, pace_src = t_available, frame.t_left
-                    due = pace_wall + (frame.t_left - pace_src)
+                    t_src = frame.timestamp
+                    if pace_wall is None or t_src < pace_src:
+                        pace_wall, pace_src = t_available, t_src
+                    due = pace_wall + (t_src - pace_src)
                     lag = t_available - due
                     if lag > RESYNC_AFTER:          # too slow for real time: play slower
-                        pace_wall, pace_src = t_available, frame.t_left
+                        pace_wall, pace_src = t_available, t_src
                     elif due > t_available:
                         self._sleep_until(due)
                         t_available = time.perf_counter()
 
-            result = tracker.process(frame.left, frame.right, frame.t_left, frame.index,
-                                     frame.index_right)
+            result = tracker.process_frame(frame)
             t_done = time.perf_counter()
             frames += 1
             for tap in taps:
                 tap(result)
             rate.tick(t_done)
-            speed_meter.append((t_done, frame.t_left))
+            speed_meter.append((t_done, frame.timestamp))
             with self._link_lock:
                 if self._link is not None:
                     try:
@@ -537,12 +542,17 @@ class TrackingWorker(QObject):
             labels = (None, None)
             if score is not None:
                 labels = truth.for_frame(frame)
-                score.add(0, result.left.detection, labels[0])
-                score.add(1, result.right.detection, labels[1])
-            for trail, cam in zip(trails, (result.left, result.right)):
-                if cam.detection is not None:
-                    trail.append((frame.t_left, cam.detection.x, cam.detection.y))
-                while trail and (trail[0][0] < frame.t_left - TRAIL_SECONDS or trail[0][0] > frame.t_left):
+                # A camera that brought no new image this step was scored on its last one.
+                if frame.fresh_left:
+                    score.add(0, result.left.detection, labels[0])
+                if frame.fresh_right:
+                    score.add(1, result.right.detection, labels[1])
+            t_step = frame.timestamp
+            for trail, cam, fresh in zip(trails, (result.left, result.right),
+                                         (frame.fresh_left, frame.fresh_right)):
+                if cam.detection is not None and fresh:
+                    trail.append((t_step, cam.detection.x, cam.detection.y))
+                while trail and (trail[0][0] < t_step - TRAIL_SECONDS or trail[0][0] > t_step):
                     trail.popleft()
 
             if reader is not None:

@@ -105,8 +105,7 @@ def evaluate_demo_lookaheads(seed: int = 0, frames: int = 1000, size: tuple[int,
             if frame is None:
                 break
             start = time.perf_counter()
-            result = tracker.process(frame.left, frame.right, frame.t_left, frame.index,
-                                     frame.index_right, keep_masks=False)
+            result = tracker.process_frame(frame, keep_masks=False)
             elapsed += time.perf_counter() - start
             for k, delay in delays.items():
                 for decided in delay.push(result):

@@ -80,7 +80,8 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                  progress: Callable[[int], None] | None = None,
                  should_stop: Callable[[], bool] | None = None, truth=None) -> TrackFileSummary:
     """Track every pair ``source.read()`` gives (a ``FrameSource``: a ``VideoPair``, possibly
-    behind a ``PrefetchingReader``) and write one row per left frame to ``output``.
+    behind a ``PrefetchingReader``) and write one row per step to ``output``: per left frame, and
+    per right frame no left frame was paired with (free-running cameras, ``VideoPair``).
 
     The rows are re-decided with ``params.lookahead.frames`` frames of look-ahead (the robot,
     when ``link`` is given, gets the live results at once). ``progress(pairs done)`` is called
@@ -92,12 +93,16 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     if truth is None:
         truth = getattr(source, "frame_truth", None)
     score = LiveScore(rig.image_size[0]) if truth is not None else None
+    last_scored = [None, None]      # each camera's frame index scored last: a step repeats one
 
     def scored(decided):
         if score is not None:
             left, right = truth.for_indices(decided.index, decided.index_right)
-            score.add(0, decided.left.detection, left)
-            score.add(1, decided.right.detection, right)
+            for cam, index, result, label in ((0, decided.index, decided.left, left),
+                                              (1, decided.index_right, decided.right, right)):
+                if index != last_scored[cam] or index < 0:
+                    score.add(cam, result.detection, label)
+                    last_scored[cam] = index
         return decided
 
     out_path = Path(output)
@@ -118,8 +123,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                 frame = source.read()
                 if frame is None:
                     break
-                result = tracker.process(frame.left, frame.right, frame.t_left, frame.index,
-                                         frame.index_right, keep_masks=False)
+                result = tracker.process_frame(frame, keep_masks=False)
                 for decided in map(scored, lookahead.push(result)):
                     writer.writerow(track_row(decided))
                     hits3d += decided.point is not None

@@ -117,12 +117,49 @@ class VideoFile:
         self._cap.release()
 
 
+def pairing_schedule(left_times: np.ndarray, right_times: np.ndarray
+                     ) -> list[tuple[int, int, bool, bool]]:
+    """The steps that pair two cameras' frames by time: ``(left index, right index, left new,
+    right new)``, in time order.
+
+    Each left frame pairs with the right frame of nearest timestamp (ties: the earlier). A right
+    frame already paired is not new again; right frames that no left frame chose come, each as
+    its own step beside the last left frame, between the pairs they fall between (a right frame
+    between the ones nearest to left frames i and i + 1 is taken after t_left[i], so the steps'
+    times never go back) and after the last pair. Right frames before the first pair have no left
+    frame to stand beside and are left out.
+    """
+    left_times = np.asarray(left_times, dtype=float)
+    right_times = np.asarray(right_times, dtype=float)
+    n_right = len(right_times)
+    after = np.clip(np.searchsorted(right_times, left_times), 0, n_right - 1)
+    before = np.clip(after - 1, 0, None)
+    nearest = np.where(np.abs(right_times[before] - left_times) <= np.abs(right_times[after] - left_times),
+                       before, after)
+    steps: list[tuple[int, int, bool, bool]] = []
+    last_j = -1
+    for i, j in enumerate(nearest.tolist()):
+        if last_j >= 0:
+            steps.extend((i - 1, k, False, True) for k in range(last_j + 1, j))
+        steps.append((i, j, True, j != last_j))
+        last_j = max(last_j, j)
+    if last_j >= 0:
+        steps.extend((len(left_times) - 1, k, False, True) for k in range(last_j + 1, n_right))
+    return steps
+
+
 class VideoPair:
     """Two video files as a stereo source (``FrameSource``).
 
     Without timestamps, frame i of the left file pairs with frame i of the right file and
     t = i / fps. With timestamp arrays (seconds, one per frame of each file), every left frame
-    is paired with the right frame whose timestamp is nearest, and t = the left timestamp.
+    is paired with the right frame whose timestamp is nearest, and t = the left timestamp; and
+    every frame of each camera is delivered once as new (``StereoFrame.fresh_left`` /
+    ``fresh_right``): a right frame that is nearest to two left frames is new in the first pair
+    only, and a right frame nearest to none (a camera that dropped frames, or runs longer) comes
+    as a step of its own beside the left frame already delivered. On launcher-stereo (free-running
+    cameras that drop frames) 54 of 567 right frames were nearest to no left frame and never
+    tracked; on the NYCU rallies at most one frame a rally, besides a camera that recorded longer.
     """
 
     def __init__(self, left: str | Path, right: str | Path,
@@ -149,6 +186,9 @@ class VideoPair:
         self.name = f"Videos {self.left_file.path.name} + {self.right_file.path.name}"
         self._index = 0
         self._right_cache: dict[int, np.ndarray] = {}
+        self._schedule = (None if self.left_times is None
+                          else pairing_schedule(self.left_times, self.right_times))
+        self._last_left: np.ndarray | None = None
 
     @property
     def image_size(self) -> tuple[int, int]:
@@ -160,17 +200,13 @@ class VideoPair:
 
     @property
     def frame_count(self) -> int:
+        """Left frames (what label files and progress count)."""
         return self.left_file.frame_count
 
-    def _right_index_for(self, i: int, t_left: float) -> int:
-        if self.right_times is None:
-            return i
-        j = int(np.searchsorted(self.right_times, t_left))
-        if j >= len(self.right_times):
-            return len(self.right_times) - 1
-        if j > 0 and abs(self.right_times[j - 1] - t_left) <= abs(self.right_times[j] - t_left):
-            return j - 1
-        return j
+    @property
+    def step_count(self) -> int:
+        """Steps ``read`` delivers: the left frames, plus the right frames paired with none."""
+        return self.frame_count if self._schedule is None else len(self._schedule)
 
     def _right_frame(self, j: int) -> np.ndarray | None:
         if j in self._right_cache:
@@ -189,26 +225,40 @@ class VideoPair:
         return self._right_cache.get(j, frame)
 
     def read(self) -> StereoFrame | None:
+        if self._schedule is not None:
+            return self._read_scheduled()
         i = self._index
-        if self.left_times is not None and i >= len(self.left_times):
-            return self._end()
         left = self.left_file.read()
         if left is None:
             return self._end()
-        t = float(self.left_times[i]) if self.left_times is not None else i / self.left_file.fps
-        j = self._right_index_for(i, t)
+        right = self._right_frame(i)
+        if right is None:
+            return self._end()
+        self._index += 1
+        return StereoFrame(left, right, i / self.left_file.fps, i / self.right_file.fps, i, i)
+
+    def _read_scheduled(self) -> StereoFrame | None:
+        if self._index >= len(self._schedule):
+            return self._end()
+        i, j, fresh_left, fresh_right = self._schedule[self._index]
+        if fresh_left or self._last_left is None:
+            left = self.left_file.read()
+            if left is None:
+                return self._end()
+            self._last_left = left
         right = self._right_frame(j)
         if right is None:
             return self._end()
-        t_right = float(self.right_times[j]) if self.right_times is not None else j / self.right_file.fps
         self._index += 1
-        return StereoFrame(left, right, t, t_right, i, j)
+        return StereoFrame(self._last_left, right, float(self.left_times[i]), float(self.right_times[j]),
+                           i, j, fresh_left, fresh_right)
 
     def _end(self) -> StereoFrame | None:
         if self.loop and self._index > 0:
             self.left_file.seek(0)
             self.right_file.seek(0)
             self._right_cache.clear()
+            self._last_left = None
             self._index = 0
             return self.read()
         return None

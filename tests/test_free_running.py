@@ -1,0 +1,191 @@
+"""Cameras without a common trigger: every frame of each camera is tracked once, at its own time.
+
+Two free-running cameras that drop frames (launcher-stereo: 54 of 567 right frames were nearest
+to no left frame) used to lose every right frame no left frame paired with, and to feed a right
+frame nearest to two left frames to its detector twice. ``pairing_schedule`` delivers each frame
+of each camera once as new; ``StereoTracker.process_frame`` runs only the camera that brought a
+new image and keeps the other's readout; the look-ahead hands a repeated readout out as its
+frame's decision.
+"""
+
+import numpy as np
+import pytest
+
+from badminton_gui.core.evaluation import tolerance_px
+from badminton_gui.core.lookahead import StereoLookahead
+from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.tracker import StereoTracker
+from badminton_gui.core.types import StereoFrame
+from badminton_gui.io.demo_scene import DemoScene
+from badminton_gui.io.video import VideoPair, pairing_schedule
+
+from .test_cli import moving_dot_frames, write_video
+
+
+def _check_schedule(left_times, right_times, steps):
+    """Every left frame new once, in order; every right frame from the first paired one new
+    once, in order; the steps' own times never go back."""
+    fresh_left = [i for i, _, fl, _ in steps if fl]
+    fresh_right = [j for _, j, _, fr in steps if fr]
+    assert fresh_left == list(range(len(left_times)))
+    assert fresh_right == list(range(fresh_right[0], len(right_times)))
+    times = [left_times[i] if fl else right_times[j] for i, j, fl, _ in steps]
+    assert all(b >= a for a, b in zip(times, times[1:]))
+    for i, j, fl, fr in steps:
+        assert fl or fr
+
+
+def test_a_right_frame_no_left_frame_chose_comes_as_its_own_step():
+    # Left dropped its frame at 30 ms; right dropped the one at 60 ms and ran 2 frames longer.
+    left = np.array([0, 10, 20, 40, 50, 60, 70]) / 1000.0
+    right = np.array([0, 10, 20, 30, 40, 50, 70, 80, 90]) / 1000.0
+    steps = pairing_schedule(left, right)
+    assert steps == [(0, 0, True, True), (1, 1, True, True), (2, 2, True, True),
+                     (2, 3, False, True),                       # right's 30 ms: no left frame
+                     (3, 4, True, True), (4, 5, True, True),
+                     (5, 5, True, False),                       # 60 ms: right 50 and 70 tie, the earlier wins; not new
+                     (6, 6, True, True),
+                     (6, 7, False, True), (6, 8, False, True)]  # right ran longer
+    _check_schedule(left, right, steps)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_the_schedule_delivers_every_frame_once_in_time_order(seed):
+    rng = np.random.default_rng(seed)
+    # Free-running cameras: ~8.4 ms frames with jitter, dropped frames, a phase offset.
+    left = np.cumsum(rng.choice([0.0084, 0.0084, 0.0084, 0.0168, 0.0025], size=120))
+    right = np.cumsum(rng.choice([0.0084, 0.0084, 0.0168, 0.0042, 0.09], size=130)) + rng.uniform(-0.02, 0.02)
+    _check_schedule(left, right, pairing_schedule(left, right))
+
+
+def test_a_video_pair_brings_the_unpaired_right_frame_beside_the_last_left_image(tmp_path):
+    frames, _ = moving_dot_frames(6)
+    write_video(tmp_path / "l.avi", frames[:5])
+    write_video(tmp_path / "r.avi", frames)
+    left_times = np.array([0, 1, 2, 4, 5]) / 30.0          # the left camera dropped frame 3
+    right_times = np.arange(6) / 30.0
+    src = VideoPair(tmp_path / "l.avi", tmp_path / "r.avi", left_times, right_times)
+    assert src.step_count == 6 and src.frame_count == 5
+    got = []
+    while (f := src.read()) is not None:
+        got.append(f)
+    src.close()
+    assert [(f.index, f.index_right, f.fresh_left, f.fresh_right) for f in got] == [
+        (0, 0, True, True), (1, 1, True, True), (2, 2, True, True), (2, 3, False, True),
+        (3, 4, True, True), (4, 5, True, True)]
+    assert got[3].left is got[2].left                   # the left image already delivered
+    assert got[3].timestamp == pytest.approx(3 / 30.0)  # the step's time is the new image's
+    assert got[3].t_left == pytest.approx(2 / 30.0)
+
+
+# ---- the tracker on the demo court with dropped frames ---------------------------------------
+FRAMES = 300
+DROP_LEFT = set(range(7, FRAMES, 7))        # right-only steps
+DROP_RIGHT = {40, 90, 150, 220}              # left-only steps: the right image comes again
+
+
+def _free_running(scene: DemoScene):
+    last = {}
+    for i in range(FRAMES):
+        left, right = scene.render(i)
+        t = scene.time_of(i)
+        if i in DROP_LEFT:
+            li, lt, limg = last["left"]
+            yield StereoFrame(limg, right, lt, t, li, i, False, True)
+            last["right"] = (i, t, right)
+        elif i in DROP_RIGHT:
+            ri, rt, rimg = last["right"]
+            yield StereoFrame(left, rimg, t, rt, i, ri, True, False)
+            last["left"] = (i, t, left)
+        else:
+            yield StereoFrame(left, right, t, t, i, i)
+            last["left"], last["right"] = (i, t, left), (i, t, right)
+
+
+def track_free_running():
+    """(steps, online results, look-ahead results, truth by frame, find_candidates calls per camera)."""
+    scene = DemoScene(seed=3, size=(1280, 720), rig="binocular", n_frames=FRAMES)
+    params = TrackerParams()
+    tracker = StereoTracker(scene.rig, params, parallel=False)
+    calls = [0, 0]
+    for cam, det in enumerate((tracker.left, tracker.right)):
+        inner = det.find_candidates
+
+        def counted(*args, _inner=inner, _cam=cam, **kwargs):
+            calls[_cam] += 1
+            return _inner(*args, **kwargs)
+        det.find_candidates = counted
+    lookahead = StereoLookahead(scene.rig, params.with_value("lookahead.frames", 4),
+                                tracker.epipolar_tolerance)
+    steps, online, decided = [], [], []
+    for frame in _free_running(scene):
+        steps.append(frame)
+        result = tracker.process_frame(frame, keep_masks=False)
+        online.append(result)
+        decided.extend(lookahead.push(result))
+    decided.extend(lookahead.flush())
+    truth = {i: scene.truth(i) for i in range(FRAMES)}
+    tracker.close()
+    return steps, online, decided, truth, calls
+
+
+@pytest.fixture(scope="module")
+def free_run():
+    return track_free_running()
+
+
+def _correct(result_cam, visible, uv) -> bool:
+    d = result_cam.detection
+    if not visible:
+        return d is None
+    return d is not None and np.hypot(d.x - uv[0], d.y - uv[1]) <= tolerance_px(1280)
+
+
+def test_each_detector_sees_each_of_its_images_once(free_run):
+    steps, _, _, _, calls = free_run
+    assert calls == [sum(s.fresh_left for s in steps), sum(s.fresh_right for s in steps)]
+    assert calls == [FRAMES - len(DROP_LEFT), FRAMES - len(DROP_RIGHT)]
+
+
+def test_a_one_camera_step_keeps_the_other_readout_and_measures_no_3d_point(free_run):
+    steps, online, _, _, _ = free_run
+    for k, (step, result) in enumerate(zip(steps, online)):
+        if step.fresh_left and step.fresh_right:
+            continue
+        stale = "left" if step.fresh_right else "right"
+        assert getattr(result, stale) is getattr(online[k - 1], stale)
+        assert result.point is None and result.measured_point is None
+        assert result.timestamp == pytest.approx(step.timestamp)
+
+
+def test_the_camera_with_the_new_image_finds_the_shuttle_on_one_camera_steps(free_run):
+    """The right camera on the steps that brought its image only (before: never tracked) is as
+    right as on the pairs, and each camera over all its own frames stays at the demo court's level
+    (tests/test_tracker_demo.py: ≥ 95 %)."""
+    steps, online, _, truth, _ = free_run
+    alone, per_cam = [], {0: [], 1: []}
+    for step, result in zip(steps, online):
+        if step.fresh_left:
+            tr = truth[step.index]
+            per_cam[0].append(_correct(result.left, tr.visible_left, tr.uv_left))
+        if step.fresh_right:
+            tr = truth[step.index_right]
+            ok = _correct(result.right, tr.visible_right, tr.uv_right)
+            per_cam[1].append(ok)
+            if not step.fresh_left:
+                alone.append(ok)
+    assert len(alone) == len(DROP_LEFT)
+    assert np.mean(alone) >= 0.95, f"{sum(alone)} of {len(alone)}"
+    for cam in (0, 1):
+        assert np.mean(per_cam[cam]) >= 0.95, (cam, np.mean(per_cam[cam]))
+
+
+def test_the_look_ahead_hands_out_one_readout_per_step_and_repeats_the_stale_camera(free_run):
+    steps, online, decided, _, _ = free_run
+    assert [r.index for r in decided] == [r.index for r in online]
+    assert [r.index_right for r in decided] == [r.index_right for r in online]
+    for k, step in enumerate(steps):
+        if not step.fresh_left:
+            assert decided[k].left is decided[k - 1].left
+        if not step.fresh_right:
+            assert decided[k].right is decided[k - 1].right
