@@ -108,6 +108,10 @@ CAUGHT_REASON = "caught: out of play"
 # px at 1280 px width: how far a caught shuttle's report may move from one frame to the next and
 # still be the shuttle in the hand that caught it (a hand carrying it walks, it does not fly).
 CAUGHT_STEP = 12.0
+# s: the least time between a pair's two images for the right camera's detections to be moved
+# along their tracks to the left image's time before they are paired (free-running cameras,
+# ``_right_xy``); the NYCU cameras' pairs are 0.05 ms apart, launcher-stereo's up to 25 ms.
+ALIGN_MIN_LAG = 0.0005
 
 
 class StereoTracker:
@@ -155,6 +159,8 @@ class StereoTracker:
         # Each camera's readout of the last step: what a step that brings no new image from that
         # camera reports for it (``process_frame``).
         self._last_results: list[CameraResult | None] = [None, None]
+        # s: the left image's time minus the right one's in the pair being processed (``_right_xy``).
+        self._right_lag = 0.0
         self._reset_caught()
 
     # ---- configuration ---------------------------------------------------------------------
@@ -257,7 +263,7 @@ class StereoTracker:
             return
         if min(self.left.tracklet_hits(own_left), self.right.tracklet_hits(own_right)) < sp.confident_hits:
             return
-        err = float(self.rig.epipolar_errors([[own_left.x, own_left.y]], [[own_right.x, own_right.y]])[0, 0])
+        err = float(self.rig.epipolar_errors([[own_left.x, own_left.y]], [list(self._right_xy(own_right))])[0, 0])
         self._add_epipolar_sample(err)
 
     def close(self) -> None:
@@ -290,6 +296,7 @@ class StereoTracker:
         None: the same)."""
         start = time.perf_counter()
         t_r = timestamp if t_right is None else t_right
+        self._right_lag = timestamp - t_r if abs(timestamp - t_r) >= ALIGN_MIN_LAG else 0.0
         if not self._checked_size:
             h, w = left_bgr.shape[:2]
             self.rig.check_image_size(w, h, "the left frames")
@@ -421,7 +428,7 @@ class StereoTracker:
         noise_shape = None
         if point_left is not None:
             measured = tuple(float(v) for v in self.rig.to_output(point_left)[0])
-            noise_shape = self.rig.noise_shape([[det_left.x, det_left.y]], [[det_right.x, det_right.y]])[0]
+            noise_shape = self.rig.noise_shape([[det_left.x, det_left.y]], [list(self._right_xy(det_right))])[0]
             if epi is not None:
                 noise_shape = noise_shape * self._epipolar_inflation(epi)
 
@@ -972,7 +979,7 @@ class StereoTracker:
         if not left or not right:
             return None, None, None, None
         pl = np.array([[c.x, c.y] for c in left])
-        pr = np.array([[c.x, c.y] for c in right])
+        pr = np.array([self._right_xy(c) for c in right])
         epi = self.rig.epipolar_errors(pl, pr)
         best = None
         order = np.argsort(epi, axis=None)
@@ -1180,7 +1187,7 @@ class StereoTracker:
         if det_left is None or det_right is None or det_left.predicted or det_right.predicted:
             return None, None
         sp = self.params.stereo
-        pl, pr = [[det_left.x, det_left.y]], [[det_right.x, det_right.y]]
+        pl, pr = [[det_left.x, det_left.y]], [list(self._right_xy(det_right))]
         err = float(self.rig.epipolar_errors(pl, pr)[0, 0])
         if err > self.epipolar_tolerance():
             return None, None
@@ -1189,6 +1196,20 @@ class StereoTracker:
         if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
             return None, None
         return point, err
+
+    def _right_xy(self, c: Candidate) -> tuple[float, float]:
+        """Where the right camera's candidate ``c`` was at the left image's time: moved along its
+        track's image velocity by the pair's time apart (free-running cameras; a pair taken
+        together, or a candidate whose track has no velocity yet, stays where it was seen). Two
+        images 5 ms apart see a 30 m/s shuttle 15 cm apart: paired as they are, the pair misses
+        its epipolar line or triangulates off the flight."""
+        lag = self._right_lag
+        if lag == 0.0:
+            return c.x, c.y
+        v = self.right.tracklet_velocity(c)
+        if v is None:
+            return c.x, c.y
+        return c.x + v[0] * lag, c.y + v[1] * lag
 
     def _resting_cork(self, point: tuple[float, float, float]) -> tuple[float, float, float]:
         """A shuttle lying where the last flight landed: move the blob's point to the cork."""
@@ -1240,10 +1261,11 @@ class StereoTracker:
         vr = self.right.tracklet_velocity(det_right)
         if vl is None or vr is None:
             return point
+        xr, yr = self._right_xy(det_right)
         back = self.rig.triangulate([[det_left.x - vl[0] * HEAD_DIRECTION_DT,
                                       det_left.y - vl[1] * HEAD_DIRECTION_DT]],
-                                    [[det_right.x - vr[0] * HEAD_DIRECTION_DT,
-                                      det_right.y - vr[1] * HEAD_DIRECTION_DT]])[0]
+                                    [[xr - vr[0] * HEAD_DIRECTION_DT,
+                                      yr - vr[1] * HEAD_DIRECTION_DT]])[0]
         step = point - back
         norm = float(np.linalg.norm(step))
         if norm < sp.head_min_speed * HEAD_DIRECTION_DT:
