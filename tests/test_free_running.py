@@ -192,7 +192,7 @@ def test_the_look_ahead_hands_out_one_readout_per_step_and_repeats_the_stale_cam
 
 
 def test_a_pair_taken_apart_is_triangulated_at_the_left_image_time():
-    """Free-running cameras' pairs are up to 25 ms apart (launcher-stereo; median 3.6 ms): the
+    """Free-running cameras' pairs are up to 25 ms apart (launcher-stereo: p90 3.1 ms): the
     right detection is moved along its track to the left image's time before it is paired. A
     shuttle at 30 m/s seen by the right camera 5 ms before the left one: paired as seen, the point
     is off by centimetres; moved, it is where the shuttle was at the left image's time."""

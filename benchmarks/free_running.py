@@ -1,0 +1,126 @@
+"""How the real two-camera clips' frames pair in time, and what pairing them at one time gives.
+
+Why this file exists: the NYCU rallies' cameras pair within 0.1 ms, but launcher-stereo's are
+free-running and drop frames (GUIDE §5): nearest-timestamp pairing there left right frames
+unpaired (never tracked) and paired images milliseconds apart. This prints, per clip, what the
+pairing schedule (``io/video.py`` ``pairing_schedule``) makes of the two clocks, and, for one
+clip, how smooth the measured 3D points are with and without the right detection moved to the
+left image's time (``StereoTracker._right_xy``): the leave-one-out residual of each measured
+point about a quadratic through its six neighbours (a 7-point window ≤ 80 ms) — a shuttle's
+flight is smooth on that scale, so the residual is measurement error, and a pair triangulated
+from two moments shows up in it. No labels are read (the launcher clip has no 3D labels).
+
+    .venv/bin/python benchmarks/free_running.py            # pairing of every clip + launcher 3D (≈ 40 s)
+    .venv/bin/python benchmarks/free_running.py --clip rally_11-46-04
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from clips import nycu_cfgs, stereo_clips  # noqa: E402
+
+from badminton_gui.core import tracker as tracker_module  # noqa: E402
+from badminton_gui.core.tracker import StereoTracker  # noqa: E402
+from badminton_gui.io.labels import read_timestamps  # noqa: E402
+from badminton_gui.io.nycu import rig_from_nycu  # noqa: E402
+from badminton_gui.io.presets import load_preset  # noqa: E402
+from badminton_gui.io.video import VideoPair, frame_times, pairing_schedule  # noqa: E402
+
+WINDOW = 7            # points in the local fit (the middle one left out)
+WINDOW_SPAN = 0.08    # s: a window longer than this spans a gap or a hit and is skipped
+
+
+def clip_times(clip) -> tuple[np.ndarray, np.ndarray]:
+    """Each camera's frame times as the accuracy benchmark pairs them: the launcher clip by its
+    videos' own times (its label files' Timestamp is i / fps), the rallies by their label CSVs."""
+    if clip.labelled_by_seek:
+        return frame_times(clip.left), frame_times(clip.right)
+    return read_timestamps(clip.left_labels)[1], read_timestamps(clip.right_labels)[1]
+
+
+def pairing_row(clip, left_times, right_times) -> str:
+    steps = pairing_schedule(left_times, right_times)
+    pairs = [(i, j) for i, j, fl, fr in steps if fl and fr]
+    apart = np.array([abs(left_times[i] - right_times[j]) for i, j in pairs]) * 1000.0
+    right_only = sum(1 for _, _, fl, _ in steps if not fl)
+    left_only = sum(1 for _, _, _, fr in steps if not fr)
+    return (f"{clip.name:16s} {len(left_times):5d} {len(right_times):5d} {len(pairs):6d} {right_only:10d} "
+            f"{left_only:9d}   {np.median(apart):6.2f} {np.percentile(apart, 90):6.2f} {apart.max():6.2f}")
+
+
+def residuals(clip, left_times, right_times, align: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(leave-one-out residual, m; the pair's time apart, s) of each measured 3D point."""
+    saved = tracker_module.ALIGN_MIN_LAG
+    tracker_module.ALIGN_MIN_LAG = saved if align else float("inf")
+    try:
+        rig = rig_from_nycu(*nycu_cfgs())
+        source = VideoPair(clip.left, clip.right, left_times, right_times)
+        tracker = StereoTracker(rig, load_preset("default"))
+        points = []
+        while (frame := source.read()) is not None:
+            result = tracker.process_frame(frame, keep_masks=False)
+            if result.measured_point is not None:
+                points.append((result.timestamp, *result.measured_point, frame.t_right - frame.t_left))
+        tracker.close()
+        source.close()
+    finally:
+        tracker_module.ALIGN_MIN_LAG = saved
+    pts = np.array(points)
+    half = WINDOW // 2
+    out, apart = [], []
+    for k in range(half, len(pts) - half):
+        w = pts[k - half:k + half + 1]
+        if w[-1, 0] - w[0, 0] > WINDOW_SPAN:
+            continue
+        t = w[:, 0] - w[half, 0]
+        basis = np.stack([np.ones_like(t), t, t * t], axis=1)
+        others = np.arange(WINDOW) != half
+        coef, *_ = np.linalg.lstsq(basis[others], w[others, 1:4], rcond=None)
+        out.append(float(np.linalg.norm(basis[half] @ coef - w[half, 1:4])))
+        apart.append(abs(w[half, 4]))
+    return np.array(out), np.array(apart)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--clip", default="launcher-stereo",
+                        help="the clip whose 3D points are compared with and without alignment")
+    args = parser.parse_args()
+    clips = stereo_clips()
+    if not clips:
+        print("no two-camera clips under ../shared/data", file=sys.stderr)
+        return 1
+    print("clip             left right  pairs right-only left-only   time apart in pairs, ms: median p90 max")
+    times = {}
+    for clip in clips:
+        times[clip.name] = clip_times(clip)
+        print(pairing_row(clip, *times[clip.name]))
+    chosen = next((c for c in clips if c.name == args.clip), None)
+    if chosen is None:
+        print(f"no clip named {args.clip}", file=sys.stderr)
+        return 1
+    print(f"\n{chosen.name}: measured 3D points, leave-one-out residual about a quadratic "
+          f"({WINDOW} points ≤ {WINDOW_SPAN * 1000:.0f} ms), cm")
+    print("right detection        points  median    p90   pairs < 2 ms apart   pairs ≥ 4 ms apart")
+    for align, label in ((False, "as seen"), (True, "at the left's time")):
+        res, apart = residuals(chosen, *times[chosen.name], align)
+        near, far = res[apart < 0.002], res[apart >= 0.004]
+
+        def med(a):
+            return f"{np.median(a) * 100:6.2f} (n={len(a)})" if len(a) else "     - (n=0)"
+        print(f"{label:20s} {len(res):8d} {np.median(res) * 100:7.2f} {np.percentile(res, 90) * 100:6.2f}"
+              f"   {med(near):>18s}   {med(far):>18s}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
