@@ -8,10 +8,12 @@ clip, how smooth the measured 3D points are with and without the right detection
 left image's time (``StereoTracker._right_xy``): the leave-one-out residual of each measured
 point about a quadratic through its six neighbours (a 7-point window ≤ 80 ms) — a shuttle's
 flight is smooth on that scale, so the residual is measurement error, and a pair triangulated
-from two moments shows up in it. No labels are read (the launcher clip has no 3D labels).
+from two moments shows up in it. No labels are read (the launcher clip has no 3D labels). Then
+the demo court, whose truth is exact, with its right camera taken ``--demo-lag-ms`` before the
+left (``io/demo_eval.py`` ``delayed_right_errors``): the 3D error with and without the move.
 
-    .venv/bin/python benchmarks/free_running.py            # pairing of every clip + launcher 3D (≈ 40 s)
-    .venv/bin/python benchmarks/free_running.py --clip rally_11-46-04
+    .venv/bin/python benchmarks/free_running.py            # every clip's pairing, launcher 3D, demo (≈ 1 min)
+    .venv/bin/python benchmarks/free_running.py --clip rally_11-46-04 --demo-lag-ms 2
 """
 
 from __future__ import annotations
@@ -28,8 +30,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from clips import nycu_cfgs, stereo_clips  # noqa: E402
 
-from badminton_gui.core import tracker as tracker_module  # noqa: E402
 from badminton_gui.core.tracker import StereoTracker  # noqa: E402
+from badminton_gui.io.demo_eval import delayed_right_errors  # noqa: E402
 from badminton_gui.io.labels import read_timestamps  # noqa: E402
 from badminton_gui.io.nycu import rig_from_nycu  # noqa: E402
 from badminton_gui.io.presets import load_preset  # noqa: E402
@@ -59,21 +61,18 @@ def pairing_row(clip, left_times, right_times) -> str:
 
 def residuals(clip, left_times, right_times, align: bool) -> tuple[np.ndarray, np.ndarray]:
     """(leave-one-out residual, m; the pair's time apart, s) of each measured 3D point."""
-    saved = tracker_module.ALIGN_MIN_LAG
-    tracker_module.ALIGN_MIN_LAG = saved if align else float("inf")
+    rig = rig_from_nycu(*nycu_cfgs())
+    source = VideoPair(clip.left, clip.right, left_times, right_times)
+    tracker = StereoTracker(rig, load_preset("default").with_value("stereo.align_pairs", align))
+    points = []
     try:
-        rig = rig_from_nycu(*nycu_cfgs())
-        source = VideoPair(clip.left, clip.right, left_times, right_times)
-        tracker = StereoTracker(rig, load_preset("default"))
-        points = []
         while (frame := source.read()) is not None:
             result = tracker.process_frame(frame, keep_masks=False)
             if result.measured_point is not None:
                 points.append((result.timestamp, *result.measured_point, frame.t_right - frame.t_left))
+    finally:
         tracker.close()
         source.close()
-    finally:
-        tracker_module.ALIGN_MIN_LAG = saved
     pts = np.array(points)
     half = WINDOW // 2
     out, apart = [], []
@@ -94,6 +93,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--clip", default="launcher-stereo",
                         help="the clip whose 3D points are compared with and without alignment")
+    parser.add_argument("--demo-lag-ms", type=float, default=4.0,
+                        help="how long before the left image the demo's right one is taken (0: skip)")
+    parser.add_argument("--demo-frames", type=int, default=400)
+    parser.add_argument("--demo-seed", type=int, default=3)
     args = parser.parse_args()
     clips = stereo_clips()
     if not clips:
@@ -119,6 +122,18 @@ def main() -> int:
             return f"{np.median(a) * 100:6.2f} (n={len(a)})" if len(a) else "     - (n=0)"
         print(f"{label:20s} {len(res):8d} {np.median(res) * 100:7.2f} {np.percentile(res, 90) * 100:6.2f}"
               f"   {med(near):>18s}   {med(far):>18s}")
+    if args.demo_lag_ms > 0:
+        print(f"\ndemo court (binocular rig, seed {args.demo_seed}, {args.demo_frames} frames), right image "
+              f"{args.demo_lag_ms:g} ms before the left: 3D error against the truth, cm")
+        print("right detection        measured: n median    p90   reported: n median    p90")
+        params = load_preset("default")
+        for lag, align, label in ((0.0, True, "taken together"), (args.demo_lag_ms / 1000.0, False, "as seen"),
+                                  (args.demo_lag_ms / 1000.0, True, "at the left's time")):
+            measured, reported = delayed_right_errors(lag, args.demo_frames, args.demo_seed,
+                                                      params.with_value("stereo.align_pairs", align))
+            print(f"{label:20s} {len(measured):12d} {np.median(measured) * 100:6.2f} "
+                  f"{np.percentile(measured, 90) * 100:6.2f} {len(reported):12d} "
+                  f"{np.median(reported) * 100:6.2f} {np.percentile(reported, 90) * 100:6.2f}")
     return 0
 
 

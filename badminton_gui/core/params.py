@@ -505,6 +505,10 @@ class StereoParams(ParamGroup):
     caught_hold: float = param(0.5, 0.0, 60.0, step=0.1, unit="s", label="... or for at most",
                                help="... or when this long has passed since the catch (the shuttle dropped "
                                     "from the hand for the next serve is reported)")
+    align_pairs: bool = flag(True, label="Pair at one moment",
+                             help="Cameras without a common trigger: the right camera's detection is moved along "
+                                  "its track to the left image's time before the two are paired (images 4 ms apart "
+                                  "put the demo court's shuttle 29 cm off in 3D, 2.5 cm once moved)")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and

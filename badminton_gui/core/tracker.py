@@ -296,7 +296,8 @@ class StereoTracker:
         None: the same)."""
         start = time.perf_counter()
         t_r = timestamp if t_right is None else t_right
-        self._right_lag = timestamp - t_r if abs(timestamp - t_r) >= ALIGN_MIN_LAG else 0.0
+        self._right_lag = (timestamp - t_r if self.params.stereo.align_pairs
+                           and abs(timestamp - t_r) >= ALIGN_MIN_LAG else 0.0)
         if not self._checked_size:
             h, w = left_bgr.shape[:2]
             self.rig.check_image_size(w, h, "the left frames")

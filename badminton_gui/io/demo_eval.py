@@ -3,7 +3,8 @@
 Why this file exists: the demo court knows exactly where the shuttle is, in 3D and in both
 images, so it measures the whole pipeline (detection, stereo, triangulation) without labels.
 The tests run it on a few hundred frames; ``benchmarks/demo_accuracy.py`` on 1000 frames × 3
-seeds for the figures in the closing notes.
+seeds for the figures in the closing notes. ``delayed_right_errors`` plays the court to a rig
+whose right camera is not triggered with the left (``benchmarks/free_running.py``).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from ..core.evaluation import Outcomes, classify, tolerance_px
 from ..core.lookahead import StereoLookahead
 from ..core.params import TrackerParams
 from ..core.tracker import StereoTracker
+from ..core.types import StereoFrame
 from .demo_scene import DemoScene
 
 
@@ -122,3 +124,45 @@ def evaluate_demo_lookaheads(seed: int = 0, frames: int = 1000, size: tuple[int,
         out[k] = DemoScore(_count(np.array(codes[k][0])), _count(np.array(codes[k][1])),
                            np.asarray(errors[k]), np.asarray(ranges[k]), n / max(elapsed, 1e-9))
     return out
+
+
+class _DelayedScene(DemoScene):
+    """The demo court seen ``lag`` seconds earlier: the right camera of a rig whose cameras are
+    not triggered together (frame i of this scene is taken at i / fps − lag)."""
+
+    def __init__(self, lag: float, **kwargs) -> None:
+        self._lag = float(lag)
+        super().__init__(**kwargs)
+
+    def time_of(self, index: int) -> float:
+        return max(super().time_of(index) - self._lag, 0.0)
+
+
+def delayed_right_errors(lag: float, frames: int = 400, seed: int = 3,
+                         params: TrackerParams | None = None,
+                         size: tuple[int, int] = (1280, 720)) -> tuple[np.ndarray, np.ndarray]:
+    """3D errors (m) on the demo court when each right image is taken ``lag`` s before its left
+    one (free-running cameras): (the measured triangulations, the reported points), over the
+    frames that have one and a shuttle in play. Truth is the shuttle at the left image's time,
+    the time every step carries."""
+    params = params or TrackerParams()
+    kwargs = dict(seed=seed, size=size, rig="binocular", n_frames=frames)
+    left_scene, right_scene = DemoScene(**kwargs), _DelayedScene(lag, **kwargs)
+    tracker = StereoTracker(left_scene.rig, params)
+    measured, reported = [], []
+    try:
+        # Frame 0 would put the right image before the rally's start: begin at frame 1.
+        for i in range(1, frames):
+            frame = StereoFrame(left_scene.render(i)[0], right_scene.render(i)[1],
+                                left_scene.time_of(i), right_scene.time_of(i), i, i)
+            result = tracker.process_frame(frame, keep_masks=False)
+            truth = left_scene.truth(i).position
+            if truth is None:
+                continue
+            if result.measured_point is not None:
+                measured.append(float(np.linalg.norm(np.subtract(result.measured_point, truth))))
+            if result.point is not None:
+                reported.append(float(np.linalg.norm(np.subtract(result.point, truth))))
+    finally:
+        tracker.close()
+    return np.array(measured), np.array(reported)
