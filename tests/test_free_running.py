@@ -240,3 +240,55 @@ def test_on_the_demo_court_a_right_camera_4_ms_late_triangulates_as_a_synchronou
     assert len(measured) >= 200 and len(reported) >= 200
     assert np.median(measured) < 0.04 and np.median(reported) < 0.02, (np.median(measured), np.median(reported))
     assert np.median(as_seen) > 0.15, np.median(as_seen)
+
+
+class _FakeCapture:
+    """A camera whose driver stamps its frames ``offset`` s before the grab returns."""
+
+    def __init__(self, backend: str, offset: float, stamp_scale: float = 1.0):
+        self.backend, self.offset, self.stamp_scale = backend, offset, stamp_scale
+        self.stamp = 0.0
+
+    def isOpened(self):
+        return True
+
+    def set(self, *_):
+        return True
+
+    def getBackendName(self):
+        return self.backend
+
+    def grab(self):
+        import time
+        self.stamp = (time.monotonic() - self.offset) * self.stamp_scale
+        return True
+
+    def retrieve(self):
+        return True, np.zeros((4, 6, 3), np.uint8)
+
+    def get(self, prop):
+        import cv2
+        return self.stamp * 1000.0 if prop == cv2.CAP_PROP_POS_MSEC else 0.0
+
+    def release(self):
+        pass
+
+
+@pytest.mark.parametrize("backend, scale, stamped", [("V4L2", 1.0, True), ("MSMF", 1.0, False),
+                                                     ("V4L2", 0.5, False)])
+def test_live_cameras_carry_their_drivers_frame_times_when_on_our_clock(monkeypatch, backend, scale, stamped):
+    """V4L2 stamps a frame on the monotonic clock when the kernel took it: the right camera's
+    frame 20 ms older than its grab is paired at that time. Another backend, or stamps on another
+    clock (here half its rate), leave the moment the grab returned."""
+    import badminton_gui.io.cameras as cameras
+
+    caps = iter([_FakeCapture(backend, 0.0, scale), _FakeCapture(backend, 0.020, scale)])
+    monkeypatch.setattr(cameras.cv2, "VideoCapture", lambda spec: next(caps))
+    pair = cameras.CameraPair(0, 1)
+    frames = [pair.read() for _ in range(3)]
+    pair.close()
+    lags = [f.t_left - f.t_right for f in frames]
+    if stamped:
+        assert all(0.015 < lag < 0.025 for lag in lags), lags
+    else:
+        assert all(-0.005 < lag <= 0.0 for lag in lags), lags

@@ -1,7 +1,9 @@
 """Live cameras: two OpenCV devices (indices or URLs) as one stereo source.
 
 Why this file exists: the two cameras must be sampled as close together in time as USB allows:
-``grab()`` both first (cheap, latches the frames), then ``retrieve()`` both (decode). A camera
+``grab()`` both first (cheap, latches the frames), then ``retrieve()`` both (decode); each frame
+carries the time its driver stamped it with where the driver stamps on our clock (V4L2), so two
+cameras without a common trigger are paired at the moments they took their frames. A camera
 that cannot open, or stops delivering, raises :class:`SourceError` with one clear sentence that
 the GUI shows in its banner.
 """
@@ -18,6 +20,9 @@ from .sources import SourceError
 
 # Consecutive failed grabs before a camera counts as gone (a USB hiccup loses one or two).
 MAX_FAILED_GRABS = 10
+# s: how far a driver's frame time may lie from the moment its grab returned and still be taken
+# as the frame's time on the clock ``time.monotonic`` reads (``_frame_time``).
+DRIVER_CLOCK_SLACK = 1.0
 
 
 def _device(spec: int | str) -> int | str:
@@ -25,6 +30,14 @@ def _device(spec: int | str) -> int | str:
     if isinstance(spec, str) and spec.strip().isdigit():
         return int(spec)
     return spec
+
+
+def _backend(cap) -> str:
+    """The capture's backend name ('' when OpenCV cannot say)."""
+    try:
+        return str(cap.getBackendName())
+    except cv2.error:
+        return ""
 
 
 def list_cameras(max_index: int = 8) -> list[int]:
@@ -61,6 +74,12 @@ class CameraPair:
                 cap.set(cv2.CAP_PROP_FPS, fps)
             self._caps.append(cap)
         self.name = f"Cameras {self._specs[0]} + {self._specs[1]}"
+        # Linux's V4L2 stamps each frame when the kernel captured it, on the monotonic clock that
+        # time.monotonic() reads (OpenCV: CAP_PROP_POS_MSEC): two free-running cameras' frames
+        # are then paired at the moments they were taken, not when each grab returned (a grab
+        # returns at once with a frame already queued).
+        self._driver_clock = [_backend(cap) == "V4L2" for cap in self._caps]
+        self._last_time = [float("-inf"), float("-inf")]
         self._index = 0
         self._failed = 0
         self._size: tuple[int, int] | None = None
@@ -84,6 +103,7 @@ class CameraPair:
             ok_right = self._caps[1].grab()
             t_right = time.monotonic()
             if ok_left and ok_right:
+                t_left, t_right = self._frame_time(0, t_left), self._frame_time(1, t_right)
                 break
             self._failed += 1
             if self._failed >= MAX_FAILED_GRABS:
@@ -104,6 +124,18 @@ class CameraPair:
                             t_left, t_right, self._index, self._index)
         self._index += 1
         return frame
+
+    def _frame_time(self, cam: int, arrival: float) -> float:
+        """The frame's time: its driver's stamp when the driver stamps on our clock (V4L2), it
+        lies within ``DRIVER_CLOCK_SLACK`` of the grab and after the camera's last frame; else
+        the moment the grab returned."""
+        t = arrival
+        if self._driver_clock[cam]:
+            stamp = float(self._caps[cam].get(cv2.CAP_PROP_POS_MSEC)) / 1000.0
+            if stamp > 0 and abs(stamp - arrival) <= DRIVER_CLOCK_SLACK and stamp > self._last_time[cam]:
+                t = stamp
+        self._last_time[cam] = t
+        return t
 
     def close(self) -> None:
         for cap in self._caps:
