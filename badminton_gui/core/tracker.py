@@ -19,11 +19,18 @@ nothing is reported where the shuttle has left the camera's view (``stereo.exit_
 ``exit_by_path``, ``out_of_view_weak``), nor, in either camera, while a shuttle whose flight
 stopped dead in mid-air is held in the hand that caught it (``stereo.caught_frames``).
 
+Cameras without a common trigger (``process_frame``): a step may bring one camera's image only
+(``StereoFrame.fresh_left`` / ``fresh_right``, io/video.py ``pairing_schedule``); only that camera
+runs, and no 3D point is measured. In a pair whose images were taken apart, the right detection
+is moved along its track to the left image's time before the two are paired
+(``stereo.align_pairs``).
+
 Usage::
 
     rig = StereoRig.load("calibration/rig.yaml")
     tracker = StereoTracker(rig)
     result = tracker.process(left_bgr, right_bgr, timestamp)
+    result = tracker.process_frame(source.read())   # a FrameSource's steps
 """
 
 from __future__ import annotations
