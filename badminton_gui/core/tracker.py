@@ -473,10 +473,7 @@ class StereoTracker:
         if point_out is not None:
             distance = float(np.linalg.norm(self.rig.to_left([point_out])[0]))
         elif flight.in_flight:
-            if guide is None:
-                guide = self._trajectory.guide(timestamp)
-            if guide is not None:
-                predicted_distance = float(np.linalg.norm(self.rig.to_left([guide[0]])[0]))
+            predicted_distance = self._predicted_distance(timestamp, guide)
         self._last_results = [res_left, res_right]
 
         return TrackResult(
@@ -558,12 +555,7 @@ class StereoTracker:
         present = [other.detection is not None] * 2
         present[cam] = result.detection is not None
         result = self._limit_alone_camera(cam, result, present, False)
-        predicted_distance = None
-        if flight.in_flight:
-            if guide is None:
-                guide = self._trajectory.guide(t)
-            if guide is not None:
-                predicted_distance = float(np.linalg.norm(self.rig.to_left([guide[0]])[0]))
+        predicted_distance = self._predicted_distance(t, guide) if flight.in_flight else None
         self._last_results[cam] = result
         left, right = (result, other) if cam == 0 else (other, result)
         return TrackResult(
@@ -572,6 +564,13 @@ class StereoTracker:
             epipolar_error=None, index_right=index_right, measured_point=None,
             predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
+
+    def _predicted_distance(self, t: float, guide: tuple[np.ndarray, np.ndarray] | None) -> float | None:
+        """Distance (m) from the left camera to where the followed flight puts the shuttle at
+        ``t`` (``guide``: that flight's guide at ``t`` when already asked), or None."""
+        if guide is None:
+            guide = self._trajectory.guide(t)
+        return None if guide is None else float(np.linalg.norm(self.rig.to_left([guide[0]])[0]))
 
     def _hold_both(self, left: tuple[CameraResult, Candidate | None],
                    right: tuple[CameraResult, Candidate | None], point_left: np.ndarray | None,
