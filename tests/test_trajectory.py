@@ -445,3 +445,43 @@ def test_a_shuttle_lying_on_the_floor_guides_no_camera():
     assert traj._flight is None and traj._tentative.speed > 1.0
     for lag in (1, 10, 20, 29):
         assert traj.guide((47 + lag) * dt) is None
+
+
+def _hit_whose_new_shot_misses_the_old_path(speed_scale: float = 1.0):
+    """The clear driven back, its new shot's points all 0.3 m off (the blob merged with the racket
+    at the hit, the cork correction turned the wrong way): the new track never meets the old
+    flight's path. ``speed_scale`` < 1 slows the new track down (a hand carrying the shuttle)."""
+    times, truth, hit_time, _ = _clear_driven_back()
+    after = times > hit_time
+    new = truth[after]
+    new = new[0] + (new - new[0]) * speed_scale + np.array([0.3, 0.0, 0.0])
+    points = truth.copy()
+    points[after] = new
+    points += np.random.default_rng(4).normal(0, 0.005, points.shape)
+    return times, [tuple(p) for p in points], hit_time
+
+
+@pytest.mark.parametrize("starved, within", [(2, 0.12), (0, None)])
+def test_a_new_shot_that_misses_the_old_path_takes_over_once_the_old_flight_starves(starved, within):
+    """rally_11-46-04 548–576: after a hit whose first points are off, the new shot's points lie on
+    one flight path but never meet the old one's; the old flight took none of them, yet the new shot
+    waited for it to run out (``max_gap`` 0.25 s), 27 frames without a 3D point for the robot.
+    ``starved_takeover`` 2: the new shot takes over two refusals after it could have."""
+    times, points, hit_time = _hit_whose_new_shot_misses_the_old_path()
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01, starved_takeover=starved), court_frame=True)
+    shots = [info.shot_index for _, info in fly(traj, times, points)]
+    first_new = next(i for i, s in enumerate(shots) if s == 1)
+    if within is not None:
+        assert times[first_new] - hit_time < within
+    else:
+        assert times[first_new] - hit_time > 0.2      # the old flight ran out first
+
+
+def test_a_slow_track_that_misses_the_old_path_does_not_take_over_early():
+    """A track slower than a shot (a hand carrying the caught shuttle, ≤ 2.6 m/s) keeps waiting
+    for the old flight to run out: the tracker's caught rule reads the flight refusing it."""
+    times, points, hit_time = _hit_whose_new_shot_misses_the_old_path(speed_scale=0.1)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01, starved_takeover=1), court_frame=True)
+    history = fly(traj, times, points)
+    early = [info.shot_index for t, info in history if hit_time < t < hit_time + 0.2]
+    assert set(early) <= {0}

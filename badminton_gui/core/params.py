@@ -556,6 +556,10 @@ class TrajectoryParams(ParamGroup):
                                         help="While a new shot is being confirmed (after a hit), the cameras' guided "
                                              "search follows it once it has this many agreeing points (0 = no guide "
                                              "until it is confirmed)")
+    starved_takeover: int = param(2, 0, 100, step=1, unit="points", label="New shot after a hidden hit",
+                                  help="A new track that lies on one flight path but does not meet the followed "
+                                       "flight's path replaces it after this many more agreeing points while the "
+                                       "followed flight takes none (0 = only once that flight is lost: 'Longest gap')")
     min_points: int = param(6, 3, 100, step=1, label="Points before predicting",
                             help="3D points of a shot needed before a landing is predicted")
 

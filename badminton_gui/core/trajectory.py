@@ -76,6 +76,9 @@ NOISE_MIN_SAMPLES = 30      # before that many, the parameter alone sets the noi
 COAST_VELOCITY_S = 0.1     # s: no speed shown after this long without a point (a hidden hit, seen in
                             # the demo: a shuttle behind a player for 190 ms, hit meanwhile)
 HIT_SLACK = 0.05            # m: at a hit the blob's centroid swaps sides of the cork (skirt lag ~2 cm)
+STARVED_MIN_SPEED = 5.0     # m/s: a track that takes over a starved flight (``starved_takeover``) is a
+                            # shot; a hand carrying a caught shuttle moves slower (≤ 2.6 m/s: the
+                            # tracker's caught rule needs the flight to refuse those points)
 MAX_RADIUS = 2.0            # m: a landing this uncertain is withheld (a fresh, poorly fixed track)
 MAX_FLIGHT_TIME = 6.0       # s: the landing search stops here
 K_MIN = 1.0 / physics.AERO_LENGTH_BOUNDS[1]
@@ -359,6 +362,9 @@ class Trajectory:
         self._flight: _Filter | None = None
         self._tentative: _Filter | None = None
         self._seed: tuple[float, np.ndarray, np.ndarray] | None = None  # last unexplained point, its noise
+        # Consecutive promotions of the tentative track refused only because it does not meet the
+        # followed flight's path (``params.starved_takeover``).
+        self._apart = 0
         self._shot_index = -1
         self._peak_speed: float | None = None
         self._launch_speed: float | None = None
@@ -555,6 +561,7 @@ class Trajectory:
                 self._after_flight_update()
                 self._tentative = None
                 self._seed = None
+                self._apart = 0
                 return True
             flight.x, flight.P, flight.t = saved
         self._feed_tentative(t, z, r, extra)
@@ -628,6 +635,7 @@ class Trajectory:
         if self._seed is not None and t > self._seed[0]:
             t0, z0, r0 = self._seed
             self._tentative = _Filter.from_two_points(t0, z0, r0, t, z, r, self._session_k)
+            self._apart = 0
         self._seed = (t, z, r)
 
     def _promote(self, tent: _Filter) -> None:
@@ -638,15 +646,27 @@ class Trajectory:
             # too short to tell. It keeps growing and is promoted once it is sure.
             return
         old = self._flight
-        if not self._consistent(tent) or (old is not None and not self._continuous(old, tent)):
+        if not self._consistent(tent):
             # Its points do not lie on one drag-model path (the 2-point start took an outlier, or
-            # the first point after a hit is the racket's blob), or it is not where the followed
-            # shuttle is or could have been hit (a racket, a shoe, the skirt for a few frames):
-            # keep the flight, drop the track's oldest point and refit the rest.
-            self._tentative = self._refit(tent.points[1:], tent.noises[1:])
-            last = tent.points[-1]
-            self._seed = (last[0], np.asarray(last[1:], dtype=float), tent.noises[-1])
+            # the first point after a hit is the racket's blob): keep the flight, drop the
+            # track's oldest point and refit the rest.
+            self._apart = 0
+            self._drop_oldest(tent)
             return
+        if old is not None and not self._continuous(old, tent):
+            # It is not where the followed shuttle is or could have been hit (a racket, a shoe,
+            # the skirt for a few frames): the same, until it has gone on as a flight for
+            # ``starved_takeover`` more points while the followed flight took none — a flight
+            # does not starve while its shuttle is seen, and a racket's or a shoe's track is no
+            # drag-model path for that long. After a hit whose first points are off (the blob
+            # merged with the racket: rally_11-46-04 549–555) the new shot otherwise waited
+            # for the old flight to run out (``max_gap``), 27 frames without a 3D point.
+            self._apart += 1
+            limit = self.params.starved_takeover
+            if limit <= 0 or self._apart < limit or tent.speed < STARVED_MIN_SPEED:
+                self._drop_oldest(tent)
+                return
+        self._apart = 0
         new_shot = True
         if old is not None:
             t_first = tent.points[0][0]
@@ -675,6 +695,12 @@ class Trajectory:
             self._peak_speed = None
             self._launch_speed = None
         self._after_flight_update()
+
+    def _drop_oldest(self, tent: _Filter) -> None:
+        """The tentative track without its oldest point, refitted; its last point seeds the next."""
+        self._tentative = self._refit(tent.points[1:], tent.noises[1:])
+        last = tent.points[-1]
+        self._seed = (last[0], np.asarray(last[1:], dtype=float), tent.noises[-1])
 
     def _refit(self, points: list, noises: list) -> _Filter | None:
         """A tentative track fitted to ``points`` (t, x, y, z) with their noise covariances afresh;
