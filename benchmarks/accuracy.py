@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import csv
+import math
 import re
 import subprocess
 import sys
@@ -190,28 +191,42 @@ def detect_in_process(video: Path, out: Path, max_frames: int, preset: str | Non
     return len(frames) / (time.perf_counter() - start)
 
 
-def three_d_errors(rows, clip, rig_path: Path) -> np.ndarray | None:
-    """Distances (m) between our 3D points and the triangulated labels, NYCU rallies only."""
+# A left label that moves more than this (px at 2048 px) between the frames 3 before and 3 after
+# marks the shuttle in flight (``three_d_errors``' coverage count).
+FLIGHT_MOVE_PX = 12.0
+
+
+def three_d_errors(rows, clip, rig_path: Path) -> tuple[np.ndarray, int, int] | None:
+    """NYCU rallies only: (distances (m) between our 3D points and the triangulated labels, frames
+    in flight that both cameras report, how many of those have no 3D point for the robot)."""
     if not clip.name.startswith("rally_"):
         return None
     rig = StereoRig.load(rig_path)
     ll = read_point_labels(clip.left_labels).as_dict()
     rl = read_point_labels(clip.right_labels).as_dict()
     ours, pl, pr = [], [], []
+    in_flight = without_point = 0
     for r in rows:
-        if r["Vis3D"] != "1":
-            continue
-        a = ll.get(int(r["Frame"]))
+        f = int(r["Frame"])
+        a = ll.get(f)
         b = rl.get(int(r["FrameR"]))
         if not (a and b and a[0] and b[0]):
+            continue
+        if r["VisL"] == "1" and r["VisR"] == "1":
+            before, after = ll.get(f - 3), ll.get(f + 3)
+            if (before and after and before[0] and after[0]
+                    and math.hypot(after[1] - before[1], after[2] - before[2]) > FLIGHT_MOVE_PX):
+                in_flight += 1
+                without_point += r["Vis3D"] != "1"
+        if r["Vis3D"] != "1":
             continue
         ours.append((float(r["X"]), float(r["Y"]), float(r["Z"])))
         pl.append(a[1:])
         pr.append(b[1:])
     if not ours:
-        return np.zeros(0)
+        return np.zeros(0), in_flight, without_point
     truth = rig.to_output(rig.triangulate(np.array(pl), np.array(pr)))
-    return np.linalg.norm(np.array(ours) - truth, axis=1)
+    return np.linalg.norm(np.array(ours) - truth, axis=1), in_flight, without_point
 
 
 def broadcast_job(clip, tmp: Path, max_frames: int | None, lookahead: int | None = None,
@@ -319,10 +334,15 @@ def main() -> int:
                       f"{', '.join(sorted({r.clip for r in sel} & LABELLED_BY_SEEK))} (labelled "
                       f"through seeks: benchmarks/clips.py)")
     if errs:
-        d = np.concatenate(errs)
+        d = np.concatenate([e[0] for e in errs])
         if len(d):
             print(f"3D vs triangulated labels (NYCU rallies, {len(d)} pairs): median "
                   f"{np.median(d):.3f} m, p90 {np.percentile(d, 90):.3f} m")
+        flying, missing = sum(e[1] for e in errs), sum(e[2] for e in errs)
+        if flying:
+            print(f"3D point for the robot on {100.0 * (flying - missing) / flying:.1f} % of the frames in "
+                  f"flight that both cameras report ({missing} of {flying} without; flight: the left "
+                  f"label moves > {FLIGHT_MOVE_PX:g} px over ±3 frames)")
     print(f"wall time {time.perf_counter() - start:.0f} s")
     return 0
 
