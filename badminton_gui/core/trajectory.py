@@ -75,6 +75,11 @@ NOISE_WINDOW = 120          # innovations kept for the measured-noise estimate (
 NOISE_MIN_SAMPLES = 30      # before that many, the parameter alone sets the noise
 COAST_VELOCITY_S = 0.1     # s: no speed shown after this long without a point (a hidden hit, seen in
                             # the demo: a shuttle behind a player for 190 ms, hit meanwhile)
+TENTATIVE_FLOOR = 0.01      # m: noise added to the points of a tentative track at ≥ STARVED_MIN_SPEED: right
+                            # after a hit the shuttle turns over and its points scatter by 1–6 cm
+                            # about the new path (rally_11-46-22 429–432) where the stereo noise
+                            # model says ≈ 2 mm, and the tentative track restarted at each
+MIN_SHOT_TIME = 0.1         # s: no two hits closer together (a flight younger is re-synchronised)
 HIT_SLACK = 0.05            # m: at a hit the blob's centroid swaps sides of the cork (skirt lag ~2 cm)
 STARVED_MIN_SPEED = 5.0     # m/s: a track that takes over a starved flight (``starved_takeover``) is a
                             # shot; a hand carrying a caught shuttle moves slower (≤ 2.6 m/s: the
@@ -615,6 +620,8 @@ class Trajectory:
         """A point the flight could not explain: grow (or restart) the tentative track."""
         p = self.params
         tent = self._tentative
+        if tent is not None and tent.speed >= STARVED_MIN_SPEED:
+            r = r + TENTATIVE_FLOOR ** 2 * np.eye(3)
         if extra is not None:
             r_gate, r = r, r + extra
         else:
@@ -674,7 +681,11 @@ class Trajectory:
             new_v = np.asarray(_propagate(tuple(tent.x[:6].tolist()), float(tent.x[6]),
                                           t_first - tent.t)[3:6])
             frame_dt = max(t_first - old.t, 1e-3)
-            new_shot = float(np.linalg.norm(new_v - old_v)) / frame_dt >= self.params.hit_acceleration
+            # No racket hits the shuttle twice within ``MIN_SHOT_TIME``: a track that replaces a
+            # flight younger than that is the same shot re-synchronised (a young flight promoted
+            # from the points that scatter right after a hit, ``TENTATIVE_FLOOR``).
+            new_shot = (float(np.linalg.norm(new_v - old_v)) / frame_dt >= self.params.hit_acceleration
+                        and t_first - old.start_t >= MIN_SHOT_TIME)
             if not new_shot:
                 # Same shot, the model had drifted: keep what the shot knew about L.
                 tent.x[6] = old.x[6]
