@@ -451,7 +451,8 @@ class StereoTracker:
         if filtered is not None:
             point_out = filtered
         elif self._trajectory.point_rejected:
-            point_out = None
+            # An outlier to the followed flight: no point, unless it is the next shot's already.
+            point_out = self._trajectory.tentative_position()
         elif measured is not None and self.rig.has_court_pose:
             point_out = self._resting_cork(measured)
         if caught:
