@@ -31,7 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from clips import nycu_cfgs, stereo_clips  # noqa: E402
 
 from badminton_gui.core.tracker import StereoTracker  # noqa: E402
-from badminton_gui.io.demo_eval import delayed_right_errors  # noqa: E402
+from badminton_gui.io.demo_eval import delayed_right_errors, dropped_frame_errors  # noqa: E402
 from badminton_gui.io.labels import read_timestamps  # noqa: E402
 from badminton_gui.io.nycu import rig_from_nycu  # noqa: E402
 from badminton_gui.io.presets import load_preset  # noqa: E402
@@ -59,23 +59,41 @@ def pairing_row(clip, left_times, right_times) -> str:
             f"{left_only:9d}   {np.median(apart):6.2f} {np.percentile(apart, 90):6.2f} {apart.max():6.2f}")
 
 
-def residuals(clip, left_times, right_times, align: bool) -> tuple[np.ndarray, np.ndarray]:
-    """(leave-one-out residual, m; the pair's time apart, s) of each measured 3D point."""
+def tracked_points(clip, left_times, right_times, **values) -> tuple[np.ndarray, np.ndarray]:
+    """Track the clip with the default preset (``values``: "group.name" overrides): (measured
+    points, reported points), each row t, x, y, z, the pair's right − left time (s), and 1 for
+    a step that brought one camera's image only."""
     rig = rig_from_nycu(*nycu_cfgs())
     source = VideoPair(clip.left, clip.right, left_times, right_times)
-    tracker = StereoTracker(rig, load_preset("default").with_value("stereo.align_pairs", align))
-    points = []
+    params = load_preset("default")
+    for key, value in values.items():
+        params = params.with_value(key, value)
+    tracker = StereoTracker(rig, params)
+    measured, reported = [], []
     try:
         while (frame := source.read()) is not None:
             result = tracker.process_frame(frame, keep_masks=False)
+            extra = (frame.t_right - frame.t_left, float(not (frame.fresh_left and frame.fresh_right)))
             if result.measured_point is not None:
-                points.append((result.timestamp, *result.measured_point, frame.t_right - frame.t_left))
+                measured.append((result.timestamp, *result.measured_point, *extra))
+            if result.point is not None:
+                reported.append((result.timestamp, *result.point, *extra))
     finally:
         tracker.close()
         source.close()
-    pts = np.array(points)
+    return np.array(measured).reshape(-1, 6), np.array(reported).reshape(-1, 6)
+
+
+def residuals(clip, left_times, right_times, align: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(leave-one-out residual, m; the pair's time apart, s) of each measured 3D point."""
+    return loo_residuals(tracked_points(clip, left_times, right_times, **{"stereo.align_pairs": align})[0])[:2]
+
+
+def loo_residuals(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(leave-one-out residual about a quadratic through its neighbours, m; the pair's time
+    apart, s; one-camera step) of each point of ``tracked_points`` whose window is short enough."""
     half = WINDOW // 2
-    out, apart = [], []
+    out, apart, alone = [], [], []
     for k in range(half, len(pts) - half):
         w = pts[k - half:k + half + 1]
         if w[-1, 0] - w[0, 0] > WINDOW_SPAN:
@@ -86,7 +104,8 @@ def residuals(clip, left_times, right_times, align: bool) -> tuple[np.ndarray, n
         coef, *_ = np.linalg.lstsq(basis[others], w[others, 1:4], rcond=None)
         out.append(float(np.linalg.norm(basis[half] @ coef - w[half, 1:4])))
         apart.append(abs(w[half, 4]))
-    return np.array(out), np.array(apart)
+        alone.append(bool(w[half, 5]))
+    return np.array(out), np.array(apart), np.array(alone, dtype=bool)
 
 
 def main() -> int:
@@ -122,6 +141,26 @@ def main() -> int:
             return f"{np.median(a) * 100:6.2f} (n={len(a)})" if len(a) else "     - (n=0)"
         print(f"{label:20s} {len(res):8d} {np.median(res) * 100:7.2f} {np.percentile(res, 90) * 100:6.2f}"
               f"   {med(near):>18s}   {med(far):>18s}")
+    print(f"\n{chosen.name}: reported 3D points (what the robot gets), leave-one-out residual as above, cm")
+    print("one-camera steps       steps  with a point   residual median p90 (n)   all points: n median p90")
+    for rays, label in ((False, "give nothing"), (True, "follow the ray")):
+        _, reported = tracked_points(chosen, *times[chosen.name], **{"stereo.one_camera_rays": rays})
+        res, _, alone = loo_residuals(reported)
+        steps = sum(1 for _, _, fl, fr in pairing_schedule(*times[chosen.name]) if not (fl and fr))
+        one = res[alone]
+        one_txt = (f"{np.median(one) * 100:6.2f} {np.percentile(one, 90) * 100:6.2f} ({len(one)})"
+                   if len(one) else "     -      - (0)")
+        print(f"{label:20s} {steps:7d} {int(reported[:, 5].sum()):13d}   {one_txt:>24s}   {len(res):6d} "
+              f"{np.median(res) * 100:6.2f} {np.percentile(res, 90) * 100:6.2f}")
+    print("\ndemo court (binocular rig, seed 3, 300 frames), cameras dropping frames (every 7th left, "
+          "4 right): reported 3D points against the truth, cm")
+    print("one-camera steps       pairs: n median    p90   one-camera steps: in play  n median    p90")
+    for rays, label in ((False, "give nothing"), (True, "follow the ray")):
+        pairs, alone, in_play = dropped_frame_errors(load_preset("default").with_value("stereo.one_camera_rays", rays))
+        alone_txt = (f"{len(alone):4d} {np.median(alone) * 100:6.2f} {np.percentile(alone, 90) * 100:6.2f}"
+                     if len(alone) else f"{0:4d}      -      -")
+        print(f"{label:20s} {len(pairs):9d} {np.median(pairs) * 100:6.2f} {np.percentile(pairs, 90) * 100:6.2f}"
+              f"   {in_play:24d} {alone_txt}")
     if args.demo_lag_ms > 0:
         print(f"\ndemo court (binocular rig, seed {args.demo_seed}, {args.demo_frames} frames), right image "
               f"{args.demo_lag_ms:g} ms before the left: 3D error against the truth, cm")

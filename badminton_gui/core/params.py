@@ -509,6 +509,10 @@ class StereoParams(ParamGroup):
                              help="Cameras without a common trigger: the right camera's detection is moved along "
                                   "its track to the left image's time before the two are paired (images 4 ms apart "
                                   "put the demo court's shuttle 29 cm off in 3D, 2.5 cm once moved)")
+    one_camera_rays: bool = flag(True, label="Follow on one camera",
+                                 help="Cameras without a common trigger: a step that brings one camera's image only "
+                                      "moves the 3D flight along that camera's ray to the shuttle, and the robot gets "
+                                      "the flight's position there (else nothing until the next pair)")
     # A lying shuttle touches the floor with its cork (radius 1.3 cm) and its skirt's rim (radius
     # 3.2 cm, 6 cm behind the cork centre): the axis rises ~18° backwards, and the centroid of
     # the visible shuttle (skirt-heavy, ~55 % of the way along the axis) lies ~3.1 cm behind and

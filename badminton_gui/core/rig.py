@@ -284,6 +284,13 @@ class StereoRig:
         jac = (pts[1:] - pts[0][None]) / step            # (4, N, 3): one column per coordinate
         return np.einsum("knj,kni->nij", jac, jac)
 
+    def rays(self, camera: int, pts) -> tuple[np.ndarray, np.ndarray]:
+        """Pixel points (N, 2) of a camera → (its optical centre (3,), unit directions (N, 3)) in
+        the output frame: the lines of sight on which those image points lie."""
+        norm = self.undistort(camera, pts)
+        dirs = np.hstack([norm, np.ones((len(norm), 1))]) @ self.camera_rotations()[camera].T
+        return self.camera_centres()[camera], dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+
     def to_output(self, pts_left_frame) -> np.ndarray:
         """Left-camera-frame points → court frame when the pose is known (else unchanged)."""
         pts = np.asarray(pts_left_frame, dtype=np.float64).reshape(-1, 3)

@@ -119,6 +119,10 @@ CAUGHT_STEP = 12.0
 # along their tracks to the left image's time before they are paired (free-running cameras,
 # ``_right_xy``); the NYCU cameras' pairs are 0.05 ms apart, launcher-stereo's up to 25 ms.
 ALIGN_MIN_LAG = 0.0005
+# s: how recent a pair's reprojection miss must be to correct a one-camera step's line of sight
+# (``_sight_offset``); the rig's miss changes slowly with where the shuttle is.
+SIGHT_OFFSET_AGE = 0.1
+SIGHT_OFFSET_PAIRS = 5       # ... averaged over this many recent pairs (one pair's is its detection noise)
 
 
 class StereoTracker:
@@ -151,6 +155,11 @@ class StereoTracker:
         # The last frame's triangulated blob point (left-camera frame) and its time: the 3D step
         # checks the direction of the cork correction (see _head_variance).
         self._last_blob: tuple[float, np.ndarray] | None = None
+        # Per camera, the last pair's (time, detection − projection of its triangulated point, px):
+        # a rig whose cameras' rays miss each other (the NYCU rig imported from its .cfg files,
+        # ≈ 10° off) puts each camera's sight of the shuttle centimetres off the triangulated
+        # flight; a one-camera step's sight is moved back by it (``_sight_offset``).
+        self._sight_miss: tuple[deque, deque] = (deque(maxlen=SIGHT_OFFSET_PAIRS), deque(maxlen=SIGHT_OFFSET_PAIRS))
         # Per camera, for ``stereo.alone_limit``: [reports alone in a row, frames without a
         # report in a row, the readout continues one that had a 3D point].
         self._alone = ([0, 0, False], [0, 0, False])
@@ -189,6 +198,8 @@ class StereoTracker:
         self._reports[0].clear()
         self._reports[1].clear()
         self._last_blob = None
+        self._sight_miss[0].clear()
+        self._sight_miss[1].clear()
         self._alone = ([0, 0, False], [0, 0, False])
         self._held = ([-1, 0, 0.0, 0.0, False], [-1, 0, 0.0, 0.0, False])
         self._held_now = [False, False]
@@ -448,6 +459,12 @@ class StereoTracker:
         point_out = measured
         caught = self._note_caught(timestamp, measured, speed)
         filtered = self._trajectory.filtered_position()
+        if filtered is not None and blob is not None and self.params.stereo.one_camera_rays:
+            # A pair the flight took: where each camera saw it against where the point projects.
+            seen_at = self.rig.to_output(blob)
+            for cam, (x, y) in ((0, (det_left.x, det_left.y)), (1, self._right_xy(det_right))):
+                u, v = (float(c) for c in self.rig.project(cam, seen_at)[0])
+                self._sight_miss[cam].append((timestamp, x - u, y - v))
         if filtered is not None:
             point_out = filtered
         elif self._trajectory.point_rejected:
@@ -492,7 +509,9 @@ class StereoTracker:
         apart would triangulate the shuttle's motion between them). The one-camera rules of a
         pair step apply to this camera as they would without a partner: the flight's guided
         look, the exits from view, the landed hold, the caught shuttle, the limit on reports
-        alone; none of them counts this step for the other camera."""
+        alone; none of them counts this step for the other camera. The flight takes this
+        camera's line of sight to the shuttle (``stereo.one_camera_rays``, corrected by
+        ``_sight_offset``) and, when it does, its position is the step's 3D point."""
         start = time.perf_counter()
         detector = self.left if cam == 0 else self.right
         sp = self.params.stereo
@@ -540,13 +559,24 @@ class StereoTracker:
         result, shown = detector.lead_to_head(result, det)
         result = CameraDetector.finalise(result, shown)
 
-        flight = self._trajectory.update(t, None)
+        if (sp.one_camera_rays and det is not None and not det.predicted
+                and result.detection is not None and self.rig.has_court_pose):
+            # The blob's centroid, as the pairs are triangulated; the cork leads it along the
+            # flight by ``head_offset`` (``_to_head``), which the flight applies to the ray.
+            dx, dy = self._sight_offset(cam, t)
+            centre, direction = self.rig.rays(cam, [[det.x - dx, det.y - dy]])
+            m = self.rig.M1 if cam == 0 else self.rig.M2
+            flight = self._trajectory.update_ray(t, centre, direction[0], 1.0 / float(m[0, 0]),
+                                                 lead=sp.head_offset, lead_min_speed=sp.head_min_speed)
+        else:
+            flight = self._trajectory.update(t, None)
+        point_out = self._trajectory.filtered_position()
         speed = None
         if flight.velocity is not None:
             speed = float(math.sqrt(sum(v * v for v in flight.velocity)))
         if (self._caught is not None and sp.caught_frames > 0
                 and t - self._caught_at <= sp.caught_hold):
-            speed = None
+            point_out = speed = None
             flight = dataclasses.replace(flight, velocity=None, prediction=None, in_flight=False,
                                          withheld_reason=CAUGHT_REASON)
             pair = [other, other]
@@ -556,15 +586,33 @@ class StereoTracker:
         present = [other.detection is not None] * 2
         present[cam] = result.detection is not None
         result = self._limit_alone_camera(cam, result, present, False)
-        predicted_distance = self._predicted_distance(t, guide) if flight.in_flight else None
+        distance = predicted_distance = None
+        if point_out is not None:
+            self._last_point = (t, float(point_out[2]))
+            distance = float(np.linalg.norm(self.rig.to_left([point_out])[0]))
+        elif flight.in_flight:
+            predicted_distance = self._predicted_distance(t, guide)
         self._last_results[cam] = result
         left, right = (result, other) if cam == 0 else (other, result)
         return TrackResult(
-            index=index, timestamp=t, left=left, right=right, point=None,
-            in_court_frame=self.rig.has_court_pose, distance=None, speed=speed,
+            index=index, timestamp=t, left=left, right=right, point=point_out,
+            in_court_frame=self.rig.has_court_pose, distance=distance, speed=speed,
             epipolar_error=None, index_right=index_right, measured_point=None,
             predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
+
+    def _sight_offset(self, cam: int, t: float) -> tuple[float, float]:
+        """How far (px) this camera's detections lay from where the triangulated points project, over
+        the last pairs the flight took (``SIGHT_OFFSET_PAIRS`` within ``SIGHT_OFFSET_AGE``); else
+        (0, 0). On an exact rig it
+        is the detection noise (a fraction of a px on the demo court); on launcher-stereo, whose
+        rig is the NYCU one imported from the .cfg files, a single camera's sight missed the
+        triangulated flight by 5–23 cm and the flight refused every one."""
+        recent = [(dx, dy) for t_pair, dx, dy in self._sight_miss[cam] if 0.0 <= t - t_pair <= SIGHT_OFFSET_AGE]
+        if not recent:
+            return 0.0, 0.0
+        dx, dy = np.mean(recent, axis=0)
+        return float(dx), float(dy)
 
     def _predicted_distance(self, t: float, guide: tuple[np.ndarray, np.ndarray] | None) -> float | None:
         """Distance (m) from the left camera to where the followed flight puts the shuttle at

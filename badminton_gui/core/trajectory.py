@@ -311,6 +311,20 @@ class _Filter:
         self.points.append((t, float(z[0]), float(z[1]), float(z[2])))
         self.noises.append(r)
 
+    def correct_across(self, t: float, basis: np.ndarray, nu: np.ndarray, S: np.ndarray,
+                       r: np.ndarray) -> None:
+        """A measurement of the position across a line of sight only: ``basis`` (2, 3) spans the
+        plane across it, ``nu`` (2,) the innovation there, ``r`` (2, 2) its noise. No point is
+        recorded (the shot's points are the triangulated ones)."""
+        PHt = self.P[:, 0:3] @ basis.T           # (7, 2)
+        K = np.linalg.solve(S, PHt.T).T
+        self.x = self.x + K @ nu
+        IKH = _I7.copy()
+        IKH[:, 0:3] -= K @ basis
+        self.P = IKH @ self.P @ IKH.T + K @ r @ K.T
+        self.x[6] = min(max(self.x[6], K_MIN), K_MAX)
+        self.t = t
+
     @property
     def speed(self) -> float:
         return float(np.linalg.norm(self.x[3:6]))
@@ -438,24 +452,10 @@ class Trajectory:
         ``extra_noise`` (3×3, m²) is added to that: an error the point may carry that its image
         noise does not explain (the tracker's cork correction made in a doubtful direction).
         """
-        if self._last_t is not None and t < self._last_t - 1e-9:
-            self.reset()        # the clock went back: a new video / replay
-        self._last_t = t
-        self._accepted_now = self._rejected_now = self._extended_tentative = False
+        self._begin_step(t)
         if not self.court_frame:
             return self._update_no_model(t, point)
-
-        p = self.params
-        if self._flight is not None:
-            if self._landing is not None and t > self._landing.prediction.t + LANDING_GRACE_S:
-                # The model says it is on the floor by now even if the last points were not usable.
-                self._end_flight(keep_landing=True)
-            elif t - self._flight.t > p.max_gap:
-                self._end_flight(keep_landing=True)   # lost: the robot keeps the last prediction
-        if self._tentative is not None and t - self._tentative.t > p.max_gap:
-            self._tentative = None
-        if self._seed is not None and t - self._seed[0] > p.max_gap:
-            self._seed = None
+        self._end_stale(t)
 
         accepted = False
         if point is not None:
@@ -467,6 +467,83 @@ class Trajectory:
                 self._rejected_now = following and not accepted
         self._accepted_now = accepted
         return self._info(t, accepted)
+
+    def update_ray(self, t: float, centre, direction, pixel_angle: float, lead: float = 0.0,
+                   lead_min_speed: float = 0.0) -> FlightInfo:
+        """Feed one camera's sight of the shuttle at time t (s): the line through ``centre`` along
+        the unit ``direction`` (court frame) on which it lies, from a step that brought this camera's
+        image only (cameras without a common trigger). ``pixel_angle`` (rad) is one image pixel
+        seen from the camera (1 / focal length in px). ``lead`` (m): the shuttle the flight
+        follows lies this far ahead of the seen point along its flight (the cork ahead of the
+        blob's centroid, as the tracker's triangulated points are moved) when the flight is at
+        least ``lead_min_speed`` (m/s) fast.
+
+        Only an established flight (``guide``'s condition) takes it, gated as a point is: the
+        filter moves across the line of sight, by the points' measured pixel scale at the
+        flight's range, and learns nothing along it. Returns the flight state; the filtered
+        position is then ``filtered_position`` as after a point.
+        """
+        self._begin_step(t)
+        if not self.court_frame:
+            return self._update_no_model(t, None)
+        self._end_stale(t)
+        flight = self._flight
+        if (flight is None or not self._stereo_noise or t <= flight.t
+                or len(flight.points) < self.params.min_points):
+            return self._info(t, False)
+        p = self.params
+        d = np.asarray(direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        # Two unit vectors across the line of sight.
+        helper = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        e1 = np.cross(d, helper)
+        e1 /= np.linalg.norm(e1)
+        basis = np.stack([e1, np.cross(d, e1)])
+        saved = (flight.x, flight.P, flight.t)
+        flight.predict(t, p.model_noise)
+        offset = flight.x[:3] - np.asarray(centre, dtype=float)
+        speed = float(np.linalg.norm(flight.x[3:6]))
+        if lead > 0.0 and speed >= max(lead_min_speed, 1e-9):
+            offset = offset - lead * flight.x[3:6] / speed
+        rng = float(np.linalg.norm(offset))
+        sigma = self.measurement_sigma * pixel_angle * rng          # m across the ray at that range
+        r = np.eye(2) * (sigma * sigma)
+        nu = -(basis @ offset)                                      # the ray passes through 0 across
+        S = basis @ flight.P[0:3, 0:3] @ basis.T + r
+        d2 = float(nu @ np.linalg.solve(S, nu))
+        if d2 > p.outlier_sigma ** 2 or float(np.linalg.norm(nu)) > p.outlier_distance:
+            flight.x, flight.P, flight.t = saved
+            return self._info(t, False)
+        robust = p.robust_sigma
+        if robust > 0.0 and d2 > robust * robust:
+            # As for a point (``_feed``): beyond robust_sigma σ, the farther the less it pulls.
+            r = r * (d2 / (robust * robust))
+            S = basis @ flight.P[0:3, 0:3] @ basis.T + r
+        flight.correct_across(t, basis, nu, S, r)
+        self._after_flight_update()
+        self._apart = 0           # the followed flight is seen: it does not starve
+        self._accepted_now = True
+        return self._info(t, True)
+
+    def _begin_step(self, t: float) -> None:
+        if self._last_t is not None and t < self._last_t - 1e-9:
+            self.reset()        # the clock went back: a new video / replay
+        self._last_t = t
+        self._accepted_now = self._rejected_now = self._extended_tentative = False
+
+    def _end_stale(self, t: float) -> None:
+        """End a flight past its landing or unseen for ``max_gap``; forget an old tentative track."""
+        p = self.params
+        if self._flight is not None:
+            if self._landing is not None and t > self._landing.prediction.t + LANDING_GRACE_S:
+                # The model says it is on the floor by now even if the last points were not usable.
+                self._end_flight(keep_landing=True)
+            elif t - self._flight.t > p.max_gap:
+                self._end_flight(keep_landing=True)   # lost: the robot keeps the last prediction
+        if self._tentative is not None and t - self._tentative.t > p.max_gap:
+            self._tentative = None
+        if self._seed is not None and t - self._seed[0] > p.max_gap:
+            self._seed = None
 
     def filtered_position(self) -> tuple[float, float, float] | None:
         """The flight's filtered position at the last update's time, when that update's point

@@ -9,9 +9,11 @@ whose right camera is not triggered with the left (``benchmarks/free_running.py`
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Callable
 
+import cv2
 import numpy as np
 
 from ..core.evaluation import Outcomes, classify, tolerance_px
@@ -166,3 +168,66 @@ def delayed_right_errors(lag: float, frames: int = 400, seed: int = 3,
     finally:
         tracker.close()
     return np.array(measured), np.array(reported)
+
+
+# A free-running rig that drops frames (launcher-stereo's right camera lost 54 of 567): every 7th
+# left image missing (right-only steps), four right images missing (left-only steps).
+DROP_LEFT_EVERY = 7
+DROP_RIGHT = frozenset({40, 90, 150, 220})
+
+
+def dropped_frame_steps(scene: DemoScene, frames: int, drop_left: frozenset | set | None = None,
+                        drop_right: frozenset | set = DROP_RIGHT):
+    """The demo court's steps as a source whose cameras drop frames would deliver them
+    (``io/video.py`` ``pairing_schedule``): a frame one camera dropped is a step that brings the
+    other camera's image only, beside the last image of the camera that dropped it."""
+    if drop_left is None:
+        drop_left = set(range(DROP_LEFT_EVERY, frames, DROP_LEFT_EVERY))
+    last = {}
+    for i in range(frames):
+        left, right = scene.render(i)
+        t = scene.time_of(i)
+        if i in drop_left and "left" in last:
+            li, lt, limg = last["left"]
+            yield StereoFrame(limg, right, lt, t, li, i, False, True)
+            last["right"] = (i, t, right)
+        elif i in drop_right and "right" in last:
+            ri, rt, rimg = last["right"]
+            yield StereoFrame(left, rimg, t, rt, i, ri, True, False)
+            last["left"] = (i, t, left)
+        else:
+            yield StereoFrame(left, right, t, t, i, i)
+            last["left"], last["right"] = (i, t, left), (i, t, right)
+
+
+def dropped_frame_errors(params: TrackerParams | None = None, frames: int = 300, seed: int = 3,
+                         size: tuple[int, int] = (1280, 720), rig_error_deg: float = 0.0
+                         ) -> tuple[np.ndarray, np.ndarray, int]:
+    """3D errors (m) of the reported points on the demo court when the cameras drop frames
+    (``dropped_frame_steps``): (on the steps of two images, on the steps of one image, how many
+    one-image steps had the shuttle in play). Truth is the shuttle at each step's new image.
+    ``rig_error_deg``: the tracker's rig has the right camera tilted by this much about its
+    horizontal axis against the cameras that filmed: a rough calibration (as the NYCU rig's),
+    whose two rays to the shuttle miss each other."""
+    params = params or TrackerParams()
+    scene = DemoScene(seed=seed, size=size, rig="binocular", n_frames=frames)
+    rig = scene.rig
+    if rig_error_deg:
+        turn = cv2.Rodrigues(np.array([np.radians(rig_error_deg), 0.0, 0.0]))[0]
+        rig = dataclasses.replace(rig, R=turn @ rig.R, _cache={})
+    tracker = StereoTracker(rig, params, parallel=False)
+    pairs, alone, alone_in_play = [], [], 0
+    try:
+        for step in dropped_frame_steps(scene, frames):
+            result = tracker.process_frame(step, keep_masks=False)
+            both = step.fresh_left and step.fresh_right
+            truth = scene.truth(step.index if step.fresh_left else step.index_right).position
+            if truth is None:
+                continue
+            alone_in_play += not both
+            if result.point is not None:
+                (pairs if both else alone).append(float(np.linalg.norm(np.subtract(result.point, truth))))
+    finally:
+        tracker.close()
+        scene.close()
+    return np.array(pairs), np.array(alone), alone_in_play
