@@ -547,3 +547,24 @@ def test_a_slow_refused_track_gives_no_position():
     rows = _tentative_reports(0.1)
     assert any(rejected for rejected, _, _ in rows)
     assert all(pos is None for _, pos, _ in rows)
+
+
+def test_a_new_shot_whose_first_point_is_off_is_reported_from_its_latest_points():
+    """rally_11-46-22: the new track's first point is often the hit itself (the blob merged with
+    the racket), and the whole track then fails the χ² test that its latest points pass: those
+    give the position. Here the first point after the hit is 12 cm off: at the track's fifth
+    point the whole track is no path, its last four are."""
+    times, points, hit_time = _hit_whose_new_shot_misses_the_old_path()
+    first = int(np.flatnonzero(times > hit_time)[0])
+    points = list(points)
+    points[first] = tuple(np.asarray(points[first]) + np.array([0.0, 0.0, 0.12]))
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01, starved_takeover=0), court_frame=True)
+    for k, (t, p) in enumerate(zip(times, points)):
+        traj.update(t, p)
+        if k == first + 4:
+            tent = traj._tentative
+            assert len(tent.points) == 5 and not traj._consistent(tent)
+        if first + 4 <= k < first + 16:
+            assert traj.point_rejected
+            pos = traj.tentative_position()
+            assert pos is not None and np.linalg.norm(np.asarray(pos) - np.asarray(p)) < 0.03

@@ -566,8 +566,16 @@ class Trajectory:
         caught shuttle is slower than ``STARVED_MIN_SPEED``, a racket's few frames no path.
         """
         tent = self._tentative
-        if (not self._extended_tentative or tent is None or len(tent.points) < TENTATIVE_REPORT_POINTS
-                or tent.speed < STARVED_MIN_SPEED or not self._consistent(tent)):
+        if not self._extended_tentative or tent is None or len(tent.points) < TENTATIVE_REPORT_POINTS:
+            return None
+        if not self._consistent(tent):
+            # Its first point is often the hit itself (the blob merged with the racket): the
+            # track's latest points alone may still lie on one path.
+            n = TENTATIVE_REPORT_POINTS
+            tent = self._refit(tent.points[-n:], tent.noises[-n:])
+            if tent is None or len(tent.points) < n or not self._consistent(tent):
+                return None
+        if tent.speed < STARVED_MIN_SPEED:
             return None
         return tuple(float(v) for v in tent.x[:3])
 
