@@ -122,6 +122,8 @@ ALIGN_MIN_LAG = 0.0005
 # s: how recent a pair's reprojection miss must be to correct a one-camera step's line of sight
 # (``_sight_offset``); the rig's miss changes slowly with where the shuttle is.
 SIGHT_OFFSET_AGE = 0.1
+FLIGHT_VOUCH_GATE = 1.5      # × the epipolar gate: how far off a pair the flight vouches for may be
+FLIGHT_VOUCH_SLACK = 0.1     # m: ... and how near the flight's prediction (+ 3σ of it) it must lie
 SIGHT_OFFSET_PAIRS = 5       # ... averaged over this many recent pairs (one pair's is its detection noise)
 
 
@@ -395,6 +397,10 @@ class StereoTracker:
                         break
             det_left, det_right = dets
             res_left, res_right = results
+        if point_left is None and det_left is not None and det_right is not None:
+            if not guide_tried:
+                guide, guide_tried = self._trajectory.guide(timestamp), True
+            point_left, epi = self._flight_vouched_pair(det_left, det_right, guide)
         for cam, det in ((0, det_left), (1, det_right)):
             if det is not None and not det.predicted:
                 velocity = (self.left if cam == 0 else self.right).tracklet_velocity(det)
@@ -1250,6 +1256,24 @@ class StereoTracker:
         point = self.rig.triangulate(pl, pr)[0]
         dist = float(np.linalg.norm(point))
         if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
+            return None, None
+        return point, err
+
+    def _flight_vouched_pair(self, det_left: Candidate, det_right: Candidate,
+                             guide: tuple[np.ndarray, np.ndarray] | None
+                             ) -> tuple[np.ndarray | None, float | None]:
+        """The two cameras' reports as a pair although they miss the epipolar gate by a little,
+        when the followed flight puts the shuttle where they triangulate (else (None, None))."""
+        if guide is None or det_left.predicted or det_right.predicted:
+            return None, None
+        pl, pr = [[det_left.x, det_left.y]], [list(self._right_xy(det_right))]
+        err = float(self.rig.epipolar_errors(pl, pr)[0, 0])
+        if err > FLIGHT_VOUCH_GATE * self.epipolar_tolerance():
+            return None, None
+        point = self.rig.triangulate(pl, pr)[0]
+        position, covariance = guide
+        reach = FLIGHT_VOUCH_SLACK + 3.0 * math.sqrt(max(float(np.trace(covariance)) / 3.0, 0.0))
+        if float(np.linalg.norm(self.rig.to_output(point)[0] - position)) > reach:
             return None, None
         return point, err
 
