@@ -122,9 +122,10 @@ ALIGN_MIN_LAG = 0.0005
 # s: how recent a pair's reprojection miss must be to correct a one-camera step's line of sight
 # (``_sight_offset``); the rig's miss changes slowly with where the shuttle is.
 SIGHT_OFFSET_AGE = 0.1
-FLIGHT_VOUCH_GATE = 1.5      # × the epipolar gate: how far off a pair the flight vouches for may be
-FLIGHT_VOUCH_SLACK = 0.1     # m: ... and how near the flight's prediction (+ 3σ of it) it must lie
 SIGHT_OFFSET_PAIRS = 5       # ... averaged over this many recent pairs (one pair's is its detection noise)
+# A pair of reports off the epipolar gate that the followed flight vouches for (``_flight_vouched_pair``):
+FLIGHT_VOUCH_GATE = 1.5      # × the epipolar gate: how far off its line it may be
+FLIGHT_VOUCH_SLACK = 0.1     # m: ... and how near the flight's prediction (+ 3σ of it) it must lie
 
 
 class StereoTracker:
@@ -157,7 +158,7 @@ class StereoTracker:
         # The last frame's triangulated blob point (left-camera frame) and its time: the 3D step
         # checks the direction of the cork correction (see _head_variance).
         self._last_blob: tuple[float, np.ndarray] | None = None
-        # Per camera, the last pair's (time, detection − projection of its triangulated point, px):
+        # Per camera, the last pairs' (time, detection − projection of its triangulated point, px):
         # a rig whose cameras' rays miss each other (the NYCU rig imported from its .cfg files,
         # ≈ 10° off) puts each camera's sight of the shuttle centimetres off the triangulated
         # flight; a one-camera step's sight is moved back by it (``_sight_offset``).
@@ -610,10 +611,9 @@ class StereoTracker:
     def _sight_offset(self, cam: int, t: float) -> tuple[float, float]:
         """How far (px) this camera's detections lay from where the triangulated points project, over
         the last pairs the flight took (``SIGHT_OFFSET_PAIRS`` within ``SIGHT_OFFSET_AGE``); else
-        (0, 0). On an exact rig it
-        is the detection noise (a fraction of a px on the demo court); on launcher-stereo, whose
-        rig is the NYCU one imported from the .cfg files, a single camera's sight missed the
-        triangulated flight by 5–23 cm and the flight refused every one."""
+        (0, 0). On an exact rig it is the detection noise (a fraction of a px on the demo court);
+        on launcher-stereo, whose rig is the NYCU one imported from the .cfg files, a single
+        camera's sight missed the triangulated flight by 5–23 cm and the flight refused every one."""
         recent = [(dx, dy) for t_pair, dx, dy in self._sight_miss[cam] if 0.0 <= t - t_pair <= SIGHT_OFFSET_AGE]
         if not recent:
             return 0.0, 0.0

@@ -526,6 +526,7 @@ class Trajectory:
         return self._info(t, True)
 
     def _begin_step(self, t: float) -> None:
+        """The start of every update: a clock that went back resets, the last step's flags clear."""
         if self._last_t is not None and t < self._last_t - 1e-9:
             self.reset()        # the clock went back: a new video / replay
         self._last_t = t
@@ -555,8 +556,8 @@ class Trajectory:
     def tentative_position(self) -> tuple[float, float, float] | None:
         """The tentative track's position at the last update's time when that update's point,
         refused by the flight being followed, extended a track that is surely a new shot: at
-        least ``TENTATIVE_REPORT_POINTS`` points on one drag-model path (``_consistent``), moving
-        at ``STARVED_MIN_SPEED`` or more; else None.
+        least ``TENTATIVE_REPORT_POINTS`` points on one drag-model path (``_consistent``; or its
+        latest that many, refitted alone), moving at ``STARVED_MIN_SPEED`` or more; else None.
 
         After a hit the new shot's points are refused by the old flight until the new track has
         ``TAKEOVER_POINTS`` of them (and longer when its first points are off): ≈ 50 ms at
