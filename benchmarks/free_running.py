@@ -11,8 +11,11 @@ flight is smooth on that scale, so the residual is measurement error, and a pair
 from two moments shows up in it. No labels are read (the launcher clip has no 3D labels). Then
 the demo court, whose truth is exact, with its right camera taken ``--demo-lag-ms`` before the
 left (``io/demo_eval.py`` ``delayed_right_errors``): the 3D error with and without the move.
+And the steps that bring one camera's image only (``stereo.one_camera_rays``): how many of the
+clip's carry a reported point and how smooth those are, and the demo court with its cameras
+dropping frames (``dropped_frame_errors``) against its truth, with and without the rays.
 
-    .venv/bin/python benchmarks/free_running.py            # every clip's pairing, launcher 3D, demo (≈ 1 min)
+    .venv/bin/python benchmarks/free_running.py            # every clip's pairing, launcher 3D, demo (≈ 1.5 min)
     .venv/bin/python benchmarks/free_running.py --clip rally_11-46-04 --demo-lag-ms 2
 """
 
