@@ -48,7 +48,7 @@ import math
 import struct
 import threading
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -228,6 +228,7 @@ class _Filter:
     points: list           # accepted measurements (t, x, y, z)
     start_t: float
     noises: list           # the (3, 3) noise covariance each accepted point was given
+    track: list = field(default_factory=list)   # the filtered position after each update (t, x, y, z)
 
 
     @classmethod
@@ -255,7 +256,8 @@ class _Filter:
         P[0:3, 3:6] = P[3:6, 0:3] = r2 / dt
         P[6, 6] = k_prior[1]
         return cls(x=x, P=P, t=t2, k_prior=k_prior,
-                   points=[(t1, *p1.tolist()), (t2, *p2.tolist())], start_t=t1, noises=[r1, r2])
+                   points=[(t1, *p1.tolist()), (t2, *p2.tolist())], start_t=t1, noises=[r1, r2],
+                   track=[(t2, *p2.tolist())])
 
     # ---- prediction -----------------------------------------------------------------------
     def predicted(self, t: float) -> tuple[float, float, float, float, float, float]:
@@ -310,6 +312,7 @@ class _Filter:
         self.x[6] = min(max(self.x[6], K_MIN), K_MAX)
         self.points.append((t, float(z[0]), float(z[1]), float(z[2])))
         self.noises.append(r)
+        self.track.append((t, float(self.x[0]), float(self.x[1]), float(self.x[2])))
 
     def correct_across(self, t: float, basis: np.ndarray, nu: np.ndarray, S: np.ndarray,
                        r: np.ndarray) -> None:
@@ -324,6 +327,7 @@ class _Filter:
         self.P = IKH @ self.P @ IKH.T + K @ r @ K.T
         self.x[6] = min(max(self.x[6], K_MIN), K_MAX)
         self.t = t
+        self.track.append((t, float(self.x[0]), float(self.x[1]), float(self.x[2])))
 
     @property
     def speed(self) -> float:
@@ -397,6 +401,7 @@ class Trajectory:
         self._rest_anchor: tuple[float, float, float, float] | None = None
         self._last_t: float | None = None
         self._ended_points: np.ndarray | None = None
+        self._ended_track: np.ndarray | None = None
         self._recent: list[tuple[float, float, float, float]] = []   # camera-frame mode
         self._velocity_no_model: tuple[float, float, float] | None = None
         self._misses_no_model = 0     # consecutive points off the local fit (camera-frame mode)
@@ -421,6 +426,18 @@ class Trajectory:
             return np.asarray(self._flight.points, dtype=float).reshape(-1, 4)
         if self._ended_points is not None:
             return self._ended_points
+        return np.zeros((0, 4))
+
+    def current_track(self) -> np.ndarray:
+        """The filtered positions of the current (or just ended) shot after each of its updates,
+        (N, 4): t, x, y, z — the path the robot was given, where ``current_flight`` has the raw
+        points (several centimetres of scatter at 7 m on the demo court)."""
+        if not self.court_frame:
+            return self.current_flight()
+        if self._flight is not None:
+            return np.asarray(self._flight.track, dtype=float).reshape(-1, 4)
+        if self._ended_track is not None:
+            return self._ended_track
         return np.zeros((0, 4))
 
     def predicted_path(self) -> np.ndarray:
@@ -804,6 +821,7 @@ class Trajectory:
                 tent.P[6, 6] = old.P[6, 6]
                 tent.k_prior = old.k_prior
                 tent.points = old.points + tent.points
+                tent.track = old.track + tent.track
                 tent.noises = old.noises + tent.noises
                 tent.start_t = old.start_t
             else:
@@ -912,6 +930,7 @@ class Trajectory:
         if f is None:
             return
         self._ended_points = np.asarray(f.points, dtype=float).reshape(-1, 4)
+        self._ended_track = np.asarray(f.track, dtype=float).reshape(-1, 4)
         k_post, var_post = float(f.x[6]), float(f.P[6, 6])
         k_pri, var_pri = f.k_prior
         # Information the shot's own points carried about k = posterior − prior information.

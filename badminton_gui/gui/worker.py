@@ -637,7 +637,10 @@ class TrackingWorker(QObject):
         flight = predicted = None
         trajectory = tracker.trajectory
         if trajectory is not None:
-            if hasattr(trajectory, "current_flight"):
+            # The filtered path (what the robot was given), not the raw points' scatter.
+            if hasattr(trajectory, "current_track"):
+                flight = trajectory.current_track()
+            elif hasattr(trajectory, "current_flight"):
                 flight = trajectory.current_flight()
             if hasattr(trajectory, "predicted_path"):
                 predicted = trajectory.predicted_path()
