@@ -303,6 +303,6 @@ def test_a_rough_rigs_one_camera_sight_is_moved_by_the_pairs_reprojection_miss(m
     pairs, alone, in_play = dropped_frame_errors(rig_error_deg=0.5)
     assert len(alone) >= 0.85 * in_play
     assert np.median(alone) < np.median(pairs) + 0.06
-    monkeypatch.setattr(StereoTracker, "_sight_offset", lambda self, cam, t: (0.0, 0.0))
+    monkeypatch.setattr(StereoTracker, "_sight_offset", lambda self, cam, t, x, y: (0.0, 0.0))
     _, uncorrected, _ = dropped_frame_errors(rig_error_deg=0.5)
     assert len(uncorrected) <= 0.6 * in_play

@@ -112,3 +112,23 @@ def white_near(frame_bgr: np.ndarray, u: float, v: float, radius: float, min_con
     brightest = patch.max(axis=2)
     white = (darkest >= level) & ((brightest - darkest) / np.maximum(brightest, 1.0) <= WHITE_SATURATION)
     return bool(white.any())
+
+
+def bright_near(frame_bgr: np.ndarray, u: float, v: float, radius: float, min_contrast: float) -> bool:
+    """True when a pixel within ``radius`` px of (u, v) is at least ``min_contrast`` grey levels
+    brighter (mean of B, G, R) than the median of a window four times as wide.
+
+    Weaker evidence than ``white_near``: no test of colour. On the NYCU rallies' cameras a
+    shuttle in flight often shows pale blue, not white, and ``white_near`` refuses it (its
+    darkest channel is red); what this rules out is a projection on plain background — the
+    shuttle hidden behind something dark, or a flight the other camera's sight pulled off.
+    """
+    h, w = frame_bgr.shape[:2]
+    ui, vi = int(round(u)), int(round(v))
+    if not (0 <= ui < w and 0 <= vi < h):
+        return False
+    r = max(int(math.ceil(radius)), 1)
+    big = 4 * r
+    window = frame_bgr[max(vi - big, 0):vi + big + 1, max(ui - big, 0):ui + big + 1].mean(axis=2)
+    patch = frame_bgr[max(vi - r, 0):vi + r + 1, max(ui - r, 0):ui + r + 1].mean(axis=2)
+    return bool(float(patch.max()) >= float(np.median(window)) + min_contrast)

@@ -411,6 +411,11 @@ class StereoParams(ParamGroup):
     guided_merged: bool = flag(True, label="... and where merged",
                                help="With no detection, the 3D flight's projection is also reported where it "
                                     "falls on a blob too large for a shuttle (merged with a player, a racket)")
+    guided_other: bool = flag(True, label="... and where the other camera follows it",
+                              help="With no detection, the 3D flight's projection (moved by where this camera's "
+                                   "last pairs lay from their points) is reported when the other camera's "
+                                   "sight has just moved that flight (the shuttle lost against a player's shirt "
+                                   "or in the detector's mask)")
     guided_override: bool = flag(False, label="... also against a detection",
                                  help="Also replace a detection that is off the flight's projection")
     stereo_vouch: bool = flag(True, label="Stereo confirms a young track",

@@ -48,7 +48,7 @@ import numpy.ma  # noqa: F401  np.median imports it on its first call: 17 ms in 
 
 from .court import NET_HEIGHT_POSTS
 from .detector import CameraDetector
-from .guided import find_spot, white_near
+from .guided import bright_near, find_spot, white_near
 from .params import TrackerParams
 from .rig import StereoRig
 from .trajectory import Trajectory
@@ -120,8 +120,15 @@ CAUGHT_STEP = 12.0
 # ``_right_xy``); the NYCU cameras' pairs are 0.05 ms apart, launcher-stereo's up to 25 ms.
 ALIGN_MIN_LAG = 0.0005
 # s: how recent a pair's reprojection miss must be to correct a one-camera step's line of sight
-# (``_sight_offset``); the rig's miss changes slowly with where the shuttle is.
+# (``_sight_offset``); the rig's miss changes slowly with where the shuttle is in the image, so an
+# older pair's miss still serves, up to SIGHT_OFFSET_MEMORY, while the shuttle is within
+# SIGHT_OFFSET_REACH (× image width) of where that pair saw it (a slow flight one camera lost).
 SIGHT_OFFSET_AGE = 0.1
+SIGHT_OFFSET_MEMORY = 0.5
+SIGHT_OFFSET_REACH = 0.05
+# × image width: with both cameras' detections and no pair, the one off the flight's projection
+# by more than this is taken for something else, and the other camera's sight moves the flight.
+SIGHT_PICK_FAR = 0.05
 SIGHT_OFFSET_PAIRS = 5       # ... averaged over this many recent pairs (one pair's is its detection noise)
 # A pair of reports off the epipolar gate that the followed flight vouches for (``_flight_vouched_pair``):
 FLIGHT_VOUCH_GATE = 1.5      # × the epipolar gate: how far off its line it may be
@@ -458,8 +465,22 @@ class StereoTracker:
             if epi is not None:
                 noise_shape = noise_shape * self._epipolar_inflation(epi)
 
-        flight = self._trajectory.update(timestamp, measured, noise_shape,
-                                         np.eye(3) * head_var if head_var > 0 else None)
+        sight_cam = None
+        if measured is None and self.params.stereo.one_camera_rays and self.rig.has_court_pose:
+            sight_cam = self._sight_camera(det_left, det_right, timestamp)
+        if sight_cam is not None:
+            # One camera sees the shuttle, the other not (hidden, merged with a player, lost by
+            # its detector, or its readout on something else): that camera's sight moves the
+            # flight as a lone image's does (``_process_one``), and the robot keeps a 3D point.
+            cam = sight_cam
+            # The right image's own time when its clock lags (``align_pairs``), never earlier
+            # than the last step (the trajectory would take that for a replay and reset).
+            last = self._trajectory.last_time
+            t_sight = timestamp if cam == 0 or (last is not None and t_r <= last) else t_r
+            flight = self._feed_sight(cam, det_left if cam == 0 else det_right, t_sight)
+        else:
+            flight = self._trajectory.update(timestamp, measured, noise_shape,
+                                             np.eye(3) * head_var if head_var > 0 else None)
         speed = None
         if flight.velocity is not None:
             speed = float(math.sqrt(sum(v * v for v in flight.velocity)))
@@ -471,7 +492,16 @@ class StereoTracker:
             seen_at = self.rig.to_output(blob)
             for cam, (x, y) in ((0, (det_left.x, det_left.y)), (1, self._right_xy(det_right))):
                 u, v = (float(c) for c in self.rig.project(cam, seen_at)[0])
-                self._sight_miss[cam].append((timestamp, x - u, y - v))
+                self._sight_miss[cam].append((timestamp, x, y, x - u, y - v))
+        if filtered is not None and sight_cam is not None and sp.guided_other:
+            blind = 1 - sight_cam
+            shown = self._projected_readout(blind, filtered, timestamp, res_left if blind == 0 else res_right,
+                                            left_bgr if blind == 0 else right_bgr)
+            if shown is not None:
+                if blind == 0:
+                    res_left = shown
+                else:
+                    res_right = shown
         if filtered is not None:
             point_out = filtered
         elif self._trajectory.point_rejected:
@@ -568,13 +598,7 @@ class StereoTracker:
 
         if (sp.one_camera_rays and det is not None and not det.predicted
                 and result.detection is not None and self.rig.has_court_pose):
-            # The blob's centroid, as the pairs are triangulated; the cork leads it along the
-            # flight by ``head_offset`` (``_to_head``), which the flight applies to the ray.
-            dx, dy = self._sight_offset(cam, t)
-            centre, direction = self.rig.rays(cam, [[det.x - dx, det.y - dy]])
-            m = self.rig.M1 if cam == 0 else self.rig.M2
-            flight = self._trajectory.update_ray(t, centre, direction[0], 1.0 / float(m[0, 0]),
-                                                 lead=sp.head_offset, lead_min_speed=sp.head_min_speed)
+            flight = self._feed_sight(cam, det, t)
         else:
             flight = self._trajectory.update(t, None)
         point_out = self._trajectory.filtered_position()
@@ -608,13 +632,81 @@ class StereoTracker:
             predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight)
 
-    def _sight_offset(self, cam: int, t: float) -> tuple[float, float]:
+    def _sight_camera(self, det_left: Candidate | None, det_right: Candidate | None, t: float) -> int | None:
+        """The camera whose sight may move the flight on a step with no pair: the one camera
+        with a measured detection; with two (their pair refused), the one whose detection lies
+        nearer the flight's projection, the other's being off it by more than SIGHT_PICK_FAR ×
+        the image width (the detector took something else, the shuttle lost against a
+        player); else None."""
+        real = [det is not None and not det.predicted for det in (det_left, det_right)]
+        if real[0] != real[1]:
+            return 0 if real[0] else 1
+        if not real[0]:
+            return None
+        guide = self._trajectory.guide(t)
+        if guide is None:
+            return None
+        at = guide[0][None]
+        off = []
+        for cam, det in ((0, det_left), (1, det_right)):
+            if float(self.rig.depth(cam, at)[0]) <= 0.1:
+                return None
+            u, v = self.rig.project(cam, at)[0]
+            off.append(math.hypot(det.x - float(u), det.y - float(v)))
+        far = SIGHT_PICK_FAR * self.rig.image_size[0]
+        if max(off) <= far:
+            return None
+        return 0 if off[0] < off[1] else 1
+
+    def _feed_sight(self, cam: int, det: Candidate, t: float):
+        """Feed the flight this camera's line of sight to ``det`` at ``t`` (``update_ray``).
+
+        The blob's centroid is used, as the pairs are triangulated; the cork leads it along the
+        flight by ``head_offset`` (``_to_head``), which the flight applies to the ray; the sight is
+        first moved by where this camera's recent detections lay from the pairs' points."""
+        sp = self.params.stereo
+        dx, dy = self._sight_offset(cam, t, det.x, det.y)
+        centre, direction = self.rig.rays(cam, [[det.x - dx, det.y - dy]])
+        m = self.rig.M1 if cam == 0 else self.rig.M2
+        return self._trajectory.update_ray(t, centre, direction[0], 1.0 / float(m[0, 0]),
+                                           lead=sp.head_offset, lead_min_speed=sp.head_min_speed)
+
+    def _projected_readout(self, cam: int, position, t: float, result: CameraResult,
+                           frame: np.ndarray) -> CameraResult | None:
+        """This camera's readout at the flight's ``position`` (court frame, the cork), which the
+        other camera's sight has just moved while this camera found nothing: the projection moved
+        by where this camera's last pairs' detections lay from their points (``_sight_offset``),
+        flagged ``predicted`` (drawn dashed, never triangulated). None when the camera has a
+        detection, when the projection is behind it or outside its image (the shuttle out of
+        view), or when nothing brighter than its surroundings lies there (``bright_near``: the
+        shuttle hidden, which the labels call not visible; one lost against a player's shirt or
+        in the detector's mask still shows)."""
+        if result.detection is not None:
+            return None
+        at = np.asarray(position, dtype=float)[None]
+        if float(self.rig.depth(cam, at)[0]) <= 0.1:
+            return None
+        u, v = (float(c) for c in self.rig.project(cam, at)[0])
+        dx, dy = self._sight_offset(cam, t, u, v)
+        u, v = u + dx, v + dy
+        w, h = result.image_size
+        if not (0 <= u < w and 0 <= v < h):
+            return None
+        if not bright_near(frame, u, v, MERGED_WHITE_RADIUS * w / 1280.0, self.params.stereo.guided_min_contrast):
+            return None
+        shown = Candidate(u, v, math.nan, math.nan, math.nan, math.nan, 0.0, 0.0, None, predicted=True)
+        return dataclasses.replace(result, detection=shown, candidates=result.candidates + (shown,))
+
+    def _sight_offset(self, cam: int, t: float, x: float, y: float) -> tuple[float, float]:
         """How far (px) this camera's detections lay from where the triangulated points project, over
-        the last pairs the flight took (``SIGHT_OFFSET_PAIRS`` within ``SIGHT_OFFSET_AGE``); else
-        (0, 0). On an exact rig it is the detection noise (a fraction of a px on the demo court);
+        the last pairs the flight took (``SIGHT_OFFSET_PAIRS`` within ``SIGHT_OFFSET_AGE``, or older,
+        up to ``SIGHT_OFFSET_MEMORY``, when seen near (x, y), the detection now); else (0, 0). On an exact rig it is the detection noise (a fraction of a px on the demo court);
         on launcher-stereo, whose rig is the NYCU one imported from the .cfg files, a single
         camera's sight missed the triangulated flight by 5–23 cm and the flight refused every one."""
-        recent = [(dx, dy) for t_pair, dx, dy in self._sight_miss[cam] if 0.0 <= t - t_pair <= SIGHT_OFFSET_AGE]
+        reach = SIGHT_OFFSET_REACH * self.rig.image_size[0]
+        recent = [(dx, dy) for t_pair, x_pair, y_pair, dx, dy in self._sight_miss[cam]
+                  if 0.0 <= t - t_pair <= SIGHT_OFFSET_AGE
+                  or (t - t_pair <= SIGHT_OFFSET_MEMORY and math.hypot(x - x_pair, y - y_pair) <= reach)]
         if not recent:
             return 0.0, 0.0
         dx, dy = np.mean(recent, axis=0)

@@ -641,6 +641,12 @@ class Trajectory:
         return dx, dy
 
     @property
+    def last_time(self) -> float | None:
+        """The time (s) of the last update, or None before the first (a later update may not be
+        earlier: a clock that goes back resets the trajectory)."""
+        return self._last_t
+
+    @property
     def point_rejected(self) -> bool:
         """The last update's point was refused by the flight being followed (an outlier: a wrong
         pair, a racket) and did not start a new one."""
