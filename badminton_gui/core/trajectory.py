@@ -588,8 +588,9 @@ class Trajectory:
             return None
         if not self._consistent(tent):
             # Its first point is often the hit itself (the blob merged with the racket): the
-            # track's latest points alone may still lie on one path.
-            n = TENTATIVE_REPORT_POINTS
+            # track's latest points alone may still lie on one path — all but its first when
+            # it has just that many.
+            n = min(TENTATIVE_REPORT_POINTS, len(tent.points) - 1)
             tent = self._refit(tent.points[-n:], tent.noises[-n:])
             if tent is None or len(tent.points) < n or not self._consistent(tent):
                 return None
