@@ -5,7 +5,9 @@ held-back candidates pass when they lie on each other's epipolar line and their 
 velocities triangulate to a moving 3D point; not when the point is at rest, when one camera's
 candidate is off the epipolar line, when its track moves another way, or when that camera
 already has a survivor of its own (it is then only a partner). And the followed 3D flight
-vouches for a pair of reports just off the epipolar gate (``StereoTracker._flight_vouched_pair``).
+vouches for a pair of reports just off the epipolar gate (``StereoTracker._flight_vouched_pair``),
+and the last step's pair of tracklets continues off it while its miss changes smoothly
+(``StereoTracker._continued_pair``).
 """
 
 import dataclasses
@@ -399,5 +401,36 @@ def test_a_pair_just_off_the_epipolar_gate_is_taken_where_the_flight_puts_the_sh
         assert tracker._flight_vouched_pair(left, right, None) == (None, None)
         left, right = _pair_off_its_line(rig, point, 2.0 * tol)
         assert tracker._flight_vouched_pair(left, right, near_guide) == (None, None)
+    finally:
+        tracker.close()
+
+
+def test_the_last_pair_of_tracklets_continues_off_the_gate_while_its_miss_changes_smoothly():
+    """rally_11-47-02 800–860: the labelled shuttle's epipolar miss on the rough .cfg rig grew
+    6 → 151 px and back along one flight (the learnt gate ≈ 113 px) while both cameras followed
+    it, and the robot lost 50 frames of 3D points. The last step's pair of tracklets stays a pair
+    while its miss moves by ≤ 0.005 × the image width a step, up to 2 × the gate."""
+    rig = make_rig("binocular", (1280, 720))
+    tracker = StereoTracker(rig, TrackerParams(), parallel=False)
+    try:
+        tol = tracker.epipolar_tolerance()
+        point = np.array([0.5, 2.0, 2.5])
+        left, right = (dataclasses.replace(c, tracklet=k) for c, k in zip(_pair_off_its_line(rig, point, 1.6 * tol), (3, 7)))
+        err = float(rig.epipolar_errors([[left.x, left.y]], [[right.x, right.y]])[0, 0])
+        assert err > 1.5 * tol and tracker._pair_point(left, right) == (None, None)
+        assert tracker._continued_pair(left, right, 1.0) == (None, None)          # no last pair
+        tracker._last_pair = (0.99, 3, 7, err - 4.0)                               # 4 px less a step ago
+        found, got = tracker._continued_pair(left, right, 1.0)
+        assert found is not None and got == pytest.approx(err)
+        assert np.linalg.norm(rig.to_output(found)[0] - point) < 0.2           # its triangulation
+        assert tracker._continued_pair(left, right, 1.05) == (None, None)         # that pair too old
+        tracker._last_pair = (0.99, 3, 8, err - 4.0)                               # another right tracklet
+        assert tracker._continued_pair(left, right, 1.0) == (None, None)
+        tracker._last_pair = (0.99, 3, 7, err - 12.0)                              # a jump, not a drift
+        assert tracker._continued_pair(left, right, 1.0) == (None, None)
+        far_left, far_right = (dataclasses.replace(c, tracklet=k) for c, k in zip(_pair_off_its_line(rig, point, 2.2 * tol), (3, 7)))
+        far_err = float(rig.epipolar_errors([[far_left.x, far_left.y]], [[far_right.x, far_right.y]])[0, 0])
+        tracker._last_pair = (0.99, 3, 7, far_err - 2.0)
+        assert tracker._continued_pair(far_left, far_right, 1.0) == (None, None)  # beyond 2 × the gate
     finally:
         tracker.close()

@@ -133,6 +133,10 @@ SIGHT_OFFSET_PAIRS = 5       # ... averaged over this many recent pairs (one pai
 # A pair of reports off the epipolar gate that the followed flight vouches for (``_flight_vouched_pair``):
 FLIGHT_VOUCH_GATE = 1.5      # × the epipolar gate: how far off its line it may be
 FLIGHT_VOUCH_SLACK = 0.1     # m: ... and how near the flight's prediction (+ 3σ of it) it must lie
+# The last step's pair continued off the epipolar gate (``_continued_pair``):
+PAIR_CONTINUITY_AGE = 0.03   # s: the last pair at most this old (a frame or two)
+PAIR_CONTINUITY_STEP = 0.005  # × image width: its epipolar error moved by at most this since (10 px at 2048)
+PAIR_CONTINUITY_GATE = 2.0   # × the epipolar gate: and is at most this
 
 
 class StereoTracker:
@@ -170,6 +174,9 @@ class StereoTracker:
         # ≈ 10° off) puts each camera's sight of the shuttle centimetres off the triangulated
         # flight; a one-camera step's sight is moved back by it (``_sight_offset``).
         self._sight_miss: tuple[deque, deque] = (deque(maxlen=SIGHT_OFFSET_PAIRS), deque(maxlen=SIGHT_OFFSET_PAIRS))
+        # The last measured pair: (time, left tracklet, right tracklet, epipolar error px), for
+        # ``_continued_pair``.
+        self._last_pair: tuple[float, int, int, float] | None = None
         # Per camera, for ``stereo.alone_limit``: [reports alone in a row, frames without a
         # report in a row, the readout continues one that had a 3D point].
         self._alone = ([0, 0, False], [0, 0, False])
@@ -208,6 +215,7 @@ class StereoTracker:
         self._reports[0].clear()
         self._reports[1].clear()
         self._last_blob = None
+        self._last_pair = None
         self._sight_miss[0].clear()
         self._sight_miss[1].clear()
         self._alone = ([0, 0, False], [0, 0, False])
@@ -409,6 +417,8 @@ class StereoTracker:
             if not guide_tried:
                 guide, guide_tried = self._trajectory.guide(timestamp), True
             point_left, epi = self._flight_vouched_pair(det_left, det_right, guide)
+            if point_left is None:
+                point_left, epi = self._continued_pair(det_left, det_right, timestamp)
         for cam, det in ((0, det_left), (1, det_right)):
             if det is not None and not det.predicted:
                 velocity = (self.left if cam == 0 else self.right).tracklet_velocity(det)
@@ -460,6 +470,8 @@ class StereoTracker:
         measured = None
         noise_shape = None
         if point_left is not None:
+            if epi is not None and det_left.tracklet >= 0 and det_right.tracklet >= 0:
+                self._last_pair = (timestamp, det_left.tracklet, det_right.tracklet, float(epi))
             measured = tuple(float(v) for v in self.rig.to_output(point_left)[0])
             noise_shape = self.rig.noise_shape([[det_left.x, det_left.y]], [list(self._right_xy(det_right))])[0]
             if epi is not None:
@@ -1366,6 +1378,32 @@ class StereoTracker:
         position, covariance = guide
         reach = FLIGHT_VOUCH_SLACK + 3.0 * math.sqrt(max(float(np.trace(covariance)) / 3.0, 0.0))
         if float(np.linalg.norm(self.rig.to_output(point)[0] - position)) > reach:
+            return None, None
+        return point, err
+
+    def _continued_pair(self, det_left: Candidate, det_right: Candidate, t: float
+                        ) -> tuple[np.ndarray | None, float | None]:
+        """The two cameras' reports as a pair although they miss the epipolar gate, when the
+        same two tracklets were the last step's pair and their epipolar error has moved by at
+        most PAIR_CONTINUITY_STEP (× image width) since, up to PAIR_CONTINUITY_GATE × the gate
+        (else (None, None)).
+
+        A rough rig's epipolar miss varies smoothly over the image: on rally_11-47-02 the
+        labelled shuttle's went 6 → 151 → 7 px along one flight (the learnt gate ≈ 113 px), and
+        the robot lost 50 frames of 3D points in the middle, with both cameras on the shuttle."""
+        last = self._last_pair
+        if (last is None or det_left.predicted or det_right.predicted or t - last[0] > PAIR_CONTINUITY_AGE
+                or (det_left.tracklet, det_right.tracklet) != (last[1], last[2]) or det_left.tracklet < 0):
+            return None, None
+        pl, pr = [[det_left.x, det_left.y]], [list(self._right_xy(det_right))]
+        err = float(self.rig.epipolar_errors(pl, pr)[0, 0])
+        if (abs(err - last[3]) > PAIR_CONTINUITY_STEP * self.rig.image_size[0]
+                or err > PAIR_CONTINUITY_GATE * self.epipolar_tolerance()):
+            return None, None
+        point = self.rig.triangulate(pl, pr)[0]
+        dist = float(np.linalg.norm(point))
+        sp = self.params.stereo
+        if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
             return None, None
         return point, err
 
