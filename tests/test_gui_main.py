@@ -467,7 +467,7 @@ def test_a_coasted_position_is_drawn_dashed_and_captioned(qtbot):
     seen_caption, seen_red = ring_pixels(False)
     predicted_caption, predicted_red = ring_pixels(True)
     assert seen_caption.endswith("shuttle found")
-    assert predicted_caption.endswith("shuttle predicted (hidden)")
+    assert predicted_caption.endswith("shuttle predicted from the 3D flight")
     assert 0 < predicted_red < 0.75 * seen_red         # dashed and thinner: clearly fewer red pixels
 
 

@@ -194,7 +194,7 @@ class FeedView(QWidget):
         if self._camera is not None:
             d = self._camera.detection
             text += ("  ·  no shuttle" if d is None else
-                     "  ·  shuttle predicted (hidden)" if d.predicted else "  ·  shuttle found")
+                     "  ·  shuttle predicted from the 3D flight" if d.predicted else "  ·  shuttle found")
         return text
 
     def _paint_title(self, p: QPainter) -> None:
