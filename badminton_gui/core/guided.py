@@ -89,6 +89,21 @@ def find_spot(frame_bgr: np.ndarray, u: float, v: float, radius: float, min_cont
     return best[1], best[2], best[3], best[4]
 
 
+def _around(frame_bgr: np.ndarray, u: float, v: float, radius: float
+            ) -> tuple[np.ndarray, np.ndarray] | None:
+    """(the pixels within ``radius`` px of (u, v), a window four times as wide around them) of the
+    frame, clipped to it; None when (u, v) lies outside."""
+    h, w = frame_bgr.shape[:2]
+    ui, vi = int(round(u)), int(round(v))
+    if not (0 <= ui < w and 0 <= vi < h):
+        return None
+    r = max(int(math.ceil(radius)), 1)
+    big = 4 * r
+    window = frame_bgr[max(vi - big, 0):vi + big + 1, max(ui - big, 0):ui + big + 1]
+    patch = frame_bgr[max(vi - r, 0):vi + r + 1, max(ui - r, 0):ui + r + 1]
+    return patch, window
+
+
 def white_near(frame_bgr: np.ndarray, u: float, v: float, radius: float, min_contrast: float) -> bool:
     """True when a white pixel lies within ``radius`` px of (u, v): its darkest channel at least
     ``min_contrast`` above the median of a window four times as wide, and unsaturated.
@@ -97,17 +112,12 @@ def white_near(frame_bgr: np.ndarray, u: float, v: float, radius: float, min_con
     no compact spot, but its white still shows at the flight's projection; a shuttle hidden
     behind the player shows the player's shirt, skin or hair there instead.
     """
-    h, w = frame_bgr.shape[:2]
-    ui, vi = int(round(u)), int(round(v))
-    if not (0 <= ui < w and 0 <= vi < h):
+    around = _around(frame_bgr, u, v, radius)
+    if around is None:
         return False
-    r = max(int(math.ceil(radius)), 1)
-    big = 4 * r
-    x0, x1 = max(ui - big, 0), min(ui + big + 1, w)
-    y0, y1 = max(vi - big, 0), min(vi + big + 1, h)
-    white_around = frame_bgr[y0:y1, x0:x1].min(axis=2)
-    level = float(np.median(white_around)) + min_contrast
-    patch = frame_bgr[max(vi - r, 0):vi + r + 1, max(ui - r, 0):ui + r + 1].astype(np.float32)
+    patch, window = around
+    level = float(np.median(window.min(axis=2))) + min_contrast
+    patch = patch.astype(np.float32)
     darkest = patch.min(axis=2)
     brightest = patch.max(axis=2)
     white = (darkest >= level) & ((brightest - darkest) / np.maximum(brightest, 1.0) <= WHITE_SATURATION)
@@ -123,12 +133,8 @@ def bright_near(frame_bgr: np.ndarray, u: float, v: float, radius: float, min_co
     darkest channel is red); what this rules out is a projection on plain background — the
     shuttle hidden behind something dark, or a flight the other camera's sight pulled off.
     """
-    h, w = frame_bgr.shape[:2]
-    ui, vi = int(round(u)), int(round(v))
-    if not (0 <= ui < w and 0 <= vi < h):
+    around = _around(frame_bgr, u, v, radius)
+    if around is None:
         return False
-    r = max(int(math.ceil(radius)), 1)
-    big = 4 * r
-    window = frame_bgr[max(vi - big, 0):vi + big + 1, max(ui - big, 0):ui + big + 1].mean(axis=2)
-    patch = frame_bgr[max(vi - r, 0):vi + r + 1, max(ui - r, 0):ui + r + 1].mean(axis=2)
-    return bool(float(patch.max()) >= float(np.median(window)) + min_contrast)
+    patch, window = around
+    return bool(float(patch.mean(axis=2).max()) >= float(np.median(window.mean(axis=2))) + min_contrast)
