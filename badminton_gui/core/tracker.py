@@ -17,7 +17,10 @@ lost the shuttle looks where the flight projects (``_guided``) or, before the fl
 where its own image path continues on the other detection's epipolar line (``_stereo_look``);
 nothing is reported where the shuttle has left the camera's view (``stereo.exit_margin``,
 ``exit_by_path``, ``out_of_view_weak``), nor, in either camera, while a shuttle whose flight
-stopped dead in mid-air is held in the hand that caught it (``stereo.caught_frames``).
+stopped dead in mid-air is held in the hand that caught it (``stereo.caught_frames``). When one
+camera alone has the shuttle, its line of sight moves the flight (``_feed_sight``), the robot
+keeps a 3D point, and the camera that lost it shows the flight's projection where its image shows
+something there (``stereo.guided_other``).
 
 Cameras without a common trigger (``process_frame``): a step may bring one camera's image only
 (``StereoFrame.fresh_left`` / ``fresh_right``, io/video.py ``pairing_schedule``); only that camera
@@ -124,6 +127,7 @@ ALIGN_MIN_LAG = 0.0005
 # older pair's miss still serves, up to SIGHT_OFFSET_MEMORY, while the shuttle is within
 # SIGHT_OFFSET_REACH (× image width) of where that pair saw it (a slow flight one camera lost).
 SIGHT_OFFSET_AGE = 0.1
+SIGHT_OFFSET_PAIRS = 5       # ... averaged over this many recent pairs (one pair's is its detection noise)
 SIGHT_OFFSET_MEMORY = 0.5
 SIGHT_OFFSET_REACH = 0.05
 # × image width: with both cameras' detections and no pair, the one off the flight's projection
@@ -133,7 +137,6 @@ SIGHT_PICK_FAR = 0.05
 # sure than a free-running camera's lone image (the shuttle half hidden, merging with a player):
 # at 1 the demo court's 3D RMS within 6 m went 0.91 → 0.98 cm, at 2 0.94, at 3 0.93 cm.
 PAIRED_SIGHT_NOISE = 3.0
-SIGHT_OFFSET_PAIRS = 5       # ... averaged over this many recent pairs (one pair's is its detection noise)
 # A pair of reports off the epipolar gate that the followed flight vouches for (``_flight_vouched_pair``):
 FLIGHT_VOUCH_GATE = 1.5      # × the epipolar gate: how far off its line it may be
 FLIGHT_VOUCH_SLACK = 0.1     # m: ... and how near the flight's prediction (+ 3σ of it) it must lie
@@ -716,8 +719,9 @@ class StereoTracker:
     def _sight_offset(self, cam: int, t: float, x: float, y: float) -> tuple[float, float]:
         """How far (px) this camera's detections lay from where the triangulated points project, over
         the last pairs the flight took (``SIGHT_OFFSET_PAIRS`` within ``SIGHT_OFFSET_AGE``, or older,
-        up to ``SIGHT_OFFSET_MEMORY``, when seen near (x, y), the detection now); else (0, 0). On an exact rig it is the detection noise (a fraction of a px on the demo court);
-        on launcher-stereo, whose rig is the NYCU one imported from the .cfg files, a single
+        up to ``SIGHT_OFFSET_MEMORY``, when seen near (x, y), the detection now); else (0, 0). On
+        an exact rig it is the detection noise (a fraction of a px on the demo court); on
+        launcher-stereo, whose rig is the NYCU one imported from the .cfg files, a single
         camera's sight missed the triangulated flight by 5–23 cm and the flight refused every one."""
         reach = SIGHT_OFFSET_REACH * self.rig.image_size[0]
         recent = [(dx, dy) for t_pair, x_pair, y_pair, dx, dy in self._sight_miss[cam]

@@ -574,7 +574,8 @@ class Trajectory:
         """The tentative track's position at the last update's time when that update's point,
         refused by the flight being followed, extended a track that is surely a new shot: at
         least ``TENTATIVE_REPORT_POINTS`` points on one drag-model path (``_consistent``; or its
-        latest that many, refitted alone), moving at ``STARVED_MIN_SPEED`` or more; else None.
+        latest that many — all but its first when it has just that many — refitted alone),
+        moving at ``STARVED_MIN_SPEED`` or more; else None.
 
         After a hit the new shot's points are refused by the old flight until the new track has
         ``TAKEOVER_POINTS`` of them (and longer when its first points are off): ≈ 50 ms at
