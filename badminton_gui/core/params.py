@@ -273,6 +273,15 @@ class AssociationParams(ParamGroup):
                                     help="Weight of the candidate's own quality this frame in its merit, on top "
                                          "of its tracklet's running quality (0 = off): a tracklet that slid onto "
                                          "a racket or a hand loses the choice the frame it stops looking like a shuttle")
+    # Broadcast (bwf_00001 94, bwf_00025 51–53): a shuttle passing a still shoe or a dark patch
+    # of the crowd was claimed by that clutter's long-lived tracklet (its history bonus beat the
+    # shuttle's younger tracklet at equal distance), and the readout lost the shuttle. On the
+    # two-camera rig the still tracklets that claim by history are mostly the shuttle itself,
+    # held or lying (rally_11-47-02: the default at True cost 16 frames of its right camera).
+    history_needs_motion: bool = flag(False, label="Only moving tracklets claim by history",
+                                      help="A tracklet's age gives it first claim on nearby candidates only while "
+                                           "it moves (travels 'Minimum travel' over the window) or is the one "
+                                           "followed; still clutter claims by distance alone")
     rebirth_radius: float = param(60.0, 0.0, 2000.0, step=1.0, unit="px", label="Hit continuity",
                                   help="When the followed tracklet misses (a racket hit), a new blob this close "
                                        "to its last position inherits its history (0 = off)")
