@@ -386,6 +386,9 @@ class CameraDetector:
         width_frames = int(p.colour.head_lead_width_frames)
         edge_exit = p.colour.edge_exit > 0
         k = 0
+        # Candidates the association refused, by index, while none passed: ``_accept_lone``.
+        lone = p.association.lone_quality < 1.0
+        refused: list[int] | None = [] if lone else None
         for m in measured:
             x, y, length, short_side, whiteness, area, quality, reason, _ = m
             motion, score, ident = math.nan, quality, None
@@ -394,8 +397,11 @@ class CameraDetector:
                 k += 1
                 if merit < 0:
                     reason = REJECT_MOTION
+                    if refused is not None and quality >= p.association.lone_quality:
+                        refused.append(len(candidates))
                 else:
                     score = merit
+                    refused = None
             c = make_candidate(x, y, length, short_side, whiteness, area, motion, score, reason,
                                tracklet=-1 if ident is None else ident)
             if ident is not None:
@@ -427,11 +433,32 @@ class CameraDetector:
                           predicted=True, tracklet=tr.ident)
             self._tracklet_of[id(c)] = tr.ident
             candidates.append(c)
+        elif refused and self._outside is None:
+            self._accept_lone(candidates, refused)
         return CameraResult(detection=None, candidates=tuple(candidates),
                             mask=mask if keep_mask else None,
                             mask_scale=mask.shape[1] / w, image_size=(w, h),
                             window=None if window is None else tuple(int(v) for v in window),
                             left_picture=self._left_picture)
+
+    def _accept_lone(self, candidates: list, refused: list[int]) -> None:
+        """No candidate lies on a confirmed, travelling tracklet: the most shuttle-like one the
+        association refused (``refused``: indices into ``candidates``, each of quality ≥
+        ``association.lone_quality``) passes after all, scored by its own quality.
+
+        The shuttle held for the serve, or lying after a rally, never travels, and TV labels
+        mark it visible; with nothing else to report, a blob the classifier is sure of is more
+        often that shuttle than anything (``lone_quality`` in params.py). Not while the shuttle
+        is out of the picture (``_out_of_picture`` holds every candidate back then) nor while the
+        followed track coasts through a blind spot.
+        """
+        best = max(refused, key=lambda i: candidates[i].score)
+        c = candidates[best]
+        accepted = dataclasses.replace(c, rejected_by=None)
+        ident = self._tracklet_of.pop(id(c), None)
+        if ident is not None:
+            self._tracklet_of[id(accepted)] = ident
+        candidates[best] = accepted
 
     def _out_of_picture(self, t: float, w: int, h: int,
                         links: list[tuple[int, float, float]]) -> list[tuple[int, float, float]]:

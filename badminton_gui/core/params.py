@@ -318,6 +318,18 @@ class AssociationParams(ParamGroup):
                                                help="The swap only while the followed tracklet's running quality is at "
                                                     "least this (it was on the shuttle until the hit, not sliding over "
                                                     "clutter after the shuttle left the view)")
+    # Broadcast labels mark the shuttle held for the serve and lying after the rally; no
+    # tracklet there travels, so the association refuses it and the readout stays empty. On the
+    # tuned-on TV clips, in the frames with no report, the best refused blob scoring ≥ 0.75
+    # was the labelled shuttle 12 times of 15 (the others: twice nothing labelled, once ~50 px
+    # off): a frame with nothing to report gains more from it than it risks. Not on the
+    # two-camera rig, whose labels leave most still shuttles unmarked (tuned-on rallies at 0.75:
+    # 98.00 → 96.48 %, 217 more FP2).
+    lone_quality: float = param(1.0, 0.0, 1.0, step=0.01, label="Report a still blob from quality",
+                                help="When no blob lies on a confirmed, travelling tracklet, the one the "
+                                     "association refused whose own quality (the classifier's probability) is "
+                                     "at least this is reported anyway: a shuttle held for the serve, or lying "
+                                     "(1 = never)")
     hits_saturation: int = param(10, 1, 500, step=1, unit="frames", label="History counts up to",
                                  help="A tracklet's length adds to its merit up to this many frames")
     hysteresis: float = param(1.0, 0.0, 10.0, step=0.1, label="Hysteresis",
