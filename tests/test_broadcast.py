@@ -237,12 +237,12 @@ def test_dark_threshold_is_off_by_default_and_on_in_the_broadcast_preset():
     assert load_preset("broadcast").background.dark_threshold == 30
 
 
-def _clear_out_of_the_top(n=75, out=range(20, 50)):
+def _clear_out_of_the_top(n=75, out=range(20, 50), flicker=None):
     """A TV-sized flight (1280×720 at 30 fps): the shuttle (a 3 px dot) rises 30 px a frame and
     leaves through the top edge after frame 19, is out of the picture in the ``out`` frames and
     comes back down through the top edge; meanwhile a second, dimmer dot (a player's shoe, say)
     crawls across the court at 6 px a frame. Returns the frames and the shuttle's position per
-    frame (None while out)."""
+    frame (None while out). ``flicker`` = (frame, (x, y)): one more dot in that frame only."""
     rng = np.random.default_rng(7)
     frames, truth = [], []
     for i in range(n):
@@ -256,6 +256,8 @@ def _clear_out_of_the_top(n=75, out=range(20, 50)):
             pos = None
         if pos is not None:
             cv2.circle(img, pos, 3, (240, 240, 240), -1)
+        if flicker is not None and i == flicker[0]:
+            cv2.circle(img, flicker[1], 3, (240, 240, 240), -1)
         frames.append(img)
         truth.append(pos)
     return frames, truth
@@ -291,6 +293,28 @@ def test_nothing_is_reported_while_the_shuttle_is_out_of_the_picture(margin):
     else:
         assert all(reported_out)   # the crawling dot, while the shuttle is out
         assert not any(back)       # ... and after: it keeps the lead it took
+
+
+def test_the_hold_ends_when_a_young_track_takes_the_returning_shuttle():
+    """A flicker (one frame, well inside the picture) starts a track just before the shuttle
+    comes back; the track's velocity is unknown, its gate wide, and it takes the shuttle's first
+    blob at the top edge. That track has now been at the edge: the shuttle is back and reported
+    (it used to be held back, like everything else, until the timeout, because the track's
+    first point was the flicker's: 1_02_01 111 with filter 1 at 18 px lost 80 frames)."""
+    p = load_preset("broadcast").with_value("classifier.enabled", False)
+    frames, truth = _clear_out_of_the_top(flicker=(49, (850, 150)))
+    det = CameraDetector(p)
+    tracks = {}
+    for i, img in enumerate(frames[:51]):
+        result = det.process(img, i / FPS, keep_mask=False)
+        for frame, (x, y) in ((49, (850, 150)), (50, truth[50])):
+            if i == frame:
+                tracks[frame] = [c.tracklet for c in result.candidates if math.hypot(c.x - x, c.y - y) <= 5]
+        if i in range(22, 50):
+            assert result.detection is None                       # held while the shuttle is out
+    assert tracks[49] == tracks[50] and len(tracks[50]) == 1   # the flicker's track took it
+    d = result.detection
+    assert d is not None and math.hypot(d.x - truth[50][0], d.y - truth[50][1]) <= 5
 
 
 def test_the_shuttle_out_of_the_picture_is_given_up_after_the_timeout():

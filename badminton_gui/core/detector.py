@@ -470,10 +470,14 @@ class CameraDetector:
         edges, not this one). Out there it cannot be seen, so whatever the association offers
         meanwhile (a player in white, a shoe, a logo) is not the shuttle; it can only come back
         across an edge. So until a
-        track born after the exit whose first point lies within ``entry_margin`` of an edge may
-        supply the detection (the shuttle coming back in; its first frames back may be missed,
-        so its track can start some way inside), or ``exit_timeout`` has passed (a new shuttle
-        brought into play), every candidate is held back (``merit`` -1).
+        track born after the exit that has been within ``entry_margin`` of an edge may supply
+        the detection (the shuttle coming back in; its first frames back may be missed, so its
+        track can start some way inside), or ``exit_timeout`` has passed (a new shuttle
+        brought into play), every candidate is held back (``merit`` -1). Any point of the
+        track counts, not only its first: a young clutter track's wide gate (its velocity
+        barely known) can take the returning shuttle's first blob over (1_02_01 111 with
+        filter 1 at 18 px: a track born at (992, 173) took the shuttle at (847, 6), and its
+        first point held it back for 17 frames).
         """
         a, ap = self._associator, self.params.association
         margin = ap.exit_margin * w / 1280.0
@@ -500,8 +504,8 @@ class CameraDetector:
         out, entered = [], False
         for ident, motion, merit in links:
             tr = by_id.get(ident)
-            if merit >= 0 and not (tr is not None and ident >= first and tr.recent
-                                   and _near_edge(*tr.recent[0], w, h, entry)):
+            if merit >= 0 and not (tr is not None and ident >= first
+                                   and any(_near_edge(x, y, w, h, entry) for x, y in tr.recent)):
                 merit = -1.0
             entered = entered or merit >= 0
             out.append((ident, motion, merit))
