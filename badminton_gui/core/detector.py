@@ -120,9 +120,9 @@ class CameraDetector:
         self._previous_gray: tuple[np.ndarray, int, int, tuple[int, int]] | None = None
         self.last_split = 0   # candidates split off merged blobs in the last frame
         # ``association.exit_margin``: (time the shuttle left the picture, first tracklet ident
-        # born after that) while it is out, else None; the tracklets that could supply the
-        # detection in the last frame.
-        self._outside: tuple[float, int] | None = None
+        # born after that, {ident: hits} of the tracklets alive then) while it is out, else
+        # None; the tracklets that could supply the detection in the last frame.
+        self._outside: tuple[float, int, dict[int, int]] | None = None
         self._eligible: set[int] = set()
         self._left_picture = -1   # the tracklet that left the picture this frame (-1: none)
 
@@ -489,14 +489,14 @@ class CameraDetector:
                     and tr.velocity_known and tr.vy < 0 and tr.y + 0.5 < margin):
                 if tr.predict(t)[1] < -0.5:
                     # The followed shuttle is the one that left: no clutter keeps the hysteresis.
-                    self._outside = (t, a._next_id)
+                    self._outside = (t, a._next_id, {other.ident: other.hits for other in a.tracklets})
                     a.select(tr.ident)
                     self._left_picture = tr.ident
                     break
         self._eligible = {ident for ident, _, merit in links if merit >= 0}
         if self._outside is None:
             return links
-        t_exit, first = self._outside
+        t_exit, first, hits_then = self._outside
         if t - t_exit > ap.exit_timeout:
             self._outside = None
             return links
@@ -504,14 +504,28 @@ class CameraDetector:
         out, entered = [], False
         for ident, motion, merit in links:
             tr = by_id.get(ident)
-            if merit >= 0 and not (tr is not None and ident >= first
-                                   and any(_near_edge(x, y, w, h, entry) for x, y in tr.recent)):
+            if merit >= 0 and not (tr is not None and self._came_in(tr, first, hits_then, w, h, entry)):
                 merit = -1.0
             entered = entered or merit >= 0
             out.append((ident, motion, merit))
         if entered:
             self._outside = None
         return out
+
+    @staticmethod
+    def _came_in(tr, first: int, hits_then: dict[int, int], w: int, h: int, entry: float) -> bool:
+        """Has tracklet ``tr`` been within ``entry`` px of an edge since the shuttle left?
+
+        A track born after the exit (ident ≥ ``first``): any of its points. An older one: only
+        the points it gained since (its hits then, ``hits_then``), for an old clutter track
+        (a player's, a line's) can take the returning shuttle's blob into its gate (bwf_00001
+        90 with the gate slack at 30 px: a track that had sat at (733, 317) for 52 frames).
+        """
+        points = list(tr.recent)
+        if tr.ident < first:
+            gained = tr.hits - hits_then.get(tr.ident, tr.hits)
+            points = points[len(points) - gained:] if gained > 0 else []
+        return any(_near_edge(x, y, w, h, entry) for x, y in points)
 
     def _split_merged(self, gray: np.ndarray, mask: np.ndarray, contours, length_all: np.ndarray,
                       t: float, w: int, sx: float, sy: float, fresh: tuple[int, int, int, int]):
