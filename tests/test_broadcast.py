@@ -344,6 +344,27 @@ def test_an_old_track_comes_in_only_by_the_points_it_gained_since_the_exit():
     assert CameraDetector._came_in(young, first, {}, w, h, entry)
 
 
+def test_another_track_leaving_through_the_top_does_not_hold_the_followed_shuttle():
+    """The followed shuttle flies across the picture while another shuttle-like dot (a second
+    shuttle, a bright clutter track) rises out through the top edge: the shuttle being
+    followed is still in the picture, so nothing is held back (bwf_00001 242 with the speed
+    gate gain at 0.75: the shuttle was held back for 3 s)."""
+    p = load_preset("broadcast").with_value("classifier.enabled", False)
+    rng = np.random.default_rng(5)
+    det = CameraDetector(p)
+    on_shuttle = []
+    for i in range(45):
+        img = np.clip(rng.normal(60, 2, (720, 1280, 3)), 0, 255).astype(np.uint8)
+        shuttle = (100 + 20 * i, 400)
+        cv2.circle(img, shuttle, 3, (240, 240, 240), -1)
+        if 6 <= i < 20:
+            cv2.circle(img, (1000, 300 - 25 * (i - 6)), 3, (240, 240, 240), -1)   # gone after 17
+        d = det.process(img, i / FPS, keep_mask=False).detection
+        if i >= 5:
+            on_shuttle.append(d is not None and math.hypot(d.x - shuttle[0], d.y - shuttle[1]) <= 5)
+    assert all(on_shuttle), [i + 5 for i, ok in enumerate(on_shuttle) if not ok]
+
+
 def test_the_shuttle_out_of_the_picture_is_given_up_after_the_timeout():
     """A shuttle that never comes back (a new one brought into play off screen): after
     ``exit_timeout`` the association reports again."""

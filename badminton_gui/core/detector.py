@@ -482,10 +482,15 @@ class CameraDetector:
         a, ap = self._associator, self.params.association
         margin = ap.exit_margin * w / 1280.0
         entry = max(ap.entry_margin, ap.exit_margin) * w / 1280.0
+        # The followed track seen in this frame is the shuttle in the picture: another track
+        # leaving through the top is clutter (bwf_00001 242 with the speed gate gain at 0.75:
+        # a track at the top edge that could have supplied the detection left while the
+        # followed shuttle flew on below, and the shuttle was held back for 3 s).
+        followed_here = any(tr.ident == a.selected and tr.hit_now for tr in a.tracklets)
         for tr in a.tracklets:
             # Through the top edge only: players, rackets and shoes cross the side and bottom
             # edges of a TV picture, never its top (they stand on the court below it).
-            if (not tr.hit_now and tr.misses == 1 and tr.ident in self._eligible
+            if (not tr.hit_now and tr.misses == 1 and tr.ident in self._eligible and not followed_here
                     and tr.velocity_known and tr.vy < 0 and tr.y + 0.5 < margin):
                 if tr.predict(t)[1] < -0.5:
                     # The followed shuttle is the one that left: no clutter keeps the hysteresis.
