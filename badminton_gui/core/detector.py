@@ -470,14 +470,15 @@ class CameraDetector:
         edges, not this one). Out there it cannot be seen, so whatever the association offers
         meanwhile (a player in white, a shoe, a logo) is not the shuttle; it can only come back
         across an edge. So until a
-        track born after the exit that has been within ``entry_margin`` of an edge may supply
-        the detection (the shuttle coming back in; its first frames back may be missed, so its
-        track can start some way inside), or ``exit_timeout`` has passed (a new shuttle
-        brought into play), every candidate is held back (``merit`` -1). Any point of the
-        track counts, not only its first: a young clutter track's wide gate (its velocity
-        barely known) can take the returning shuttle's first blob over (1_02_01 111 with
-        filter 1 at 18 px: a track born at (992, 173) took the shuttle at (847, 6), and its
-        first point held it back for 17 frames).
+        track that has come within ``entry_margin`` of an edge since the exit may supply the
+        detection (the shuttle coming back in; its first frames back may be missed, so its
+        track can start some way inside; ``_came_in``), or ``exit_timeout`` has passed (a new
+        shuttle brought into play), every candidate is held back (``merit`` -1). Any point of a
+        track born after the exit counts, not only its first: a young clutter track's wide gate
+        (its velocity barely known) can take the returning shuttle's first blob over (1_02_01
+        111 with filter 1 at 18 px: a track born at (992, 173) took the shuttle at (847, 6), and
+        its first point held it back for 17 frames). The hold starts only while the followed
+        track is not seen in the frame.
         """
         a, ap = self._associator, self.params.association
         margin = ap.exit_margin * w / 1280.0
