@@ -19,6 +19,7 @@ candidates and mask at the label:
     .venv/bin/python benchmarks/broadcast_census.py                       # tuned-on clips, look-ahead 4
     .venv/bin/python benchmarks/broadcast_census.py --lookahead 0 --frames  # online, one line per error
     .venv/bin/python benchmarks/broadcast_census.py --set association.hop_distance=0  # one value changed
+    .venv/bin/python benchmarks/broadcast_census.py --lone 0.75   # what association.lone_quality would report
 
 Held-out clips are refused unless --held-out is given (they are for the final measurement only).
 """
@@ -126,6 +127,35 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
     return out
 
 
+def lone_candidates(clip, preset: str, quality: float) -> list[tuple[int, str, float]]:
+    """The frames in which the online detector, ``association.lone_quality`` off, reports
+    nothing while a blob the association refused scores ≥ ``quality``: (frame, where the best
+    such blob lies — "at the label", "N px off the label", "nothing labelled" —, its score).
+    The measurement behind the broadcast preset's ``lone_quality``."""
+    params = (load_preset(preset).with_value("lookahead.frames", 0)
+              .with_value("association.lone_quality", 1.0))
+    det = CameraDetector(params)
+    labels = read_point_labels(clip.labels).as_dict()
+    video = VideoFile(clip.video)
+    tol = tolerance_px(1280)
+    rows = []
+    i = 0
+    while (frame := video.read()) is not None:
+        res = det.process(frame, i / video.fps, keep_mask=False)
+        refused = [c for c in res.candidates if c.rejected_by == "motion" and not c.predicted
+                   and c.score >= quality]
+        if res.detection is None and refused:
+            best = max(refused, key=lambda c: c.score)
+            visible, x, y = labels.get(i, (False, 0.0, 0.0))
+            off = math.hypot(best.x - x, best.y - y)
+            where = ("nothing labelled" if not visible else "at the label" if off <= tol
+                     else f"{off:.0f} px off the label")
+            rows.append((i, where, float(best.score)))
+        i += 1
+    video.close()
+    return rows
+
+
 def dataclass_without_mask(result):
     """The look-ahead keeps results for K frames: drop the mask (not needed there)."""
     import dataclasses
@@ -145,6 +175,9 @@ def main() -> int:
     ap.add_argument("--preset", default="broadcast", help="preset name or .json")
     ap.add_argument("--lookahead", type=int, default=4, help="frames of look-ahead (0 = online)")
     ap.add_argument("--frames", action="store_true", help="also print one line per wrong frame")
+    ap.add_argument("--lone", type=float, default=None, metavar="Q",
+                    help="instead: the frames with no report where a refused blob scores >= Q "
+                         "(online, lone_quality off), and where that blob lies")
     ap.add_argument("--set", action="append", default=[], metavar="GROUP.NAME=VALUE",
                     help="override one preset value (repeatable), e.g. association.hop_distance=25")
     args = ap.parse_args()
@@ -155,6 +188,16 @@ def main() -> int:
     if not clips:
         print("no clips (held-out clips need --held-out)")
         return 1
+    if args.lone is not None:
+        where: collections.Counter = collections.Counter()
+        for clip in clips:
+            for frame, place, score in lone_candidates(clip, args.preset, args.lone):
+                print(f"{clip.name:10s} {frame:4d}  score {score:.3f}  {place}")
+                where["at the label" if place == "at the label" else
+                      "nothing labelled" if place == "nothing labelled" else "off the label"] += 1
+        print(f"frames with no report and a refused blob scoring >= {args.lone}: {sum(where.values())} "
+              f"({', '.join(f'{k} {v}' for k, v in where.most_common())})")
+        return 0
     total = collections.Counter()
     lines: list[str] | None = [] if args.frames else None
     per_clip = []

@@ -112,17 +112,15 @@ class TrackletAssociator:
         """(tracklets × candidates distances to the predictions, gates, matching costs)."""
         # Per tracklet: predicted x, y, gate and hits, in one pass (hits are small integers:
         # exact as floats).
+        # ``history_needs_motion``: still clutter (a shoe, the crowd) claims by distance alone,
+        # its age must not take the blob of a shuttle passing over it from the shuttle's
+        # younger tracklet.
         p = self.params
-        if p.history_needs_motion:
-            # Still clutter (a shoe, the crowd) claims by distance alone: its age must not
-            # take the blob of a shuttle passing over it from the shuttle's younger tracklet.
-            rows = np.array([(*tr.predict(t), self.gate(tr, max(t - tr.t, 1e-3)),
-                              tr.hits if (tr.ident == self.selected
-                                          or tr.recent_travel(p.travel_window) >= p.min_travel) else 0)
-                             for tr in self.tracklets])
-        else:
-            rows = np.array([(*tr.predict(t), self.gate(tr, max(t - tr.t, 1e-3)), tr.hits)
-                             for tr in self.tracklets])
+        any_age = not p.history_needs_motion
+        rows = np.array([(*tr.predict(t), self.gate(tr, max(t - tr.t, 1e-3)),
+                          tr.hits if (any_age or tr.ident == self.selected
+                                      or tr.recent_travel(p.travel_window) >= p.min_travel) else 0)
+                         for tr in self.tracklets])
         gates = rows[:, 2]
         d = np.hypot(rows[:, None, 0] - positions[None, :, 0],
                      rows[:, None, 1] - positions[None, :, 1])

@@ -321,8 +321,8 @@ class AssociationParams(ParamGroup):
     # Broadcast labels mark the shuttle held for the serve and lying after the rally; no
     # tracklet there travels, so the association refuses it and the readout stays empty. On the
     # tuned-on TV clips, in the frames with no report, the best refused blob scoring ≥ 0.75
-    # was the labelled shuttle 12 times of 15 (the others: twice nothing labelled, once ~50 px
-    # off): a frame with nothing to report gains more from it than it risks. Not on the
+    # was the labelled shuttle 11 times of 14 (the others: twice nothing labelled, once 32 px
+    # off; benchmarks/broadcast_census.py --lone 0.75): a frame with nothing to report gains more from it than it risks. Not on the
     # two-camera rig, whose labels leave most still shuttles unmarked (tuned-on rallies at 0.75:
     # 98.00 → 96.48 %, 217 more FP2).
     lone_quality: float = param(1.0, 0.0, 1.0, step=0.01, label="Report a still blob from quality",
