@@ -89,6 +89,31 @@ def test_backfill_reaches_only_k_frames_back():
     assert [r.detection is not None for r in out] == [False] * 3 + [True] * 9
 
 
+def test_backfill_replaces_the_coasting_guess_of_a_tracklet_never_followed_again():
+    """After a hit the followed racket's tracklet 3 loses its blob and coasts for a frame (its
+    prediction is the online detection) while the shuttle's tracklet 9 is born; from the next
+    frame on the readout follows 9 (1_02_01 frame 130)."""
+    stream = []
+    for i in range(10):
+        if i < 4:
+            stream.append(frame([cand(800.0, 400.0 + 20 * i, 3)], 3))
+        elif i == 4:
+            guess = Candidate(800.0, 480.0, math.nan, math.nan, math.nan, math.nan, 0.0, 4.0, None,
+                              predicted=True, tracklet=3)
+            shuttle = cand(680.0, 230.0, 9)
+            stream.append(CameraResult(detection=guess, candidates=(shuttle, guess), image_size=(1280, 720)))
+        else:
+            stream.append(frame([cand(680.0 - 40 * (i - 4), 230.0 - 30 * (i - 4), 9)], 9))
+    out, la = run(stream, params(4))
+    d = out[4].detection
+    assert (d.x, d.y, d.tracklet, d.predicted) == (680.0, 230.0, 9, False)
+    assert la.changes["backfill"] == 1
+    # A guess whose tracklet the readout follows again (a shuttle coasting behind a player) stays.
+    stream[5] = frame([cand(800.0, 500.0, 3), cand(640.0, 200.0, 9)], 3)
+    out, _ = run(stream, params(4))
+    assert out[4].detection.predicted and out[4].detection.tracklet == 3
+
+
 def test_no_backfill_of_a_shuttle_held_still_before_the_serve():
     stream = []
     for i in range(12):

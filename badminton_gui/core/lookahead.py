@@ -14,10 +14,12 @@ unchanged by it.
 
 Two rules, per camera, for frame t with the online readouts of frames t+1 … t+K:
 
-* **back-fill**: no online detection at t, and the next tracklet the readout follows (for at
+* **back-fill**: no online detection at t (or only the coasting prediction of a tracklet the
+  readout does not follow again), and the next tracklet the readout follows (for at
   least ``lookahead.min_support`` of the K frames) had a candidate at t: that candidate is the
   detection (a flight's unconfirmed first frames; a frame where the followed tracklet's blob
-  was refused for a moment).
+  was refused for a moment; the shuttle's first frame after a hit while the racket's
+  tracklet coasted).
 * **switch**: the online detection at t is on tracklet A, the readout later hands over to
   tracklet B for good within the window (A is not followed again after B's first frame, and B
   is followed at least ``min_support`` frames), and B had a candidate at t: B's candidate is
@@ -151,7 +153,10 @@ class CameraLookahead:
             # Nothing to look at, or the online readout came from the 3D flight (a guided spot):
             # the stereo tracker knew something the tracklets do not.
             return None
-        if det is None:
+        # A coasting prediction of a tracklet the readout never follows again was a guess
+        # that did not come true (the racket's track after a hit, 1_02_01 130): as no detection.
+        lost_guess = det is not None and det.predicted and det.tracklet not in future
+        if det is None or lost_guess:
             if not lp.backfill:
                 return None
             # The next tracklet the readout follows.
