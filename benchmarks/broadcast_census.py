@@ -78,18 +78,31 @@ def label_cause(det: CameraDetector, result, x: float, y: float, tol: float) -> 
 
 
 def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
-           overrides: tuple[tuple[str, str], ...] = ()) -> collections.Counter:
+           overrides: tuple[tuple[str, str], ...] = (), transform=None) -> collections.Counter:
+    """Outcome counts of one clip, and (outcome, cause) counts of its wrong frames.
+
+    ``transform``: an object with ``frame(image) -> image`` and ``point(x, y) -> (x, y) | None``
+    (None: the label leaves the picture) applied to every frame and label first
+    (benchmarks/augment.py)."""
     params = load_preset(preset).with_value("lookahead.frames", lookahead)
     for path, value in overrides:
         params = params.with_value(path, value)
     det, la = CameraDetector(params), CameraLookahead(params)
     labels = read_point_labels(clip.labels).as_dict()
+    if transform is not None:
+        moved = {}
+        for f, (visible, x, y) in labels.items():
+            xy = transform.point(x, y) if visible else None
+            moved[f] = (True, *xy) if xy is not None else (False, 0.0, 0.0)
+        labels = moved
     video = VideoFile(clip.video)
     tol = tolerance_px(1280)
     causes: dict[int, str] = {}
     decided = []
     i = 0
     while (frame := video.read()) is not None:
+        if transform is not None:
+            frame = transform.frame(frame)
         res = det.process(frame, i / video.fps, keep_mask=True)
         visible, x, y = labels.get(i, (False, 0.0, 0.0))
         if visible:
