@@ -60,14 +60,18 @@ class Mirror(Identity):
 
 @dataclass(frozen=True)
 class Zoom(Identity):
-    """The lens zoomed by ``factor`` about the picture's centre (< 1: zoomed out, a smaller
-    shuttle and a black frame around the picture; > 1: zoomed in, the edges cut off)."""
+    """The lens zoomed by ``factor`` (> 1: zoomed in about the picture's centre, the edges cut
+    off; < 1: zoomed out, a smaller shuttle, the picture shrunk against the top edge with a black
+    band on the sides and below — a real zoomed-out camera shows more hall there, which we do not
+    have; at the top the picture's edge stays the image's, where the shuttle leaves the picture
+    on a clear and the out-of-picture hold watches for it)."""
     name: str = "zoom"
     factor: float = 1.0
 
     def _matrix(self, w: int, h: int) -> np.ndarray:
         s = self.factor
-        return np.array([[s, 0.0, (1.0 - s) * (w - 1) / 2.0], [0.0, s, (1.0 - s) * (h - 1) / 2.0]])
+        ty = (1.0 - s) * (h - 1) / 2.0 if s > 1.0 else 0.0
+        return np.array([[s, 0.0, (1.0 - s) * (w - 1) / 2.0], [0.0, s, ty]])
 
     def frame(self, image: np.ndarray) -> np.ndarray:
         h, w = image.shape[:2]

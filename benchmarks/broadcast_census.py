@@ -78,16 +78,20 @@ def label_cause(det: CameraDetector, result, x: float, y: float, tol: float) -> 
 
 
 def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
-           overrides: tuple[tuple[str, str], ...] = (), transform=None) -> collections.Counter:
+           overrides: tuple[tuple[str, str], ...] = (), transform=None,
+           classifier=None) -> collections.Counter:
     """Outcome counts of one clip, and (outcome, cause) counts of its wrong frames.
 
     ``transform``: an object with ``frame(image) -> image`` and ``point(x, y) -> (x, y) | None``
     (None: the label leaves the picture) applied to every frame and label first
-    (benchmarks/augment.py)."""
+    (benchmarks/augment.py). ``classifier``: a CandidateClassifier used instead of the preset's
+    (a leave-one-clip-out study, ``train_classifier.py --leave-one-out``)."""
     params = load_preset(preset).with_value("lookahead.frames", lookahead)
     for path, value in overrides:
         params = params.with_value(path, value)
     det, la = CameraDetector(params), CameraLookahead(params)
+    if classifier is not None:
+        det.use_classifier(classifier)
     labels = read_point_labels(clip.labels).as_dict()
     if transform is not None:
         moved = {}

@@ -154,6 +154,7 @@ def main() -> int:
     ap.add_argument("--max-frames", type=int, default=100000)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--hidden", type=int, default=16)
+    ap.add_argument("--epochs", type=int, default=300, help="full-batch Adam steps per MLP")
     ap.add_argument("--patches", action=argparse.BooleanOptionalAction, default=None,
                     help="add the blob's grey patch to the features (default: on)")
     ap.add_argument("--seed", type=int, default=0, help="the MLPs' random start")
@@ -165,6 +166,14 @@ def main() -> int:
     ap.add_argument("--augment", nargs="*", default=None, metavar="CHANGE",
                     help="broadcast: also train on the tuned-on clips changed so (benchmarks/augment.py "
                          "names; default: %s)" % " ".join(BROADCAST_AUGMENT))
+    ap.add_argument("--exclude", nargs="*", default=(), metavar="CLIP",
+                    help="tuned-on clips (or videos) left out of training: leave-one-clip-out studies")
+    ap.add_argument("--out", default=None, help="write the classifier here instead of resources/")
+    ap.add_argument("--leave-one-out", action="store_true",
+                    help="broadcast: instead of writing a classifier, train one per tuned-on clip on the "
+                         "others (with the same options) and print that clip's detect accuracy with it "
+                         "(broadcast_census.py, look-ahead 4): how the classifier does on a clip it has "
+                         "not seen, without the held-out clips")
     ap.add_argument("--members", type=int, default=None,
                     help="MLPs averaged in logit (default: 9 for both two-camera kinds, 3 broadcast; "
                          "1 without patches)")
@@ -203,6 +212,8 @@ def main() -> int:
         changes = ["unchanged"] + list(BROADCAST_AUGMENT if args.augment is None else args.augment)
         jobs = [(str(c.video), str(c.labels), preset, args.max_frames, patches, change)
                 for change in changes for c in broadcast_clips() if not c.held_out]
+    jobs = [j for j in jobs if not any(name in (Path(j[0]).stem, Path(j[0]).parent.name)
+                                       for name in args.exclude)]
     print(f"{len(jobs)} videos (tuned-on only), preset {preset}, "
           f"{'patch features, ' if patches else ''}{members} MLP{'s' if members > 1 else ''}")
 
@@ -214,6 +225,9 @@ def main() -> int:
         parts = list(pool.map(dump, jobs))
     x = np.vstack([p[0] for p in parts])
     y = np.concatenate([p[1] for p in parts])
+    if args.leave_one_out:
+        return leave_one_out(args, jobs, parts, lambda xs, ys: train(
+            xs, ys, hidden=args.hidden, epochs=args.epochs, name=out_name, feature_names=names))
     # Hold the last clip out of training, every change of it too, to report an honest
     # validation figure on that clip as it is.
     last = jobs[-1][0]
@@ -221,17 +235,37 @@ def main() -> int:
     as_is = np.concatenate([np.full(len(p[1]), len(job) < 6 or job[5] == "unchanged")
                             for p, job in zip(parts, jobs)])
     train_rows, val_rows = ~held, held & as_is
-    model = train(x[train_rows], y[train_rows], hidden=args.hidden, name=out_name, feature_names=names)
+    model = train(x[train_rows], y[train_rows], hidden=args.hidden, epochs=args.epochs, name=out_name,
+                  feature_names=names)
     pv = model.probability(x[val_rows])
     yv = y[val_rows]
     auc = _auc(pv, yv)
     print(f"{len(y)} candidates, {int(y.sum())} shuttles; validation on the last video: "
           f"AUC {auc:.3f}, recall@0.5 {np.mean(pv[yv] > 0.5):.3f}, "
           f"false-positive rate@0.5 {np.mean(pv[~yv] > 0.5):.3f}")
-    model = train(x, y, hidden=args.hidden, name=out_name, feature_names=names)
-    out = RESOURCES_DIR / f"{out_name}.json"
+    model = train(x, y, hidden=args.hidden, epochs=args.epochs, name=out_name, feature_names=names)
+    out = Path(args.out) if args.out else RESOURCES_DIR / f"{out_name}.json"
     model.save(out)
     print(f"→ {out}")
+    return 0
+
+
+def leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
+    """Per tuned-on TV clip: a classifier trained on the other clips (every change of them),
+    and the clip's accuracy with it; the total over the clips."""
+    if args.kind != "broadcast":
+        print("--leave-one-out is for --kind broadcast (the two-camera kinds: accuracy.py runs)")
+        return 2
+    import collections
+    from broadcast_census import census, summary
+    total: collections.Counter = collections.Counter()
+    for clip in (c for c in broadcast_clips() if not c.held_out):
+        rows = [p for p, job in zip(parts, jobs) if job[0] != str(clip.video)]
+        model = train(np.vstack([p[0] for p in rows]), np.concatenate([p[1] for p in rows]))
+        counts = census(clip, "broadcast", 4, None, classifier=model)
+        total += counts
+        print(f"  {clip.name:10s} trained without it: {summary(counts)}", flush=True)
+    print(f"leave-one-clip-out total: {summary(total)}")
     return 0
 
 

@@ -161,6 +161,14 @@ class CameraDetector:
         self._needs_patches = (self._classifier is not None
                                and len(self._classifier.feature_names) > len(FEATURE_NAMES))
 
+    def use_classifier(self, classifier) -> None:
+        """Score candidates with this classifier object instead of the preset's file (until the
+        next ``set_params``): a leave-one-clip-out study trains one per left-out clip
+        (``benchmarks/train_classifier.py --leave-one-out``) without writing ``resources/``."""
+        self._classifier = classifier
+        self._needs_patches = (classifier is not None
+                               and len(classifier.feature_names) > len(FEATURE_NAMES))
+
     # ---- the whole chain for one camera (CLI `detect`) --------------------------------------
     def process(self, frame_bgr: np.ndarray, t: float, keep_mask: bool = True) -> CameraResult:
         result = self.find_candidates(frame_bgr, t, keep_mask)
