@@ -174,6 +174,9 @@ def main() -> int:
                          "others (with the same options) and print that clip's detect accuracy with it "
                          "(broadcast_census.py, look-ahead 4): how the classifier does on a clip it has "
                          "not seen, without the held-out clips")
+    ap.add_argument("--scan", action="append", default=[], metavar="GROUP.NAME=V1,V2,...",
+                    help="with --leave-one-out: also score each left-out clip with each of these preset "
+                         "values (one at a time, the same classifiers: a paired comparison)")
     ap.add_argument("--members", type=int, default=None,
                     help="MLPs averaged in logit (default: 9 for both two-camera kinds, 3 broadcast; "
                          "1 without patches)")
@@ -258,14 +261,22 @@ def leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
         return 2
     import collections
     from broadcast_census import census, summary
-    total: collections.Counter = collections.Counter()
+    settings: list[tuple[tuple[str, str], ...]] = [()]
+    for scan in args.scan:
+        name, values = scan.split("=", 1)
+        settings += [((name, value),) for value in values.split(",")]
+    totals = {setting: collections.Counter() for setting in settings}
     for clip in (c for c in broadcast_clips() if not c.held_out):
         rows = [p for p, job in zip(parts, jobs) if job[0] != str(clip.video)]
         model = train(np.vstack([p[0] for p in rows]), np.concatenate([p[1] for p in rows]))
-        counts = census(clip, "broadcast", 4, None, classifier=model)
-        total += counts
-        print(f"  {clip.name:10s} trained without it: {summary(counts)}", flush=True)
-    print(f"leave-one-clip-out total: {summary(total)}")
+        for setting in settings:
+            counts = census(clip, "broadcast", 4, None, setting, classifier=model)
+            totals[setting] += counts
+            if not setting:
+                print(f"  {clip.name:10s} trained without it: {summary(counts)}", flush=True)
+    print(f"leave-one-clip-out total: {summary(totals[()])}")
+    for setting in settings[1:]:
+        print(f"  with {setting[0][0]} = {setting[0][1]}: {summary(totals[setting])}")
     return 0
 
 
