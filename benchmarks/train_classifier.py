@@ -172,7 +172,7 @@ def main() -> int:
     ap.add_argument("--demo-frames", type=int, default=1000)
     ap.add_argument("--augment", nargs="*", default=None, metavar="CHANGE",
                     help="broadcast: also train on the tuned-on clips changed so (benchmarks/augment.py "
-                         "names; default: %s)" % " ".join(BROADCAST_AUGMENT))
+                         "names; default: %s)" % (" ".join(BROADCAST_AUGMENT) or "none"))
     ap.add_argument("--exclude", nargs="*", default=(), metavar="CLIP",
                     help="tuned-on clips (or videos) left out of training: leave-one-clip-out studies")
     ap.add_argument("--out", default=None, help="write the classifier here instead of resources/")
@@ -188,6 +188,9 @@ def main() -> int:
                     help="MLPs averaged in logit (default: 9 for both two-camera kinds, 3 broadcast; "
                          "1 without patches)")
     args = ap.parse_args()
+    if args.leave_one_out and args.kind != "broadcast":
+        ap.error("--leave-one-out is for --kind broadcast (the two-camera kinds: leave-one-rally-out "
+                 "runs through accuracy.py)")
     # The TV and the default two-camera classifiers read the blob's patch too, as ensembles
     # (sixteenth round: leave-one-clip-out the shuttle ranked first among its frame's
     # candidates in 541–553 of 707 TV frames against 488–492, leave-one-rally-out in 9,707 of
@@ -268,9 +271,6 @@ def main() -> int:
 def leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
     """Per tuned-on TV clip: a classifier trained on the other clips (every change of them),
     and the clip's accuracy with it; the total over the clips."""
-    if args.kind != "broadcast":
-        print("--leave-one-out is for --kind broadcast (the two-camera kinds: accuracy.py runs)")
-        return 2
     import collections
     from broadcast_census import census, summary
     settings: list[tuple[tuple[str, str], ...]] = [()]
