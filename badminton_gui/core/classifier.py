@@ -76,14 +76,17 @@ def load_classifier(name_or_path: str) -> CandidateClassifier:
 def train_mlp(features: np.ndarray, labels: np.ndarray, hidden: int = 16, epochs: int = 300,
               learning_rate: float = 0.05, positive_weight: float | None = None,
               seed: int = 0, name: str = "candidate_classifier",
-              feature_names: tuple[str, ...] = ()) -> CandidateClassifier:
-    """Full-batch Adam on the weighted cross-entropy; small enough for a few 100k samples."""
+              feature_names: tuple[str, ...] = (), dtype=np.float64) -> CandidateClassifier:
+    """Full-batch Adam on the weighted cross-entropy; small enough for a few 100k samples.
+
+    ``dtype``: the arithmetic of training (float32 about halves the time; the shipped files were
+    trained in float64, which reproduces them). The result is float64 either way."""
     rng = np.random.default_rng(seed)
     x = np.asarray(features, float)
     y = np.asarray(labels, float)
     mean = x.mean(axis=0)
     scale = x.std(axis=0) + 1e-6
-    xs = (x - mean) / scale
+    xs = ((x - mean) / scale).astype(dtype, copy=False)
     if positive_weight is None:
         positive_weight = max((1 - y.mean()) / max(y.mean(), 1e-6), 1.0) ** 0.5
     sw = np.where(y > 0.5, positive_weight, 1.0)
@@ -91,6 +94,9 @@ def train_mlp(features: np.ndarray, labels: np.ndarray, hidden: int = 16, epochs
     n_in = x.shape[1]
     params = [rng.normal(0, 1 / np.sqrt(n_in), (n_in, hidden)), np.zeros(hidden),
               rng.normal(0, 1 / np.sqrt(hidden), (hidden, 1)), np.zeros(1)]
+    params = [p.astype(dtype, copy=False) for p in params]
+    y = y.astype(dtype, copy=False)
+    sw = sw.astype(dtype, copy=False)
     m = [np.zeros_like(p) for p in params]
     v = [np.zeros_like(p) for p in params]
     for step in range(1, epochs + 1):
@@ -111,13 +117,13 @@ def train_mlp(features: np.ndarray, labels: np.ndarray, hidden: int = 16, epochs
             mh = m[k] / (1 - 0.9 ** step)
             vh = v[k] / (1 - 0.999 ** step)
             params[k] = params[k] - learning_rate * mh / (np.sqrt(vh) + 1e-8)
-    w1, b1, w2, b2 = params
+    w1, b1, w2, b2 = (p.astype(np.float64, copy=False) for p in params)
     return CandidateClassifier(name, mean, scale, (w1, w2), (b1, b2), tuple(feature_names))
 
 
 def train_ensemble(features: np.ndarray, labels: np.ndarray, members: int = 3, hidden: int = 16,
                    epochs: int = 300, seed: int = 0, name: str = "candidate_classifier",
-                   feature_names: tuple[str, ...] = ()) -> CandidateClassifier:
+                   feature_names: tuple[str, ...] = (), dtype=np.float64) -> CandidateClassifier:
     """``members`` MLPs from different initial weights, averaged in logit, as one wider MLP.
 
     Trained on a few clips, one small MLP's ranking of a clip it has not seen swings with its
@@ -126,7 +132,7 @@ def train_ensemble(features: np.ndarray, labels: np.ndarray, members: int = 3, h
     layers side by side, the output weights divided by ``members`` — so the shipped file and
     ``CandidateClassifier`` stay as they are.
     """
-    nets = [train_mlp(features, labels, hidden=hidden, epochs=epochs, seed=seed * 1000 + k,
+    nets = [train_mlp(features, labels, hidden=hidden, epochs=epochs, seed=seed * 1000 + k, dtype=dtype,
                       name=name, feature_names=feature_names) for k in range(members)]
     first = nets[0]
     return CandidateClassifier(

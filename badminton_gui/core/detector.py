@@ -101,6 +101,9 @@ class CameraDetector:
         self._widths: dict[int, deque] = {}      # tracklet ident → its blobs' recent short sides
         self._areas: dict[int, deque] = {}       # tracklet ident → its blobs' recent areas (edge_exit)
         self.last_features: list = []   # (x, y, features, rejected_by) of the last frame's blobs
+        # The last frame's measured blobs as the classifier saw them: positions (N, 2) and feature
+        # rows (N, F), the patch included when the classifier reads it (core/adaptation.py).
+        self.last_scored: tuple[np.ndarray, np.ndarray] = (np.zeros((0, 2)), np.zeros((0, 0)))
         self._classifier = None
         self._load_classifier()
         self._previous_positions = np.zeros((0, 2))
@@ -160,6 +163,11 @@ class CameraDetector:
         # A classifier trained with the patch features reads them after FEATURE_NAMES.
         self._needs_patches = (self._classifier is not None
                                and len(self._classifier.feature_names) > len(FEATURE_NAMES))
+
+    @property
+    def classifier(self):
+        """The classifier scoring candidates (None: the hand-made score)."""
+        return self._classifier
 
     def use_classifier(self, classifier) -> None:
         """Score candidates with this classifier object instead of the preset's file (until the
@@ -363,11 +371,13 @@ class CameraDetector:
             feats[:4] = (math.log1p(length), math.log1p(short_side), math.log1p(area),
                          long_side / max(short_side, 1e-3))
             measured.append([x, y, length, short_side, whiteness, area, 0.0, reason, feats])
+        self.last_scored = (np.zeros((0, 2)), np.zeros((0, features.shape[1])))
         if measured:
             if self._needs_patches:
                 features = np.hstack([features, patch_features(
                     frame_bgr, np.array([m[0] for m in measured]), np.array([m[1] for m in measured]))])
             qualities = self._qualities(np.array([m[2] for m in measured]), features[:, 4], features)
+            self.last_scored = (np.array([(m[0], m[1]) for m in measured]), features)
             for m, quality in zip(measured, qualities.tolist()):
                 m[6] = quality
                 if m[7] is None and quality < p.association.min_quality:

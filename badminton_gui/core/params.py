@@ -380,6 +380,13 @@ class ClassifierParams(ParamGroup):
                                                  "candidate_classifier_coarse"),
                         label="Model", help="Classifier file in resources/ (_coarse: trained with "
                                             "background.coarse_from_width on, for the coarse preset)")
+    # Recorded files only (core/adaptation.py): a first pass over the recording labels its own
+    # candidates on long runs of detections and a classifier trained on them scores a second.
+    adapt_min_run: int = param(0, 0, 1000, step=1, unit="frames", label="Adapt to a recording: runs of",
+                               help="`badminton-track detect` on a file only (not live, not the "
+                                    "two-camera track): a first pass takes every run of at least this "
+                                    "many consecutive detections as the shuttle, trains a classifier for "
+                                    "this recording on its candidates, and a second pass uses it (0: off)")
 
 
 @dataclass(frozen=True, slots=True)
