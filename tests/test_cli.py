@@ -251,3 +251,19 @@ def test_unwritable_output(tmp_path, capsys, dot_video):
 def test_presets_command_lists_default(capsys):
     assert main(["presets"]) == 0
     assert "default" in capsys.readouterr().out
+
+
+def test_detect_adapts_to_the_recording_when_asked(dot_video, tmp_path, capsys):
+    video, _labels, truth = dot_video
+    out = tmp_path / "adapted.csv"
+    assert main(["detect", str(video), "-o", str(out), "--adapt"]) == 0
+    text = capsys.readouterr().out
+    assert "adapted to the recording: 1 runs" in text
+    hits = [r for r in csv.DictReader(out.open()) if r["Visibility"] == "1"]
+    assert len(hits) >= N - 5
+    for r in hits:
+        x, y = truth[int(r["Frame"])]
+        assert abs(float(r["X"]) - x) < 2.0 and abs(float(r["Y"]) - y) < 2.0
+    # --no-adapt and a preset with it off: one pass, no adaptation line.
+    assert main(["detect", str(video), "-o", str(out), "--no-adapt"]) == 0
+    assert "adapted to the recording" not in capsys.readouterr().out

@@ -6,6 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
+from ..core.adaptation import adapt_to_recording
 from ..core.detector import CameraDetector
 from ..core.lookahead import CameraLookahead
 from ..io.labels import write_point_labels
@@ -22,8 +23,49 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, help="output CSV (TrackNet label format)")
     add_preset_argument(p)
     add_lookahead_argument(p)
+    p.add_argument("--adapt", action=argparse.BooleanOptionalAction, default=None,
+                   help="first adapt the classifier to this recording from its own long runs of "
+                        "detections (two passes or more; default: the preset's "
+                        "classifier.adapt_min_run, on for --preset broadcast)")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=run)
+
+
+def _frames(path: str, label: str, quiet: bool):
+    """The video's (image, time) from its start, decoded ahead on a reader thread."""
+    video = PrefetchingReader(VideoFile(path))
+    progress = Progress(video.frame_count or None, label, force=False)
+    try:
+        i = 0
+        while (frame := video.read()) is not None:
+            yield frame, i / video.fps
+            i += 1
+            if not quiet:
+                progress.update(i)
+    finally:
+        video.close()
+        if not quiet:
+            progress.close()
+
+
+def _adapted_classifier(args: argparse.Namespace, params):
+    """The classifier adapted to this recording (core/adaptation.py), or None to keep the preset's."""
+    if args.adapt is False or (args.adapt is None and params.classifier.adapt_min_run <= 0):
+        return None
+    if params.classifier.adapt_min_run <= 0:   # --adapt with a preset that has it off
+        params = params.with_value("classifier.adapt_min_run", 25)
+    start = time.perf_counter()
+    try:
+        classifier, harvest = adapt_to_recording(params, lambda: _frames(args.video, "adapt", args.quiet))
+    except INPUT_ERRORS as exc:
+        raise UserError(str(exc)) from None
+    if not args.quiet:
+        if classifier is None:
+            print("adaptation: no run of detections long enough; the preset's classifier is kept")
+        else:
+            print(f"adapted to the recording: {harvest.runs} runs, {harvest.frames} frames "
+                  f"({time.perf_counter() - start:.1f} s)")
+    return classifier
 
 
 def run(args: argparse.Namespace) -> int:
@@ -33,7 +75,15 @@ def run(args: argparse.Namespace) -> int:
         video = PrefetchingReader(VideoFile(args.video))
     except INPUT_ERRORS as exc:
         raise UserError(str(exc)) from None
+    start = time.perf_counter()
+    try:
+        adapted = _adapted_classifier(args, params)
+    except BaseException:
+        video.close()
+        raise
     detector = CameraDetector(params)
+    if adapted is not None:
+        detector.use_classifier(adapted)
     lookahead = CameraLookahead(params)
     frames, visible, xy = [], [], []
 
@@ -45,7 +95,6 @@ def run(args: argparse.Namespace) -> int:
             xy.append((d.x, d.y) if d else (0.0, 0.0))
 
     progress = Progress(video.frame_count or None, "detect", force=False)
-    start = time.perf_counter()
     i = 0
     try:
         while True:
