@@ -169,10 +169,26 @@ def detect_in_process(video: Path, out: Path, max_frames: int, preset: str | Non
     v = VideoFile(video)
     params = load_preset(preset).with_value(
         "lookahead.frames", FILE_LOOKAHEAD if lookahead is None else lookahead)
+    start = time.perf_counter()
     det = CameraDetector(params)
+    if params.lookahead.frames > 0 and params.classifier.adapt_min_run > 0:
+        # As `detect` does on a file (core/adaptation.py); the live readout (look-ahead 0) does not.
+        from badminton_gui.core.adaptation import adapt_to_recording
+
+        def first_frames():
+            clip = VideoFile(video)
+            try:
+                for i in range(max_frames):
+                    if (image := clip.read()) is None:
+                        break
+                    yield image, i / clip.fps
+            finally:
+                clip.close()
+        adapted, _harvest = adapt_to_recording(params, first_frames)
+        if adapted is not None:
+            det.use_classifier(adapted)
     la = CameraLookahead(params)
     frames, vis, xy = [], [], []
-    start = time.perf_counter()
     decided = []
     for i in range(max_frames):
         frame = v.read()
@@ -240,8 +256,10 @@ def broadcast_job(clip, tmp: Path, max_frames: int | None, lookahead: int | None
         if max_frames:
             rate = detect_in_process(clip.video, out, max_frames, preset, lookahead)
         else:
+            # The live readout (look-ahead 0) is what the GUI gets: it does not adapt the
+            # classifier to the recording (core/adaptation.py), so neither does its figure.
             rate, _ = run_cli(["detect", str(clip.video), "-o", str(out), "--preset", preset]
-                              + _lookahead_args(lookahead))
+                              + _lookahead_args(lookahead) + (["--no-adapt"] if lookahead == 0 else []))
         return [Row(clip.name, "-", "detect", clip.held_out, "broadcast",
                     score(read_detect(out), clip.labels, 1280, max_frames), rate, "frames/s")], None
     return job

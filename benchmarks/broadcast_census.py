@@ -20,6 +20,7 @@ candidates and mask at the label:
     .venv/bin/python benchmarks/broadcast_census.py --lookahead 0 --frames  # online, one line per error
     .venv/bin/python benchmarks/broadcast_census.py --set association.hop_distance=0  # one value changed
     .venv/bin/python benchmarks/broadcast_census.py --lone 0.75   # what association.lone_quality would report
+    .venv/bin/python benchmarks/broadcast_census.py --no-adapt   # the shipped classifier, not adapted to each clip
 
 Held-out clips are refused unless --held-out is given (they are for the final measurement only).
 """
@@ -40,6 +41,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from badminton_gui.core.adaptation import adapt_to_recording  # noqa: E402
 from badminton_gui.core.detector import CameraDetector  # noqa: E402
 from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
 from badminton_gui.core.lookahead import CameraLookahead  # noqa: E402
@@ -79,16 +81,35 @@ def label_cause(det: CameraDetector, result, x: float, y: float, tol: float) -> 
 
 def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
            overrides: tuple[tuple[str, str], ...] = (), transform=None,
-           classifier=None) -> collections.Counter:
+           classifier=None, adapt: bool | None = None) -> collections.Counter:
     """Outcome counts of one clip, and (outcome, cause) counts of its wrong frames.
 
     ``transform``: an object with ``frame(image) -> image`` and ``point(x, y) -> (x, y) | None``
     (None: the label leaves the picture) applied to every frame and label first
     (benchmarks/augment.py). ``classifier``: a CandidateClassifier used instead of the preset's
-    (a leave-one-clip-out study, ``train_classifier.py --leave-one-out``)."""
+    (a leave-one-clip-out study, ``train_classifier.py --leave-one-out``). ``adapt``: adapt that
+    classifier to the clip first as `detect` does (core/adaptation.py); None: as the preset says,
+    and never for the live readout (look-ahead 0: the GUI does not adapt)."""
     params = load_preset(preset).with_value("lookahead.frames", lookahead)
     for path, value in overrides:
         params = params.with_value(path, value)
+    if adapt is None:
+        adapt = lookahead > 0 and params.classifier.adapt_min_run > 0
+    if adapt:
+        if params.classifier.adapt_min_run <= 0:
+            params = params.with_value("classifier.adapt_min_run", 25)
+
+        def frames():
+            video = VideoFile(clip.video)
+            try:
+                i = 0
+                while (image := video.read()) is not None:
+                    yield (transform.frame(image) if transform is not None else image), i / video.fps
+                    i += 1
+            finally:
+                video.close()
+        adapted, _harvest = adapt_to_recording(params, frames, classifier=classifier)
+        classifier = adapted or classifier
     det, la = CameraDetector(params), CameraLookahead(params)
     if classifier is not None:
         det.use_classifier(classifier)
@@ -192,6 +213,9 @@ def main() -> int:
     ap.add_argument("--preset", default="broadcast", help="preset name or .json")
     ap.add_argument("--lookahead", type=int, default=4, help="frames of look-ahead (0 = online)")
     ap.add_argument("--frames", action="store_true", help="also print one line per wrong frame")
+    ap.add_argument("--adapt", action=argparse.BooleanOptionalAction, default=None,
+                    help="adapt the classifier to each clip first (default: as `detect`, the preset's "
+                         "classifier.adapt_min_run, never with --lookahead 0)")
     ap.add_argument("--lone", type=float, default=None, metavar="Q",
                     help="instead: the frames with no report where a refused blob scores >= Q "
                          "(online, lone_quality off), and where that blob lies")
@@ -219,7 +243,7 @@ def main() -> int:
     lines: list[str] | None = [] if args.frames else None
     per_clip = []
     for clip in clips:
-        counts = census(clip, args.preset, args.lookahead, lines, overrides)
+        counts = census(clip, args.preset, args.lookahead, lines, overrides, adapt=args.adapt)
         per_clip.append(f"{clip.name} {summary(counts)}")
         total += counts
     if lines:

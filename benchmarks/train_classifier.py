@@ -12,6 +12,7 @@ logit: nine for the two two-camera kinds, three for TV (broadcast).
     .venv/bin/python benchmarks/train_classifier.py --kind broadcast   # → resources/candidate_classifier_broadcast.json
     .venv/bin/python benchmarks/train_classifier.py --kind stereo-coarse   # → resources/candidate_classifier_coarse.json
     .venv/bin/python benchmarks/train_classifier.py --kind broadcast --leave-one-out   # no file: each TV clip scored by a classifier trained without it
+    (adapted to the clip first as `detect` does, core/adaptation.py; --no-adapt: as trained)
 
 A file is reproduced by running this in the tree that wrote it (the candidates depend on the
 whole pipeline): the shipped TV classifier is commit 18c5d33's (sixteenth round). Retrained in
@@ -184,6 +185,10 @@ def main() -> int:
     ap.add_argument("--scan", action="append", default=[], metavar="GROUP.NAME=V1,V2,...",
                     help="with --leave-one-out: also score each left-out clip with each of these preset "
                          "values (one at a time, the same classifiers: a paired comparison)")
+    ap.add_argument("--adapt", action=argparse.BooleanOptionalAction, default=None,
+                    help="with --leave-one-out: adapt each left-out classifier to its clip first "
+                         "(core/adaptation.py; default: as `detect`, the preset's "
+                         "classifier.adapt_min_run; --no-adapt: the classifier as trained)")
     ap.add_argument("--members", type=int, default=None,
                     help="MLPs averaged in logit (default: 9 for both two-camera kinds, 3 broadcast; "
                          "1 without patches)")
@@ -282,7 +287,7 @@ def leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
         rows = [p for p, job in zip(parts, jobs) if job[0] != str(clip.video)]
         model = train(np.vstack([p[0] for p in rows]), np.concatenate([p[1] for p in rows]))
         for setting in settings:
-            counts = census(clip, "broadcast", 4, None, setting, classifier=model)
+            counts = census(clip, "broadcast", 4, None, setting, classifier=model, adapt=args.adapt)
             totals[setting] += counts
             if not setting:
                 print(f"  {clip.name:10s} trained without it: {summary(counts)}", flush=True)
