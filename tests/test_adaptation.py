@@ -88,7 +88,7 @@ def harvest_feature_names(params):
 
 
 def test_no_run_long_enough_keeps_the_classifier():
-    on = TrackerParams().with_value("classifier.adapt_min_run", 1000)
+    on = TrackerParams().with_value("classifier.adapt_min_run", 200)
     classifier, harvest = adapt_to_recording(on, demo_frames(40))
     assert classifier is None and harvest.runs == 0
 

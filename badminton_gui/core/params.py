@@ -382,7 +382,7 @@ class ClassifierParams(ParamGroup):
                                             "background.coarse_from_width on, for the coarse preset)")
     # Recorded files only (core/adaptation.py): a first pass over the recording labels its own
     # candidates on long runs of detections and a classifier trained on them scores a second.
-    adapt_min_run: int = param(0, 0, 1000, step=1, unit="frames", label="Adapt to a recording: runs of",
+    adapt_min_run: int = param(0, 0, 200, step=1, unit="frames", label="Adapt to a file: runs of",
                                help="`badminton-track detect` on a file only (not live, not the "
                                     "two-camera track): a first pass takes every run of at least this "
                                     "many consecutive detections as the shuttle, trains a classifier for "
