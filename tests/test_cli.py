@@ -264,6 +264,9 @@ def test_detect_adapts_to_the_recording_when_asked(dot_video, tmp_path, capsys):
     for r in hits:
         x, y = truth[int(r["Frame"])]
         assert abs(float(r["X"]) - x) < 2.0 and abs(float(r["Y"]) - y) < 2.0
-    # --no-adapt and a preset with it off: one pass, no adaptation line.
-    assert main(["detect", str(video), "-o", str(out), "--no-adapt"]) == 0
-    assert "adapted to the recording" not in capsys.readouterr().out
+    # --no-adapt, a preset with it off, and the live readout: one pass, no adaptation line.
+    for extra in (["--no-adapt"], ["--preset", "broadcast", "--lookahead", "0"], []):
+        assert main(["detect", str(video), "-o", str(out)] + extra) == 0
+        assert "adapted to the recording" not in capsys.readouterr().out
+    assert main(["detect", str(video), "-o", str(out), "--preset", "broadcast"]) == 0
+    assert "adapt" in capsys.readouterr().out   # adapted, or no run long enough on this tiny video

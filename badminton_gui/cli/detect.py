@@ -25,8 +25,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_lookahead_argument(p)
     p.add_argument("--adapt", action=argparse.BooleanOptionalAction, default=None,
                    help="first adapt the classifier to this recording from its own long runs of "
-                        "detections (two passes or more; default: the preset's "
-                        "classifier.adapt_min_run, on for --preset broadcast)")
+                        "detections (two passes; default: the preset's classifier.adapt_min_run, on "
+                        "for --preset broadcast, and never with --lookahead 0, the live readout)")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=run)
 
@@ -50,7 +50,9 @@ def _frames(path: str, label: str, quiet: bool):
 
 def _adapted_classifier(args: argparse.Namespace, params):
     """The classifier adapted to this recording (core/adaptation.py), or None to keep the preset's."""
-    if args.adapt is False or (args.adapt is None and params.classifier.adapt_min_run <= 0):
+    if args.adapt is False or (args.adapt is None and (params.classifier.adapt_min_run <= 0
+                                                       or params.lookahead.frames == 0)):
+        # --lookahead 0 is the live readout, which the GUI gives: it keeps the shipped classifier.
         return None
     if params.classifier.adapt_min_run <= 0:   # --adapt with a preset that has it off
         params = params.with_value("classifier.adapt_min_run", 25)
