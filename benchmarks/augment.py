@@ -9,7 +9,7 @@ labels moved with the picture, and prints the accuracy of each change beside the
 clips', flagging every clip that loses more than ``--flag`` points: a rule that only works at our
 clips' scale or brightness shows up here without a look at the held-out clips.
 
-    .venv/bin/python benchmarks/augment.py                    # every change (≈ 2 min)
+    .venv/bin/python benchmarks/augment.py                    # every change (≈ 7 min: the preset adapts the classifier to each clip)
     .venv/bin/python benchmarks/augment.py --only mirror zoom-out-0.8
     .venv/bin/python benchmarks/augment.py --set contour_length.min_length=16   # with one value changed
 """
