@@ -41,7 +41,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from badminton_gui.core.adaptation import adapt_to_recording  # noqa: E402
+from badminton_gui.core.adaptation import DEFAULT_MIN_RUN, adapt_to_recording  # noqa: E402
 from badminton_gui.core.detector import CameraDetector  # noqa: E402
 from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
 from badminton_gui.core.lookahead import CameraLookahead  # noqa: E402
@@ -97,7 +97,7 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
         adapt = lookahead > 0 and params.classifier.adapt_min_run > 0
     if adapt:
         if params.classifier.adapt_min_run <= 0:
-            params = params.with_value("classifier.adapt_min_run", 25)
+            params = params.with_value("classifier.adapt_min_run", DEFAULT_MIN_RUN)
 
         def frames():
             video = VideoFile(clip.video)

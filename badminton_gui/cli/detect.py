@@ -6,7 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
-from ..core.adaptation import adapt_to_recording
+from ..core.adaptation import DEFAULT_MIN_RUN, adapt_to_recording
 from ..core.detector import CameraDetector
 from ..core.lookahead import CameraLookahead
 from ..io.labels import write_point_labels
@@ -55,7 +55,7 @@ def _adapted_classifier(args: argparse.Namespace, params):
         # --lookahead 0 is the live readout, which the GUI gives: it keeps the shipped classifier.
         return None
     if params.classifier.adapt_min_run <= 0:   # --adapt with a preset that has it off
-        params = params.with_value("classifier.adapt_min_run", 25)
+        params = params.with_value("classifier.adapt_min_run", DEFAULT_MIN_RUN)
     start = time.perf_counter()
     try:
         classifier, harvest = adapt_to_recording(params, lambda: _frames(args.video, "adapt", args.quiet))

@@ -43,6 +43,9 @@ from .params import TrackerParams
 # position is moved to the cork head (``colour.head_lead_width_frames``), a few px from the blob's
 # centroid the candidate carries; at 3 px a third of the runs' frames had no positive (a trial).
 PSEUDO_LABEL_RADIUS = 8.0
+# frames: the run length when adaptation is asked for (``detect --adapt``) under a preset that has
+# it off; the broadcast preset's value, chosen leave-one-clip-out (benchmarks/README.md).
+DEFAULT_MIN_RUN = 25
 
 
 class RunHarvest:

@@ -371,19 +371,19 @@ class CameraDetector:
             feats[:4] = (math.log1p(length), math.log1p(short_side), math.log1p(area),
                          long_side / max(short_side, 1e-3))
             measured.append([x, y, length, short_side, whiteness, area, 0.0, reason, feats])
-        self.last_scored = (np.zeros((0, 2)), np.zeros((0, features.shape[1])))
         if measured:
             if self._needs_patches:
                 features = np.hstack([features, patch_features(
                     frame_bgr, np.array([m[0] for m in measured]), np.array([m[1] for m in measured]))])
             qualities = self._qualities(np.array([m[2] for m in measured]), features[:, 4], features)
-            self.last_scored = (np.array([(m[0], m[1]) for m in measured]), features)
             for m, quality in zip(measured, qualities.tolist()):
                 m[6] = quality
                 if m[7] is None and quality < p.association.min_quality:
                     m[7] = REJECT_SCORE
         self._previous_positions = np.asarray([(m[0], m[1]) for m in measured],
                                               dtype=float).reshape(-1, 2)
+        # The same positions array, no second copy on the per-frame path.
+        self.last_scored = (self._previous_positions, features)
 
         # Filter 4, multi-frame: only candidates on a confirmed, travelling, smooth tracklet
         # pass (the speed-aware gate lives in the associator).
