@@ -279,3 +279,97 @@ def test_a_tracklet_that_left_the_picture_takes_its_last_frames():
     out, la = run(plain, params(4))
     assert [r.detection.tracklet if r.detection else None for r in out][4:8] == [2] * 4
     assert la.changes["exit"] == 0
+
+
+# --- lead-in (``lookahead.lead_in_run``): a run followed back through the held shuttle ---------
+
+def held_then_served(held=10, flight=15, width=1280, step=2.0):
+    """The shuttle held in the hand, drifting ``step`` px a frame (of a 1280-wide picture) and
+    refused by filter 1 (too short), with a still light far away; then the serve flies 10 px a
+    frame, detected online."""
+    scale = width / 1280
+    stream = []
+    for i in range(held + flight):
+        light = cand(900.0 * scale, 600.0, 1)
+        if i < held:
+            shuttle = Candidate((100.0 + step * i) * scale, 300.0, 4.0, 1.0, math.nan, 2.0, math.nan, 0.0,
+                                "length")
+            stream.append(CameraResult(None, (light, shuttle), image_size=(width, 720)))
+        else:
+            shuttle = cand((100.0 + step * held + 10 * (i - held)) * scale, 300.0, 7)
+            stream.append(frame([light, shuttle], 7))
+    return [dataclasses.replace(r, image_size=(width, 720)) for r in stream]
+
+
+def run_all(stream, p):
+    """Every result of one camera's look-ahead, and the number held back after each push."""
+    la = CameraLookahead(p)
+    out, held_back = [], []
+    for i, res in enumerate(stream):
+        out += la.push(res, i / FPS)
+        held_back.append(i + 1 - len(out))
+    return out + la.flush(), la, held_back
+
+
+@pytest.mark.parametrize("k", [0, 4])
+def test_lead_in_follows_a_run_back_through_the_held_shuttle(k):
+    stream = held_then_served()
+    out, la, held_back = run_all(stream, params(k, lead_in_run=10))
+    assert len(out) == len(stream)
+    assert [r.detection is not None for r in out] == [True] * len(stream)
+    for i in range(10):
+        d = out[i].detection
+        assert (d.x, d.y, d.rejected_by) == (100.0 + 2 * i, 300.0, None)
+        # The taken blob is the frame's one accepted candidate; the light is untouched.
+        assert [c.rejected_by is None for c in out[i].candidates] == [False, True]
+    assert la.changes["lead_in"] == 10
+    # Held back K frames, then the run's 10 and lead_in_frames (60) more: the whole stream here.
+    assert max(held_back) == len(stream)
+
+
+def test_lead_in_is_off_by_default_and_on_in_the_broadcast_preset():
+    assert TrackerParams().lookahead.lead_in_run == 0
+    assert load_preset("broadcast").lookahead.lead_in_run > 0
+    out, la, held_back = run_all(held_then_served(), params(4))
+    assert [r.detection is not None for r in out] == [False] * 10 + [True] * 15
+    assert la.changes["lead_in"] == 0 and max(held_back) == 4
+
+
+def test_lead_in_needs_a_long_enough_run():
+    stream = held_then_served(flight=15)
+    for i in range(16, 25):                      # the detections stop after 6 frames of flight
+        stream[i] = dataclasses.replace(stream[i], detection=None)
+    out, _, _ = run_all(stream, params(0, lead_in_run=10))
+    assert [r.detection is not None for r in out[:10]] == [False] * 10
+    out, _, _ = run_all(stream, params(0, lead_in_run=6))
+    assert [r.detection is not None for r in out[:10]] == [True] * 10
+
+
+def test_lead_in_stops_at_a_gap_a_player_or_its_reach():
+    stream = held_then_served()
+    # Frame 3 has no blob near the hand: frames 0-3 stay empty.
+    stream[3] = CameraResult(None, (cand(900.0, 600.0, 1),), image_size=(1280, 720))
+    # Frame 6: a player's blob (longer than filter 1's maximum) is nearer than the shuttle.
+    player = Candidate(113.0, 300.0, 400.0, 60.0, math.nan, 5000.0, math.nan, 0.0, "length")
+    stream[6] = dataclasses.replace(stream[6], candidates=stream[6].candidates + (player,))
+    out, la, _ = run_all(stream, params(0, lead_in_run=10))
+    assert [r.detection is not None for r in out[:10]] == [False] * 4 + [True] * 6
+    assert out[6].detection.x == 112.0 and out[6].detection.length == 4.0
+    assert la.changes["lead_in"] == 6
+    # At most lead_in_frames back.
+    out, _, _ = run_all(held_then_served(), params(0, lead_in_run=10, lead_in_frames=4))
+    assert [r.detection is not None for r in out[:10]] == [False] * 6 + [True] * 4
+
+
+def test_lead_in_radius_is_in_pixels_of_a_1280_wide_picture():
+    # The held shuttle steps 5 px a frame at 1280 px wide, 10 px at 2560.
+    for width in (1280, 2560):
+        out, _, _ = run_all(held_then_served(width=width, step=5.0), params(0, lead_in_run=10, lead_in_radius=6.0))
+        assert all(r.detection is not None for r in out[:10])
+        out, _, _ = run_all(held_then_served(width=width, step=5.0), params(0, lead_in_run=10, lead_in_radius=4.0))
+        assert not any(r.detection is not None for r in out[:10])
+
+
+def test_stereo_lookahead_has_no_lead_in():
+    la = StereoLookahead(None, params(4, lead_in_run=10))
+    assert not la.left.lead_in and not la.right.lead_in

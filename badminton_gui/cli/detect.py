@@ -124,6 +124,9 @@ def run(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(f"{i} frames, shuttle found in {sum(visible)} ({100 * sum(visible) / i:.1f} %), "
               f"{i / elapsed:.1f} frames/s → {args.output}")
+        if lookahead.changes["lead_in"]:
+            print(f"lead-in: {lookahead.changes['lead_in']} frames taken before runs of "
+                  f"{params.lookahead.lead_in_run} detections (the shuttle held before a serve)")
     if video.frame_count and i < video.frame_count - 1:
         print(f"warning: {args.video} ended after {i} of {video.frame_count} frames (truncated?)")
     return 0

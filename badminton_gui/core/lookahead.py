@@ -32,6 +32,16 @@ candidates). For the stereo tracker (:class:`StereoLookahead`) each camera is re
 own; a frame with no online 3D point whose two detections were both taken by the look-ahead gets
 the triangulation of their centroids when epipolar-consistent (the online flight filter's point
 stays everywhere else).
+
+A third rule, off unless ``lookahead.lead_in_run`` is set (the broadcast preset), runs on the
+decided frames: **lead-in**. A run of that many detections is followed back from its first
+frame through the earlier frames that have none, each time to the nearest blob within
+``lead_in_radius`` of the last one taken, whatever the filters said of it (not one too large for
+a shuttle). On TV the shuttle held before the serve moves a few pixels a frame, is often shorter
+than filter 1 allows and never travels, yet is labelled visible; the rally it starts is plain
+to see once the serve flies. It holds the decided frames back ``lead_in_frames`` + the run's
+frames more. Not for the two-camera tracker (its labels call the held shuttle not visible, and
+its 3D points are not re-made from a lead-in): :class:`StereoLookahead` turns it off.
 """
 
 from __future__ import annotations
@@ -73,11 +83,16 @@ class CameraLookahead:
         # image from this camera pushes its last result again (the same object).
         self._last_online: CameraResult | None = None
         self._last_decided: CameraResult | None = None
-        self.changes = {"backfill": 0, "switch": 0, "exit": 0}
+        self.changes = {"backfill": 0, "switch": 0, "exit": 0, "lead_in": 0}
         # id(decided CameraResult) → the taken candidate's measured centroid (before the lead to
         # the cork), for the stereo re-triangulation; read and removed by StereoLookahead.
         self.centroids: dict[int, tuple[float, float]] = {}
         self.keep_centroids = False
+        # The lead-in stage: decided results held back, and the length of the run of real
+        # detections that ends the held frames.
+        self.lead_in = True
+        self._held: deque[CameraResult] = deque()
+        self._run = 0
 
     @property
     def frames(self) -> int:
@@ -87,6 +102,8 @@ class CameraLookahead:
         self._buffer.clear()
         self._past = None
         self._last_online = self._last_decided = None
+        self._held.clear()
+        self._run = 0
 
     def push(self, result: CameraResult, t: float) -> list[CameraResult]:
         """Add this frame's online result; return the results now decided, in order (one per
@@ -116,14 +133,63 @@ class CameraLookahead:
         out = []
         while len(self._buffer) > self.frames:
             out.extend(self._decide())
-        return out
+        return self._lead_in(out)
 
     def flush(self) -> list[CameraResult]:
         """The frames still held back (end of the video), decided with what future there is."""
         out = []
         while self._buffer:
             out.extend(self._decide())
+        out = self._lead_in(out)
+        out.extend(self._held)
+        self._held.clear()
         return out
+
+    # ---------------------------------------------------------------------------------------
+    def _lead_in(self, decided: list[CameraResult]) -> list[CameraResult]:
+        """The decided results through the lead-in stage (the module docstring): those now final."""
+        lp = self.params.lookahead
+        if lp.lead_in_run <= 0 or not self.lead_in:
+            return decided
+        out = []
+        for result in decided:
+            self._held.append(result)
+            det = result.detection
+            self._run = self._run + 1 if det is not None and not det.predicted else 0
+            if self._run == lp.lead_in_run:
+                self._follow_back(len(self._held) - self._run)
+            while len(self._held) > lp.lead_in_run + lp.lead_in_frames:
+                out.append(self._held.popleft())
+        return out
+
+    def _follow_back(self, start: int) -> None:
+        """Give the held frames before ``start`` (a run's first) the blobs that lead to it."""
+        lp, p = self.params.lookahead, self.params
+        first = self._held[start]
+        x, y = first.detection.x, first.detection.y
+        width = first.image_size[0] or 1280
+        radius = lp.lead_in_radius * width / 1280.0
+        for k in range(start - 1, max(start - 1 - lp.lead_in_frames, -1), -1):
+            result = self._held[k]
+            if result.detection is not None:
+                break
+            best, best_d = None, radius
+            for c in result.candidates:
+                # A blob too large for a shuttle is a player or a racket, never the held shuttle.
+                if (c.predicted or c.length > p.contour_length.max_length
+                        or c.short_side > p.tilted_rect.max_short_side):
+                    continue
+                d = math.hypot(c.x - x, c.y - y)
+                if d <= best_d:
+                    best, best_d = c, d
+            if best is None:
+                break
+            chosen = dataclasses.replace(best, rejected_by=None)
+            self._held[k] = dataclasses.replace(
+                result, detection=chosen,
+                candidates=tuple(chosen if c is best else c for c in result.candidates))
+            x, y = best.x, best.y
+            self.changes["lead_in"] += 1
 
     # ---------------------------------------------------------------------------------------
     def _decide(self) -> list[CameraResult]:
@@ -284,6 +350,8 @@ class StereoLookahead:
         self.left = CameraLookahead(self.params)
         self.right = CameraLookahead(self.params)
         self.left.keep_centroids = self.right.keep_centroids = True
+        # Per camera, a lead-in would give 2D points with no 3D (module docstring).
+        self.left.lead_in = self.right.lead_in = False
         self._tolerance = tolerance or (lambda: float(self.params.stereo.max_epipolar_error))
         self._results: deque[TrackResult] = deque()
         # Each camera's decided results not yet zipped: with steps that bring one camera's image

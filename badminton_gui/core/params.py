@@ -631,6 +631,16 @@ class LookaheadParams(ParamGroup):
     min_speed: float = param(400.0, 0.0, 20000.0, step=50.0, unit="px/s", label="Taken from image speed",
                              help="A candidate is taken only when its tracklet moves at least this fast from it "
                                   "(a shuttle held still before the serve is not yet in play)")
+    lead_in_run: int = param(0, 0, 200, step=1, unit="frames", label="Lead-in after a run of",
+                             help="A run of this many detections is followed back, frame by frame, through the "
+                                  "blobs next to its first one (the shuttle held before the serve, labelled "
+                                  "visible on TV; 0 = off)")
+    lead_in_radius: float = param(12.0, 1.0, 100.0, step=1.0, unit="px", label="Lead-in step",
+                                  help="How far the blob of the frame before may lie, in pixels of a "
+                                       "1280-wide picture (scaled to the video's width)")
+    lead_in_frames: int = param(60, 1, 600, step=1, unit="frames", label="Lead-in at most",
+                                help="How many frames a lead-in may go back (adds this many frames and the "
+                                     "run's to the file commands' delay)")
 
 
 @dataclass(frozen=True, slots=True)
