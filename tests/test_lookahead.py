@@ -311,7 +311,7 @@ def run_all(stream, p):
     return out + la.flush(), la, held_back
 
 
-@pytest.mark.parametrize("k", [0, 4])
+@pytest.mark.parametrize("k", [1, 4])
 def test_lead_in_follows_a_run_back_through_the_held_shuttle(k):
     stream = held_then_served()
     out, la, held_back = run_all(stream, params(k, lead_in_run=10))
@@ -333,15 +333,18 @@ def test_lead_in_is_off_by_default_and_on_in_the_broadcast_preset():
     out, la, held_back = run_all(held_then_served(), params(4))
     assert [r.detection is not None for r in out] == [False] * 10 + [True] * 15
     assert la.changes["lead_in"] == 0 and max(held_back) == 4
+    # Nor with look-ahead 0, the live readout: nothing held back.
+    out, la, held_back = run_all(held_then_served(), params(0, lead_in_run=10))
+    assert la.changes["lead_in"] == 0 and max(held_back) == 0
 
 
 def test_lead_in_needs_a_long_enough_run():
     stream = held_then_served(flight=15)
     for i in range(16, 25):                      # the detections stop after 6 frames of flight
         stream[i] = dataclasses.replace(stream[i], detection=None)
-    out, _, _ = run_all(stream, params(0, lead_in_run=10))
+    out, _, _ = run_all(stream, params(1, lead_in_run=10))
     assert [r.detection is not None for r in out[:10]] == [False] * 10
-    out, _, _ = run_all(stream, params(0, lead_in_run=6))
+    out, _, _ = run_all(stream, params(1, lead_in_run=6))
     assert [r.detection is not None for r in out[:10]] == [True] * 10
 
 
@@ -352,21 +355,21 @@ def test_lead_in_stops_at_a_gap_a_player_or_its_reach():
     # Frame 6: a player's blob (longer than filter 1's maximum) is nearer than the shuttle.
     player = Candidate(113.0, 300.0, 400.0, 60.0, math.nan, 5000.0, math.nan, 0.0, "length")
     stream[6] = dataclasses.replace(stream[6], candidates=stream[6].candidates + (player,))
-    out, la, _ = run_all(stream, params(0, lead_in_run=10))
+    out, la, _ = run_all(stream, params(1, lead_in_run=10))
     assert [r.detection is not None for r in out[:10]] == [False] * 4 + [True] * 6
     assert out[6].detection.x == 112.0 and out[6].detection.length == 4.0
     assert la.changes["lead_in"] == 6
     # At most lead_in_frames back.
-    out, _, _ = run_all(held_then_served(), params(0, lead_in_run=10, lead_in_frames=4))
+    out, _, _ = run_all(held_then_served(), params(1, lead_in_run=10, lead_in_frames=4))
     assert [r.detection is not None for r in out[:10]] == [False] * 6 + [True] * 4
 
 
 def test_lead_in_radius_is_in_pixels_of_a_1280_wide_picture():
     # The held shuttle steps 5 px a frame at 1280 px wide, 10 px at 2560.
     for width in (1280, 2560):
-        out, _, _ = run_all(held_then_served(width=width, step=5.0), params(0, lead_in_run=10, lead_in_radius=6.0))
+        out, _, _ = run_all(held_then_served(width=width, step=5.0), params(1, lead_in_run=10, lead_in_radius=6.0))
         assert all(r.detection is not None for r in out[:10])
-        out, _, _ = run_all(held_then_served(width=width, step=5.0), params(0, lead_in_run=10, lead_in_radius=4.0))
+        out, _, _ = run_all(held_then_served(width=width, step=5.0), params(1, lead_in_run=10, lead_in_radius=4.0))
         assert not any(r.detection is not None for r in out[:10])
 
 

@@ -40,7 +40,7 @@ frame through the earlier frames that have none, each time to the nearest blob w
 a shuttle). On TV the shuttle held before the serve moves a few pixels a frame, is often shorter
 than filter 1 allows and never travels, yet is labelled visible; the rally it starts is plain
 to see once the serve flies. It holds the decided frames back ``lead_in_frames`` + the run's
-frames more. Not for the two-camera tracker (its labels call the held shuttle not visible, and
+frames more, so it is off with ``lookahead.frames`` 0 (the live readout). Not for the two-camera tracker (its labels call the held shuttle not visible, and
 its 3D points are not re-made from a lead-in): :class:`StereoLookahead` turns it off.
 """
 
@@ -149,7 +149,8 @@ class CameraLookahead:
     def _lead_in(self, decided: list[CameraResult]) -> list[CameraResult]:
         """The decided results through the lead-in stage (the module docstring): those now final."""
         lp = self.params.lookahead
-        if lp.lead_in_run <= 0 or not self.lead_in:
+        if lp.lead_in_run <= 0 or not self.lead_in or self.frames == 0:
+            # (look-ahead 0 is the live readout, `detect --lookahead 0`: no delay at all)
             return decided
         out = []
         for result in decided:
