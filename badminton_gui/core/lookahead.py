@@ -40,8 +40,10 @@ frame through the earlier frames that have none, each time to the nearest blob w
 a shuttle). On TV the shuttle held before the serve moves a few pixels a frame, is often shorter
 than filter 1 allows and never travels, yet is labelled visible; the rally it starts is plain
 to see once the serve flies. It holds the decided frames back ``lead_in_frames`` + the run's
-frames more, so it is off with ``lookahead.frames`` 0 (the live readout). Not for the two-camera tracker (its labels call the held shuttle not visible, and
-its 3D points are not re-made from a lead-in): :class:`StereoLookahead` turns it off.
+frames more, so it is off with ``lookahead.frames`` 0 (the live readout). Not for the two-camera
+tracker (its labels call the held shuttle not visible, and its 3D points are not re-made from a
+lead-in): :class:`StereoLookahead` turns it off. Chosen leave-one-clip-out (twenty-sixth round,
+benchmarks/README.md): runs of 10 frames, 12 px.
 """
 
 from __future__ import annotations
