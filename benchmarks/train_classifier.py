@@ -292,6 +292,9 @@ def leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
             if not setting:
                 print(f"  {clip.name:10s} trained without it: {summary(counts)}", flush=True)
     print(f"leave-one-clip-out total: {summary(totals[()])}")
+    # Why the left-out clips' wrong frames are wrong (broadcast_census.py's causes).
+    causes = sorted(((k, v) for k, v in totals[()].items() if isinstance(k, tuple)), key=lambda kv: -kv[1])
+    print("  " + "; ".join(f"{v} {outcome} {cause}" for (outcome, cause), v in causes))
     for setting in settings[1:]:
         print(f"  with {setting[0][0]} = {setting[0][1]}: {summary(totals[setting])}")
     return 0
