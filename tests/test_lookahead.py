@@ -376,3 +376,55 @@ def test_lead_in_radius_is_in_pixels_of_a_1280_wide_picture():
 def test_stereo_lookahead_has_no_lead_in():
     la = StereoLookahead(None, params(4, lead_in_run=10))
     assert not la.left.lead_in and not la.right.lead_in
+
+
+def with_report(result, x, y, tracklet):
+    """``result`` with a blob at (x, y) on ``tracklet`` reported as the detection."""
+    reported = Candidate(x, y, 20.0, 0.0, 200.0, 30.0, 0.0, 0.5, None, tracklet=tracklet)
+    return dataclasses.replace(result, detection=reported, candidates=result.candidates + (reported,))
+
+
+@pytest.mark.parametrize("k", [1, 4])
+def test_lead_in_goes_through_clutter_reported_just_before_the_serve(k):
+    # Frames 5-9: a player's hand (tracklet 3, far from the held shuttle) is reported. The serve's
+    # run is counted from its own tracklet's first frame (10), not from the hand's (5), and the
+    # chain back from it replaces the hand's five frames by the held shuttle, then goes on.
+    stream = held_then_served()
+    for i in range(5, 10):
+        stream[i] = with_report(stream[i], 600.0 + 3 * i, 500.0, 3)
+    out, la, _ = run_all(stream, params(k, lead_in_run=10))
+    assert len(out) == len(stream)
+    for i in range(10):
+        d = out[i].detection
+        assert (d.x, d.y) == (100.0 + 2 * i, 300.0)
+    # The hand's blob stays among the candidates, marked as a loser; nothing else is lost.
+    for i in range(5, 10):
+        assert [(c.x, c.rejected_by) for c in out[i].candidates if c.tracklet == 3] == [(600.0 + 3 * i, REJECT_SCORE)]
+        assert len(out[i].candidates) == len(stream[i].candidates)
+    assert la.changes["lead_in"] == 10 and la.changes["lead_in_over"] == 5
+
+
+@pytest.mark.parametrize("reported, kept", [(10, True), (9, False)])
+def test_lead_in_keeps_an_earlier_run_of_its_own(reported, kept):
+    # A track reported for ``reported`` frames up to the serve: a run of lead_in_run frames (10)
+    # is a flight of its own and stays; a shorter one is replaced by the chain.
+    stream = held_then_served()
+    for i in range(10 - reported, 10):
+        stream[i] = with_report(stream[i], 600.0 + 8 * i, 500.0, 3)
+    out, la, _ = run_all(stream, params(1, lead_in_run=10))
+    xs = [out[i].detection.x if out[i].detection else None for i in range(10)]
+    if kept:
+        assert xs == [600.0 + 8 * i for i in range(10)] and la.changes["lead_in"] == 0
+    else:
+        assert xs == [100.0 + 2 * i for i in range(10)] and la.changes["lead_in_over"] == 9
+
+
+def test_lead_in_stops_where_the_held_shuttle_was_already_reported():
+    # Frames 0-3: the held shuttle itself reported (the association's lone still blob, on no
+    # tracklet): the chain reaches it at frame 3 and stops there, the reports untouched.
+    stream = held_then_served()
+    for i in range(4):
+        stream[i] = with_report(stream[i], 100.0 + 2 * i + 1.0, 300.0, -1)
+    out, la, _ = run_all(stream, params(1, lead_in_run=10))
+    assert [out[i].detection.x for i in range(10)] == [101.0, 103.0, 105.0, 107.0] + [100.0 + 2 * i for i in range(4, 10)]
+    assert la.changes["lead_in"] == 6 and la.changes["lead_in_over"] == 0

@@ -125,8 +125,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"{i} frames, shuttle found in {sum(visible)} ({100 * sum(visible) / i:.1f} %), "
               f"{i / elapsed:.1f} frames/s → {args.output}")
         if lookahead.changes["lead_in"]:
+            over = lookahead.changes["lead_in_over"]
             print(f"lead-in: {lookahead.changes['lead_in']} frames taken before runs of "
-                  f"{params.lookahead.lead_in_run} detections (the shuttle held before a serve)")
+                  f"{params.lookahead.lead_in_run} detections (the shuttle held before a serve)"
+                  + (f", {over} of them in place of a shorter track's report" if over else ""))
     if video.frame_count and i < video.frame_count - 1:
         print(f"warning: {args.video} ended after {i} of {video.frame_count} frames (truncated?)")
     return 0

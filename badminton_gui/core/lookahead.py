@@ -34,16 +34,21 @@ the triangulation of their centroids when epipolar-consistent (the online flight
 stays everywhere else).
 
 A third rule, off unless ``lookahead.lead_in_run`` is set (the broadcast preset), runs on the
-decided frames: **lead-in**. A run of that many detections is followed back from its first
-frame through the earlier frames that have none, each time to the nearest blob within
+decided frames: **lead-in**. A run of that many detections on one tracklet is followed back from
+its first frame through the earlier frames, each time to the nearest blob within
 ``lead_in_radius`` of the last one taken, whatever the filters said of it (not one too large for
 a shuttle). On TV the shuttle held before the serve moves a few pixels a frame, is often shorter
 than filter 1 allows and never travels, yet is labelled visible; the rally it starts is plain
-to see once the serve flies. It holds the decided frames back ``lead_in_frames`` + the run's
-frames more, so it is off with ``lookahead.frames`` 0 (the live readout). Not for the two-camera
-tracker (its labels call the held shuttle not visible, and its 3D points are not re-made from a
-lead-in): :class:`StereoLookahead` turns it off. Chosen leave-one-clip-out (twenty-sixth round,
-benchmarks/README.md): runs of 10 frames, 12 px.
+to see once the serve flies. The chain stops at a gap, at a report it reaches (within the
+radius), and at a run of its own length on another tracklet (an earlier flight); a shorter
+report elsewhere (a hand, a shoe the association followed for a few frames while the shuttle
+was held) is replaced. A run is counted per tracklet so that such a report just before the
+serve does not become the run's first frames. It holds the decided frames back
+``lead_in_frames`` + the run's frames more, so it is off with ``lookahead.frames`` 0 (the live
+readout). Not for the two-camera tracker (its labels call the held shuttle not visible, and its
+3D points are not re-made from a lead-in): :class:`StereoLookahead` turns it off. Chosen
+leave-one-clip-out (benchmarks/README.md): runs of 10 frames, 12 px (twenty-sixth round);
+through shorter reports, runs per tracklet (twenty-seventh).
 """
 
 from __future__ import annotations
@@ -85,7 +90,7 @@ class CameraLookahead:
         # image from this camera pushes its last result again (the same object).
         self._last_online: CameraResult | None = None
         self._last_decided: CameraResult | None = None
-        self.changes = {"backfill": 0, "switch": 0, "exit": 0, "lead_in": 0}
+        self.changes = {"backfill": 0, "switch": 0, "exit": 0, "lead_in": 0, "lead_in_over": 0}
         # id(decided CameraResult) → the taken candidate's measured centroid (before the lead to
         # the cork), for the stereo re-triangulation; read and removed by StereoLookahead.
         self.centroids: dict[int, tuple[float, float]] = {}
@@ -94,7 +99,11 @@ class CameraLookahead:
         # detections that ends the held frames.
         self.lead_in = True
         self._held: deque[CameraResult] = deque()
+        # Per held result: the length so far of its track segment (consecutive real detections
+        # on one tracklet, counted from before the held window too; 0: no real detection).
+        self._held_runs: deque[int] = deque()
         self._run = 0
+        self._run_tracklet = -1
 
     @property
     def frames(self) -> int:
@@ -105,7 +114,9 @@ class CameraLookahead:
         self._past = None
         self._last_online = self._last_decided = None
         self._held.clear()
+        self._held_runs.clear()
         self._run = 0
+        self._run_tracklet = -1
 
     def push(self, result: CameraResult, t: float) -> list[CameraResult]:
         """Add this frame's online result; return the results now decided, in order (one per
@@ -145,6 +156,7 @@ class CameraLookahead:
         out = self._lead_in(out)
         out.extend(self._held)
         self._held.clear()
+        self._held_runs.clear()
         return out
 
     # ---------------------------------------------------------------------------------------
@@ -156,14 +168,30 @@ class CameraLookahead:
             return decided
         out = []
         for result in decided:
-            self._held.append(result)
             det = result.detection
-            self._run = self._run + 1 if det is not None and not det.predicted else 0
+            if det is None or det.predicted:
+                self._run = 0
+            elif self._run and det.tracklet == self._run_tracklet:
+                self._run += 1
+            else:
+                # Another tracklet starts another segment: clutter reported just before the
+                # serve must not become the first frames of the serve's run.
+                self._run, self._run_tracklet = 1, det.tracklet
+            self._held.append(result)
+            self._held_runs.append(self._run)
             if self._run == lp.lead_in_run:
                 self._follow_back(len(self._held) - self._run)
             while len(self._held) > lp.lead_in_run + lp.lead_in_frames:
+                self._held_runs.popleft()
                 out.append(self._held.popleft())
         return out
+
+    def _in_long_segment(self, k: int) -> bool:
+        """The held result k's detection is part of a segment of at least ``lead_in_run``."""
+        runs, end = self._held_runs, k
+        while end + 1 < len(runs) and runs[end + 1] == runs[end] + 1 and runs[end] > 0:
+            end += 1
+        return runs[end] >= self.params.lookahead.lead_in_run
 
     def _follow_back(self, start: int) -> None:
         """Give the held frames before ``start`` (a run's first) the blobs that lead to it."""
@@ -174,7 +202,10 @@ class CameraLookahead:
         radius = lp.lead_in_radius * width / 1280.0
         for k in range(start - 1, max(start - 1 - lp.lead_in_frames, -1), -1):
             result = self._held[k]
-            if result.detection is not None:
+            old = result.detection
+            if old is not None and (self._in_long_segment(k)
+                                    or math.hypot(old.x - x, old.y - y) <= radius):
+                # An earlier flight (its own run), or the chain has reached what was reported.
                 break
             best, best_d = None, radius
             for c in result.candidates:
@@ -190,9 +221,13 @@ class CameraLookahead:
             chosen = dataclasses.replace(best, rejected_by=None)
             self._held[k] = dataclasses.replace(
                 result, detection=chosen,
-                candidates=tuple(chosen if c is best else c for c in result.candidates))
+                candidates=tuple(chosen if c is best else
+                                 dataclasses.replace(c, rejected_by=REJECT_SCORE) if c is old else c
+                                 for c in result.candidates))
             x, y = best.x, best.y
             self.changes["lead_in"] += 1
+            if old is not None:
+                self.changes["lead_in_over"] += 1
 
     # ---------------------------------------------------------------------------------------
     def _decide(self) -> list[CameraResult]:

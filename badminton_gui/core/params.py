@@ -632,9 +632,10 @@ class LookaheadParams(ParamGroup):
                              help="A candidate is taken only when its tracklet moves at least this fast from it "
                                   "(a shuttle held still before the serve is not yet in play)")
     lead_in_run: int = param(0, 0, 200, step=1, unit="frames", label="Lead-in after a run of",
-                             help="A run of this many detections is followed back, frame by frame, through the "
-                                  "blobs next to its first one (the shuttle held before the serve, labelled "
-                                  "visible on TV; 0 = off; never with look-ahead 0)")
+                             help="A run of this many detections on one tracklet is followed back, frame by "
+                                  "frame, through the blobs next to its first one (the shuttle held before the "
+                                  "serve, labelled visible on TV), in place of shorter reports elsewhere "
+                                  "(0 = off; never with look-ahead 0)")
     lead_in_radius: float = param(12.0, 1.0, 100.0, step=1.0, unit="px", label="Lead-in step",
                                   help="How far the blob of the frame before may lie, in pixels of a "
                                        "1280-wide picture (scaled to the video's width)")
