@@ -419,12 +419,15 @@ def test_lead_in_keeps_an_earlier_run_of_its_own(reported, kept):
         assert xs == [100.0 + 2 * i for i in range(10)] and la.changes["lead_in_over"] == 9
 
 
-def test_lead_in_stops_where_the_held_shuttle_was_already_reported():
-    # Frames 0-3: the held shuttle itself reported (the association's lone still blob, on no
-    # tracklet): the chain reaches it at frame 3 and stops there, the reports untouched.
+def test_lead_in_goes_on_through_the_held_shuttle_already_reported():
+    # Frames 4-6: the held shuttle itself reported for a moment (a still blob the association let
+    # through, here on a tracklet of its own, 8): the chain keeps those reports as they are and
+    # goes on from them back to frame 0.
     stream = held_then_served()
-    for i in range(4):
-        stream[i] = with_report(stream[i], 100.0 + 2 * i + 1.0, 300.0, -1)
+    for i in range(4, 7):
+        stream[i] = with_report(stream[i], 100.0 + 2 * i + 1.0, 300.0, 8)
     out, la, _ = run_all(stream, params(1, lead_in_run=10))
-    assert [out[i].detection.x for i in range(10)] == [101.0, 103.0, 105.0, 107.0] + [100.0 + 2 * i for i in range(4, 10)]
-    assert la.changes["lead_in"] == 6 and la.changes["lead_in_over"] == 0
+    assert [out[i].detection.x for i in range(10)] == (
+        [100.0 + 2 * i for i in range(4)] + [109.0, 111.0, 113.0] + [100.0 + 2 * i for i in range(7, 10)])
+    assert all(out[i].detection is stream[i].detection for i in range(4, 7))
+    assert la.changes["lead_in"] == 7 and la.changes["lead_in_over"] == 0

@@ -39,10 +39,10 @@ its first frame through the earlier frames, each time to the nearest blob within
 ``lead_in_radius`` of the last one taken, whatever the filters said of it (not one too large for
 a shuttle). On TV the shuttle held before the serve moves a few pixels a frame, is often shorter
 than filter 1 allows and never travels, yet is labelled visible; the rally it starts is plain
-to see once the serve flies. The chain stops at a gap, at a report it reaches (within the
-radius), and at a run of its own length on another tracklet (an earlier flight); a shorter
-report elsewhere (a hand, a shoe the association followed for a few frames while the shuttle
-was held) is replaced. A run is counted per tracklet so that such a report just before the
+to see once the serve flies. The chain stops at a gap and at a run of its own length on another
+tracklet (an earlier flight); it goes on through a report it reaches (within the radius: the
+held shuttle reported for a moment, kept as it is); a shorter report elsewhere (a hand, a shoe
+the association followed for a few frames while the shuttle was held) is replaced. A run is counted per tracklet so that such a report just before the
 serve does not become the run's first frames. It holds the decided frames back
 ``lead_in_frames`` + the run's frames more, so it is off with ``lookahead.frames`` 0 (the live
 readout). Not for the two-camera tracker (its labels call the held shuttle not visible, and its
@@ -203,10 +203,14 @@ class CameraLookahead:
         for k in range(start - 1, max(start - 1 - lp.lead_in_frames, -1), -1):
             result = self._held[k]
             old = result.detection
-            if old is not None and (self._in_long_segment(k)
-                                    or math.hypot(old.x - x, old.y - y) <= radius):
-                # An earlier flight (its own run), or the chain has reached what was reported.
-                break
+            if old is not None:
+                if self._in_long_segment(k):
+                    break                    # an earlier flight, a run of its own
+                if math.hypot(old.x - x, old.y - y) <= radius:
+                    # The held shuttle reported already (a still blob the association let
+                    # through, a short tracklet on it): kept, and the chain goes on from it.
+                    x, y = old.x, old.y
+                    continue
             best, best_d = None, radius
             for c in result.candidates:
                 # A blob too large for a shuttle is a player or a racket, never the held shuttle.
