@@ -431,3 +431,23 @@ def test_lead_in_goes_on_through_the_held_shuttle_already_reported():
         [100.0 + 2 * i for i in range(4)] + [109.0, 111.0, 113.0] + [100.0 + 2 * i for i in range(7, 10)])
     assert all(out[i].detection is stream[i].detection for i in range(4, 7))
     assert la.changes["lead_in"] == 7 and la.changes["lead_in_over"] == 0
+
+
+def test_lead_in_not_through_stops_at_any_report():
+    # lookahead.lead_in_through off (the adaptation's first pass): a run counts whatever the
+    # tracklet, so the hand reported in frames 5-9 starts the serve's run, and nothing near the
+    # hand leads back from it; frames 0-4 stay empty, the hand's reports stay.
+    stream = held_then_served()
+    for i in range(5, 10):
+        stream[i] = with_report(stream[i], 600.0 + 3 * i, 500.0, 3)
+    out, la, _ = run_all(stream, params(1, lead_in_run=10, lead_in_through=False))
+    assert [out[i].detection.x if out[i].detection else None for i in range(10)] == (
+        [None] * 5 + [600.0 + 3 * i for i in range(5, 10)])
+    assert la.changes["lead_in"] == 0
+    # Nor through the held shuttle reported already: the chain stops at its report.
+    stream = held_then_served()
+    for i in range(4, 7):
+        stream[i] = with_report(stream[i], 100.0 + 2 * i + 1.0, 300.0, 8)
+    out, la, _ = run_all(stream, params(1, lead_in_run=10, lead_in_through=False))
+    assert [r.detection is not None for r in out[:10]] == [False] * 4 + [True] * 6
+    assert la.changes["lead_in"] == 3

@@ -636,6 +636,11 @@ class LookaheadParams(ParamGroup):
                                   "frame, through the blobs next to its first one (the shuttle held before the "
                                   "serve, labelled visible on TV), in place of shorter reports elsewhere "
                                   "(0 = off; never with look-ahead 0)")
+    lead_in_through: bool = flag(True, label="... through shorter reports",
+                                 help="The lead-in replaces a shorter track's report on its way to the held "
+                                      "shuttle and goes on through the held shuttle reported already (runs "
+                                      "counted per tracklet); off: it stops at any report. The adaptation's "
+                                      "first pass turns it off")
     lead_in_radius: float = param(12.0, 1.0, 100.0, step=1.0, unit="px", label="Lead-in step",
                                   help="How far the blob of the frame before may lie, in pixels of a "
                                        "1280-wide picture (scaled to the video's width)")
