@@ -451,3 +451,20 @@ def test_lead_in_not_through_stops_at_any_report():
     out, la, _ = run_all(stream, params(1, lead_in_run=10, lead_in_through=False))
     assert [r.detection is not None for r in out[:10]] == [False] * 4 + [True] * 6
     assert la.changes["lead_in"] == 3
+
+
+@pytest.mark.parametrize("cap, led_in", [(9, False), (10, True)])
+def test_a_lead_in_replacing_more_reports_than_allowed_is_dropped_whole(cap, led_in):
+    # Frames 0-9: a flight reported on two short tracklets (3 and 4, five frames each) beside
+    # the still blob the serve's run leads back into: replacing ten reports is not leading in
+    # a hand's few frames. Above ``lead_in_max_replaced`` the whole chain is dropped.
+    stream = held_then_served()
+    for i in range(10):
+        stream[i] = with_report(stream[i], 600.0 + 20 * i, 500.0 - 10 * i, 3 if i < 5 else 4)
+    out, la, _ = run_all(stream, params(1, lead_in_run=10, lead_in_max_replaced=cap))
+    xs = [out[i].detection.x for i in range(10)]
+    if led_in:
+        assert xs == [100.0 + 2 * i for i in range(10)] and la.changes["lead_in_over"] == 10
+    else:
+        assert xs == [600.0 + 20 * i for i in range(10)]
+        assert la.changes["lead_in"] == 0 and la.changes["lead_in_refused"] == 1

@@ -44,7 +44,9 @@ tracklet (an earlier flight); it goes on through a report it reaches (within the
 held shuttle reported for a moment, kept as it is); a shorter report elsewhere (a hand, a shoe
 the association followed for a few frames while the shuttle was held) is replaced. A run is
 counted per tracklet, so that such a report just before the serve does not become the run's
-first frames. With ``lead_in_through`` off the chain stops at any report and a run is any
+first frames. A chain that would replace more than ``lead_in_max_replaced`` reports is dropped
+whole: it ran beside a flight reported on short tracklets (bwf_00025 13-73: a still blob beside
+the serve, which the chain would have replaced for 36 frames). With ``lead_in_through`` off the chain stops at any report and a run is any
 unbroken detections: the adaptation's first pass (core/adaptation.py) leads in so, since the
 frames the chain replaces are the least sure and its pseudo-labels must be sure. The lead-in
 holds the decided frames back ``lead_in_frames`` + the run's frames more, so it is off with
@@ -52,7 +54,7 @@ holds the decided frames back ``lead_in_frames`` + the run's frames more, so it 
 held shuttle not visible, and its 3D points are not re-made from a lead-in):
 :class:`StereoLookahead` turns it off. Chosen leave-one-clip-out (benchmarks/README.md): runs of
 10 frames, 12 px (twenty-sixth round); through shorter reports, runs per tracklet, not in the
-adaptation's pass (twenty-seventh: 81.60 -> 84.03 % mean over seeds 0/1/2).
+adaptation's pass, at most 10 replaced (twenty-seventh: 81.60 -> 84.03 % mean over seeds 0/1/2).
 """
 
 from __future__ import annotations
@@ -94,7 +96,7 @@ class CameraLookahead:
         # image from this camera pushes its last result again (the same object).
         self._last_online: CameraResult | None = None
         self._last_decided: CameraResult | None = None
-        self.changes = {"backfill": 0, "switch": 0, "exit": 0, "lead_in": 0, "lead_in_over": 0}
+        self.changes = {"backfill": 0, "switch": 0, "exit": 0, "lead_in": 0, "lead_in_over": 0, "lead_in_refused": 0}
         # id(decided CameraResult) → the taken candidate's measured centroid (before the lead to
         # the cork), for the stereo re-triangulation; read and removed by StereoLookahead.
         self.centroids: dict[int, tuple[float, float]] = {}
@@ -204,6 +206,7 @@ class CameraLookahead:
         x, y = first.detection.x, first.detection.y
         width = first.image_size[0] or 1280
         radius = lp.lead_in_radius * width / 1280.0
+        taken: list[tuple[int, Candidate, Candidate | None]] = []   # (held index, blob, report replaced)
         for k in range(start - 1, max(start - 1 - lp.lead_in_frames, -1), -1):
             result = self._held[k]
             old = result.detection
@@ -226,16 +229,24 @@ class CameraLookahead:
                     best, best_d = c, d
             if best is None:
                 break
+            taken.append((k, best, old))
+            x, y = best.x, best.y
+        replaced = sum(old is not None for _, _, old in taken)
+        if replaced > lp.lead_in_max_replaced:
+            # A still blob beside a flight whose reports are on short tracklets each: the chain
+            # would replace the flight, not a hand's few frames. Not a lead-in.
+            self.changes["lead_in_refused"] += 1
+            return
+        for k, best, old in taken:
+            result = self._held[k]
             chosen = dataclasses.replace(best, rejected_by=None)
             self._held[k] = dataclasses.replace(
                 result, detection=chosen,
                 candidates=tuple(chosen if c is best else
                                  dataclasses.replace(c, rejected_by=REJECT_SCORE) if c is old else c
                                  for c in result.candidates))
-            x, y = best.x, best.y
-            self.changes["lead_in"] += 1
-            if old is not None:
-                self.changes["lead_in_over"] += 1
+        self.changes["lead_in"] += len(taken)
+        self.changes["lead_in_over"] += replaced
 
     # ---------------------------------------------------------------------------------------
     def _decide(self) -> list[CameraResult]:

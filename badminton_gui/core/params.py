@@ -641,6 +641,10 @@ class LookaheadParams(ParamGroup):
                                       "shuttle and goes on through the held shuttle reported already (runs "
                                       "counted per tracklet); off: it stops at any report. The adaptation's "
                                       "first pass turns it off")
+    lead_in_max_replaced: int = param(10, 0, 600, step=1, unit="frames", label="... replacing at most",
+                                      help="A lead-in that would replace more reports than this is dropped "
+                                           "whole: it ran beside a flight (reported on short tracklets), "
+                                           "not through a hand's few frames")
     lead_in_radius: float = param(12.0, 1.0, 100.0, step=1.0, unit="px", label="Lead-in step",
                                   help="How far the blob of the frame before may lie, in pixels of a "
                                        "1280-wide picture (scaled to the video's width)")
