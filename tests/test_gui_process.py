@@ -132,3 +132,73 @@ def test_a_labelled_recording_ends_with_its_score(qtbot, tmp_path):
     assert main(["track", "--left", spec.left, "--right", spec.right, "--calib", spec.calib,
                  "-o", str(tmp_path / "cli.csv"), "--quiet"]) == 0
     assert _rows(tmp_path / "gui.csv") == _rows(tmp_path / "cli.csv")
+
+
+# --- one camera's video (a TV clip): `detect`'s loop, io/detect_file.py ----------------------
+
+@pytest.fixture
+def one_video(tmp_path):
+    from .test_cli import moving_dot_frames, write_labels, write_video
+    frames, truth = moving_dot_frames()
+    write_video(tmp_path / "dot.avi", frames)
+    write_labels(tmp_path / "dot_ball.csv", truth)
+    return SourceSpec("single", str(tmp_path / "dot.avi"), left_labels=str(tmp_path / "dot_ball.csv"))
+
+
+def test_one_video_gives_the_rows_of_detect_with_its_score(qtbot, one_video, tmp_path):
+    dialog = ProcessDialog(one_video, TrackerParams())
+    qtbot.addWidget(dialog)
+    assert dialog.output.text().endswith("dot_detect.csv")
+    assert "dot.avi (one camera)" in dialog.recording.text() and "dot_ball.csv" in dialog.recording.text()
+    # The broadcast preset as shipped: two passes, the classifier adapted to the video first.
+    dialog.preset.setCurrentIndex(dialog.preset.findData("broadcast"))
+    assert dialog.recording.text().endswith("classifier adapted to it first, then detected · scored against dot_ball.csv")
+    dialog.output.setText(str(tmp_path / "gui.csv"))
+    seen = []
+    dialog.start()
+    dialog.job.progress.connect(lambda done, total, text: seen.append((done, total, text)))
+    qtbot.waitUntil(lambda: not dialog.running, timeout=120_000)
+    summary = dialog.last_summary
+    assert dialog.last_error == "" and summary.frames == 40 and summary.adapt_asked
+    assert seen[-1][:2] == (80, 80) and seen[-1][2].startswith("detecting: 40 frames")   # both passes on the bar
+    assert any(text.startswith("adapting the classifier to the recording: ") for _, _, text in seen)
+    assert dialog.bar.value() == 1000
+    text = dialog.status.text()
+    assert text.startswith(f"Done: 40 frames, shuttle found in {summary.found_share:.1f} %")
+    assert f"Against the labels: {100 * summary.score.accuracy:.2f} %" in text
+    assert main(["detect", one_video.left, "--preset", "broadcast", "-o", str(tmp_path / "cli.csv"), "--quiet"]) == 0
+    assert _rows(tmp_path / "gui.csv") == _rows(tmp_path / "cli.csv")
+
+
+def test_one_video_cancel_and_bad_input(qtbot, one_video, tmp_path, monkeypatch):
+    import time
+
+    from badminton_gui.core.detector import CameraDetector
+    real = CameraDetector.process
+
+    def slow(self, *args, **kwargs):
+        time.sleep(0.02)
+        return real(self, *args, **kwargs)
+    monkeypatch.setattr(CameraDetector, "process", slow)
+    dialog = ProcessDialog(one_video, TrackerParams())
+    qtbot.addWidget(dialog)
+    dialog.output.setText(str(tmp_path / "part.csv"))
+    dialog.start()
+    qtbot.waitUntil(lambda: dialog.status.text().startswith("detecting: "), timeout=60_000)
+    dialog.cancel_button.click()
+    qtbot.waitUntil(lambda: not dialog.running, timeout=60_000)
+    summary = dialog.last_summary
+    assert summary.cancelled and 0 < summary.frames < 40
+    assert dialog.status.text().startswith(f"Cancelled after {summary.frames} frames: their rows are in")
+    assert [int(r[0]) for r in _rows(tmp_path / "part.csv")[1:]] == list(range(summary.frames))
+    # A missing video, a label file that is not one: one sentence each, the dialog usable.
+    dialog.spec = SourceSpec("single", str(tmp_path / "gone.mp4"))
+    dialog.start()
+    qtbot.waitUntil(lambda: not dialog.running, timeout=60_000)
+    assert dialog.last_summary is None and "video not found" in dialog.last_error
+    (tmp_path / "bad.csv").write_text("Frame,Visibility,X,Y\n0,yes,1,2\n", encoding="utf-8")
+    dialog.spec = SourceSpec("single", one_video.left, left_labels=str(tmp_path / "bad.csv"))
+    dialog.start()
+    qtbot.waitUntil(lambda: not dialog.running, timeout=60_000)
+    assert "bad.csv" in dialog.last_error and "clear the label file" in dialog.last_error
+    assert dialog.start_button.isEnabled() and not dialog.cancel_button.isEnabled()

@@ -547,8 +547,9 @@ class MainWindow(QMainWindow):
         self._start_pending()
 
     def open_process(self) -> None:
-        """Tools ▸ Process a recording…: a video pair tracked into a CSV, off the GUI thread, with
-        the parameters in use now (gui/process_dialog.py). Tracking here goes on meanwhile."""
+        """Tools ▸ Process a recording…: a video pair tracked, or one camera's video detected, into
+        a CSV, off the GUI thread, with the parameters in use now or a preset
+        (gui/process_dialog.py). Tracking here goes on meanwhile."""
         from .process_dialog import ProcessDialog
         if self._process is None:
             self._process = ProcessDialog(self.spec, self.params, self)

@@ -1,4 +1,5 @@
-"""*Tools ▸ Process a recording…*: track a recorded video pair into a CSV file, off the GUI thread.
+"""*Tools ▸ Process a recording…*: track a recorded video pair, or detect in one camera's video,
+into a CSV file, off the GUI thread.
 
 Why this file exists: an operator who recorded a session wants its track — for the robot's log,
 for `badminton-track eval` — without a terminal, and with the tuning the window uses now. At
@@ -8,6 +9,12 @@ It runs the loop `badminton-track track` runs (io/track_file.py), so the rows ar
 the same sources (gui/sources.py), so a pair opens here exactly as in *Source ▸ Stereo video
 pair*. Bad input (a missing video, a rig for another resolution, a full disk) ends the job with
 one sentence; the dialog stays open to fix it.
+
+One camera's video (a TV clip, *One video…*) runs the loop of `badminton-track detect`
+(io/detect_file.py): with the broadcast preset that is two passes, the classifier adapted to the
+recording first, then the look-ahead with the lead-in from the held shuttle — the file readout,
+which the live view (frame by frame, the shipped classifier) cannot give: on the held-out TV clips
+81 against 77 % (benchmarks/README.md).
 """
 
 from __future__ import annotations
@@ -17,16 +24,19 @@ import threading
 import time
 from pathlib import Path
 
-from PySide6.QtCore import QObject, QThread, Signal
-from PySide6.QtWidgets import (QDialog, QDialogButtonBox, QFileDialog, QFormLayout, QHBoxLayout,
-                               QLabel, QLineEdit, QProgressBar, QPushButton, QSpinBox,
+from PySide6.QtCore import QObject, Qt, QThread, Signal
+from PySide6.QtWidgets import (QComboBox, QDialog, QDialogButtonBox, QFileDialog, QFormLayout,
+                               QHBoxLayout, QLabel, QLineEdit, QProgressBar, QPushButton, QSpinBox,
                                QVBoxLayout, QWidget)
 
-from ..core.params import TrackerParams
-from ..io.sources import OpeningCancelled
+from ..core.params import ParamError, TrackerParams
+from ..io.detect_file import ADAPTING, DetectFileSummary, adaptation_asked, detect_to_csv
+from ..io.labels import CsvFormatError, read_point_labels
+from ..io.presets import list_presets, load_preset
+from ..io.sources import OpeningCancelled, SourceError
 from ..io.track_file import FILE_LOOKAHEAD, TrackFileSummary, track_to_csv
 from .settings import SourceSpec
-from .sources import VideoPairDialog, open_spec
+from .sources import SingleVideoDialog, VideoPairDialog, open_spec
 from .worker import USER_ERRORS, OpeningContext, _one_sentence
 
 _log = logging.getLogger(__name__)
@@ -37,11 +47,12 @@ PROGRESS_EVERY_S = 0.1
 
 
 def default_output(spec: SourceSpec) -> str:
-    """``<left video's name>_track.csv`` beside the left video ('' without one)."""
+    """``<left video's name>_track.csv`` beside the left video, ``<name>_detect.csv`` beside one
+    camera's video ('' without one)."""
     if not spec.left:
         return ""
     left = Path(spec.left)
-    return str(left.with_name(left.stem + "_track.csv"))
+    return str(left.with_name(left.stem + ("_detect.csv" if spec.kind == "single" else "_track.csv")))
 
 
 class ProcessJob(QObject):
@@ -63,26 +74,7 @@ class ProcessJob(QObject):
     def run(self) -> None:
         summary, error = None, ""
         try:
-            context = OpeningContext(self._cancel, lambda text: self.progress.emit(0, 0, text))
-            source, rig = open_spec(self.spec, context)
-            try:
-                rig.check_image_size(*source.image_size, what="the videos")
-                # Steps, not left frames: free-running cameras add the right frames no left
-                # frame paired with (``VideoPair.step_count``).
-                total = max(int(getattr(source, "step_count", 0) or getattr(source, "frame_count", 0) or 0), 0)
-                start, last = time.perf_counter(), 0.0
-
-                def report(n: int) -> None:
-                    nonlocal last
-                    now = time.perf_counter()
-                    if now - last >= PROGRESS_EVERY_S or n == total:
-                        last = now
-                        self.progress.emit(n, total, _rate_text(n, total, now - start))
-
-                summary = track_to_csv(source, rig, self.params, self.output, progress=report,
-                                       should_stop=self._cancel.is_set)
-            finally:
-                source.close()
+            summary = self._detect() if self.spec.kind == "single" else self._track()
         except OpeningCancelled:
             error = "cancelled before tracking began: nothing was written"
         except USER_ERRORS as exc:
@@ -91,6 +83,55 @@ class ProcessJob(QObject):
             _log.exception("processing a recording failed")
             error = f"internal error ({type(exc).__name__}: {exc}); details are in the log"
         self.done.emit(summary, error)
+
+    def _track(self) -> TrackFileSummary:
+        """The pair tracked into the CSV (`badminton-track track`'s loop)."""
+        context = OpeningContext(self._cancel, lambda text: self.progress.emit(0, 0, text))
+        source, rig = open_spec(self.spec, context)
+        try:
+            rig.check_image_size(*source.image_size, what="the videos")
+            # Steps, not left frames: free-running cameras add the right frames no left
+            # frame paired with (``VideoPair.step_count``).
+            total = max(int(getattr(source, "step_count", 0) or getattr(source, "frame_count", 0) or 0), 0)
+            start, last = time.perf_counter(), 0.0
+
+            def report(n: int) -> None:
+                nonlocal last
+                now = time.perf_counter()
+                if now - last >= PROGRESS_EVERY_S or n == total:
+                    last = now
+                    self.progress.emit(n, total, _rate_text(n, total, now - start))
+
+            return track_to_csv(source, rig, self.params, self.output, progress=report,
+                                should_stop=self._cancel.is_set)
+        finally:
+            source.close()
+
+    def _detect(self) -> DetectFileSummary:
+        """One camera's video detected into the CSV (`badminton-track detect`'s loop)."""
+        labels = None
+        if self.spec.left_labels:
+            try:
+                labels = read_point_labels(self.spec.left_labels).as_dict()
+            except CsvFormatError as exc:
+                raise SourceError(f"{exc} (clear the label file to process the video without a score)") from None
+        starts: dict[str, float] = {}
+        last = 0.0
+
+        def report(stage: str, n: int, total: int) -> None:
+            nonlocal last
+            now = time.perf_counter()
+            start = starts.setdefault(stage, now)
+            if now - last >= PROGRESS_EVERY_S or n == total:
+                last = now
+                # The bar runs over both passes when there are two.
+                two = adaptation_asked(self.params, None)
+                done = (n if stage == ADAPTING or not two else total + n) if total else 0
+                self.progress.emit(done, 2 * total if two else total,
+                                   _frame_rate_text(stage, n, total, now - start))
+
+        return detect_to_csv(self.spec.left, self.params, self.output, labels=labels,
+                             progress=report, should_stop=self._cancel.is_set)
 
 
 def _rate_text(n: int, total: int, elapsed: float) -> str:
@@ -101,7 +142,18 @@ def _rate_text(n: int, total: int, elapsed: float) -> str:
     return text
 
 
-def summary_text(summary: TrackFileSummary) -> str:
+def _frame_rate_text(stage: str, n: int, total: int, elapsed: float) -> str:
+    rate = n / elapsed if elapsed > 0 else 0.0
+    what = "adapting the classifier to the recording" if stage == ADAPTING else "detecting"
+    text = f"{what}: {n:,} frames · {rate:.0f} frames/s"
+    if total and rate > 0 and n < total:
+        text += f" · about {max(total - n, 0) / rate:.0f} s left in this pass"
+    return text
+
+
+def summary_text(summary: TrackFileSummary | DetectFileSummary) -> str:
+    if isinstance(summary, DetectFileSummary):
+        return _detect_summary_text(summary)
     share = 100.0 * summary.points_3d / summary.pairs if summary.pairs else 0.0
     head = (f"Cancelled after {summary.pairs:,} pairs: their rows are in" if summary.cancelled
             else f"Done: {summary.pairs:,} pairs, 3D point in {share:.1f} %, "
@@ -113,27 +165,52 @@ def summary_text(summary: TrackFileSummary) -> str:
     return f"{head} {summary.output}{score}{note}"
 
 
+def _detect_summary_text(summary: DetectFileSummary) -> str:
+    if summary.cancelled:
+        if not summary.frames:
+            return "Cancelled while adapting the classifier to the recording: nothing was written."
+        return f"Cancelled after {summary.frames:,} frames: their rows are in {summary.output}"
+    lines = [f"Done: {summary.frames:,} frames, shuttle found in {summary.found_share:.1f} %, "
+             f"{summary.frames_per_second:.0f} frames/s → {summary.output}"]
+    lines += [text[:1].upper() + text[1:] + "." for text in (
+        summary.adaptation_text, summary.lead_in_text, summary.score_text) if text]
+    if summary.truncated:
+        lines.append(f"The video ended after {summary.frames:,} of {summary.frame_count:,} frames (truncated?).")
+    return "\n".join(lines)
+
+
+# The parameter choice that means "what the window uses now".
+WINDOW_PARAMS = "the window's now (Tools ▸ Tuning)"
+
+
 class ProcessDialog(QDialog):
-    """The recording (as in *Source ▸ Stereo video pair*), the output file, the look-ahead,
-    Start / Cancel, and the progress."""
+    """The recording (a video pair as in *Source ▸ Stereo video pair*, or one camera's video as
+    in *Source ▸ One video*), the output file, the parameters, the look-ahead, Start / Cancel, and
+    the progress."""
 
     def __init__(self, spec: SourceSpec, params: TrackerParams, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.setWindowTitle("Process a recording")
         self.setMinimumWidth(620)
-        self.spec = spec if spec.kind == "video" else SourceSpec("video", calib=spec.calib)
+        self.spec = spec if spec.kind in ("video", "single") else SourceSpec("video", calib=spec.calib)
         self.params = params
         self.job: ProcessJob | None = None
         self.thread: QThread | None = None
-        self.last_summary: TrackFileSummary | None = None
+        self.last_summary: TrackFileSummary | DetectFileSummary | None = None
         self.last_error = ""
 
         self.recording = QLabel()     # two lines of its own: a wrapped label clipped in the form
-        choose = QPushButton("Choose…")
+        choose = QPushButton("Video pair…")
+        choose.setToolTip("Two cameras' videos and their rig: tracked in 3D (`badminton-track track`)")
         choose.clicked.connect(self.choose_recording)
+        choose_one = QPushButton("One video…")
+        choose_one.setToolTip("One camera's video (a TV broadcast): detected in the picture "
+                              "(`badminton-track detect`)")
+        choose_one.clicked.connect(self.choose_single_video)
         rec_row = QHBoxLayout()
         rec_row.addWidget(self.recording, 1)
         rec_row.addWidget(choose)
+        rec_row.addWidget(choose_one)
         self.output = QLineEdit(default_output(self.spec))
         browse = QPushButton("Browse…")
         browse.clicked.connect(self._browse_output)
@@ -146,11 +223,18 @@ class ProcessDialog(QDialog):
         self.lookahead.setSuffix(" frames")
         self.lookahead.setToolTip("Each frame's detection is re-decided once this many later frames are "
                                   "known (a file has its future); 0 gives the live readout the robot gets")
+        self.preset = QComboBox()
+        self.preset.addItem(WINDOW_PARAMS)
+        for name, description in list_presets().items():
+            self.preset.addItem(f"preset {name}", name)
+            self.preset.setItemData(self.preset.count() - 1, description, Qt.ItemDataRole.ToolTipRole)
+        self.preset.setToolTip("The parameters of the job: those of the window now, or a preset as shipped")
+        self.preset.currentIndexChanged.connect(self._show_recording)
         form = QFormLayout()
         form.addRow("Recording", rec_row)
         form.addRow("Output CSV", out_row)
+        form.addRow("Parameters", self.preset)
         form.addRow("Look-ahead", self.lookahead)
-        form.addRow("", QLabel("Tracked with the parameters the window uses now (Tools ▸ Tuning)."))
 
         self.bar = QProgressBar()
         self.bar.setRange(0, 1000)
@@ -175,10 +259,28 @@ class ProcessDialog(QDialog):
         self._show_recording()
 
     # ---- inputs ----------------------------------------------------------------------------
+    def job_params(self) -> TrackerParams:
+        """The parameters the job runs with (the choice above), with the look-ahead set here."""
+        name = self.preset.currentData()
+        params = self.params if name is None else load_preset(name)
+        return params.with_value("lookahead.frames", self.lookahead.value())
+
     def _show_recording(self) -> None:
         s = self.spec
         if not s.left:
             self.recording.setText("<i>none chosen</i>")
+            return
+        if s.kind == "single":
+            try:
+                params = self.job_params()
+            except ParamError as exc:     # a preset file gone bad: said when Start is pressed
+                _log.warning("%s", exc)
+                params = self.params
+            how = ("classifier adapted to it first, then detected" if adaptation_asked(params, None)
+                   else "detected")
+            labels = f" · scored against {Path(s.left_labels).name}" if s.left_labels else ""
+            self.recording.setText(f"{Path(s.left).name} (one camera)<br>{how}{labels}")
+            self.recording.setToolTip(f"{s.left}\n{s.left_labels}".strip())
             return
         pairing = ("timestamp files" if s.left_times else "the videos' own frame times" if s.video_times
                    else "frame index")
@@ -191,6 +293,17 @@ class ProcessDialog(QDialog):
         if dialog.exec():
             old_default = default_output(self.spec)
             self.spec = dialog.spec(self.spec.realtime)
+            if not self.output.text().strip() or self.output.text().strip() == old_default:
+                self.output.setText(default_output(self.spec))
+            self._show_recording()
+
+    def choose_single_video(self) -> None:
+        dialog = SingleVideoDialog(self.spec, self)
+        if dialog.exec():
+            old_default = default_output(self.spec)
+            self.spec = dialog.spec(self.spec.realtime)
+            if dialog.broadcast.isChecked():
+                self.preset.setCurrentIndex(max(self.preset.findData("broadcast"), 0))
             if not self.output.text().strip() or self.output.text().strip() == old_default:
                 self.output.setText(default_output(self.spec))
             self._show_recording()
@@ -210,13 +323,17 @@ class ProcessDialog(QDialog):
         if self.running:
             return
         output = self.output.text().strip()
-        if not self.spec.left or not self.spec.right:
-            self._finish_message("Choose the recording first (Choose…).")
+        if not self.spec.left or (self.spec.kind == "video" and not self.spec.right):
+            self._finish_message("Choose the recording first (Video pair… or One video…).")
             return
         if not output:
             self._finish_message("Give the output CSV file.")
             return
-        params = self.params.with_value("lookahead.frames", self.lookahead.value())
+        try:
+            params = self.job_params()
+        except ParamError as exc:
+            self._finish_message(str(exc)[:1].upper() + str(exc)[1:])
+            return
         self.last_summary, self.last_error = None, ""
         self.job = ProcessJob(self.spec, params, output)
         self.thread = QThread(self)
