@@ -145,7 +145,9 @@ def _rate_text(n: int, total: int, elapsed: float) -> str:
 def _frame_rate_text(stage: str, n: int, total: int, elapsed: float) -> str:
     rate = n / elapsed if elapsed > 0 else 0.0
     what = "adapting the classifier to the recording" if stage == ADAPTING else "detecting"
-    text = f"{what}: {n:,} frames · {rate:.0f} frames/s"
+    text = f"{what}: {n:,} frame{'s' if n != 1 else ''}"
+    if rate > 0:
+        text += f" · {rate:.0f} frames/s"
     if total and rate > 0 and n < total:
         text += f" · about {max(total - n, 0) / rate:.0f} s left in this pass"
     return text
@@ -373,6 +375,8 @@ class ProcessDialog(QDialog):
 
     def _finish_message(self, text: str) -> None:
         self.status.setText(text)
+        # A summary of several lines needs room: grow rather than squeeze the form above it.
+        self.resize(self.width(), max(self.height(), self.sizeHint().height()))
         self.start_button.setEnabled(True)
         self.cancel_button.setEnabled(False)
 
