@@ -45,10 +45,11 @@ held shuttle reported for a moment, kept as it is); a shorter report elsewhere (
 the association followed for a few frames while the shuttle was held) is replaced. A run is
 counted per tracklet, so that such a report just before the serve does not become the run's
 first frames. A chain that would replace more than ``lead_in_max_replaced`` reports is dropped
-whole: it ran beside a flight reported on short tracklets (bwf_00025 13-73: a still blob beside
-the serve, which the chain would have replaced for 36 frames). With ``lead_in_through`` off the chain stops at any report and a run is any
-unbroken detections: the adaptation's first pass (core/adaptation.py) leads in so, since the
-frames the chain replaces are the least sure and its pseudo-labels must be sure. The lead-in
+whole: it ran beside a flight reported on short tracklets (bwf_00025 frames 13-73: a still blob
+beside the serve, whose flight the chain would have replaced for 36 frames). With
+``lead_in_through`` off the chain stops at any report and a run is any unbroken detections: the
+adaptation's first pass (core/adaptation.py) leads in so, since the frames the chain replaces
+are the least sure and its pseudo-labels must be sure. The lead-in
 holds the decided frames back ``lead_in_frames`` + the run's frames more, so it is off with
 ``lookahead.frames`` 0 (the live readout). Not for the two-camera tracker (its labels call the
 held shuttle not visible, and its 3D points are not re-made from a lead-in):
@@ -96,7 +97,10 @@ class CameraLookahead:
         # image from this camera pushes its last result again (the same object).
         self._last_online: CameraResult | None = None
         self._last_decided: CameraResult | None = None
-        self.changes = {"backfill": 0, "switch": 0, "exit": 0, "lead_in": 0, "lead_in_over": 0, "lead_in_refused": 0}
+        # lead_in_over: frames the lead-in took in place of a shorter track's report;
+        # lead_in_refused: chains dropped whole (``lookahead.lead_in_max_replaced``).
+        self.changes = {"backfill": 0, "switch": 0, "exit": 0, "lead_in": 0, "lead_in_over": 0,
+                        "lead_in_refused": 0}
         # id(decided CameraResult) → the taken candidate's measured centroid (before the lead to
         # the cork), for the stereo re-triangulation; read and removed by StereoLookahead.
         self.centroids: dict[int, tuple[float, float]] = {}
