@@ -151,7 +151,9 @@ def adapt_to_recording(params: TrackerParams, frames: Callable[[], Iterable[tupl
     # it here 80.46 / 79.94 % at seeds 0 / 1, without 83.26 / 84.10 %; no lead-in here at all
     # 77.86 / 81.19 %).
     detector = CameraDetector(params)
-    lookahead = CameraLookahead(params.with_value("lookahead.lead_in_through", False))
+    # Nor does it fill gaps: a filled frame is a guess along a line, not a sure label.
+    lookahead = CameraLookahead(params.with_value("lookahead.lead_in_through", False)
+                                .with_value("lookahead.gap_fill_frames", 0))
     if classifier is not None:
         detector.use_classifier(classifier)
     start = detector.classifier

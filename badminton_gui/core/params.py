@@ -651,6 +651,13 @@ class LookaheadParams(ParamGroup):
     lead_in_frames: int = param(60, 1, 600, step=1, unit="frames", label="Lead-in at most",
                                 help="How many frames a lead-in may go back (adds this many frames and the "
                                      "run's to the file commands' delay)")
+    gap_fill_frames: int = param(0, 0, 60, step=1, unit="frames", label="Fill gaps of at most",
+                                 help="A gap of at most this many frames between two detections takes, in each "
+                                      "frame, the blob nearest the straight line between them (0 = off; only "
+                                      "with the lead-in, whose delay it shares)")
+    gap_fill_radius: float = param(10.0, 1.0, 100.0, step=1.0, unit="px", label="... within",
+                                   help="How far from that line the blob may lie, in pixels of a 1280-wide "
+                                        "picture (scaled to the video's width)")
 
 
 @dataclass(frozen=True, slots=True)

@@ -51,6 +51,7 @@ class DetectFileSummary:
     lead_in: int = 0        # frames the lead-in took (core/lookahead.py), and of them those
     lead_in_over: int = 0   # that replaced a shorter track's report
     lead_in_run: int = 0
+    gap_fill: int = 0       # frames the gap fill took (core/lookahead.py)
     frame_count: int = 0    # the frames the video's header announced (0: unknown)
     score: Outcomes | None = None   # against the labels given, None without
 
@@ -78,11 +79,12 @@ class DetectFileSummary:
 
     @property
     def lead_in_text(self) -> str:
-        if not self.lead_in:
+        if not self.lead_in and not self.gap_fill:
             return ""
         over = f", {self.lead_in_over} of them in place of a shorter track's report" if self.lead_in_over else ""
+        gaps = f"; {self.gap_fill} frames taken in short gaps between detections" if self.gap_fill else ""
         return (f"lead-in: {self.lead_in} frames taken before runs of {self.lead_in_run} detections "
-                f"(the shuttle held before a serve){over}")
+                f"(the shuttle held before a serve){over}{gaps}")
 
     @property
     def score_text(self) -> str:
@@ -176,7 +178,7 @@ def detect_to_csv(video: str | Path, params: TrackerParams, output: str | Path, 
         adapted_frames=harvest.frames if classifier is not None else 0,
         adapt_seconds=adapt_seconds,
         lead_in=lookahead.changes["lead_in"], lead_in_over=lookahead.changes["lead_in_over"],
-        lead_in_run=params.lookahead.lead_in_run, frame_count=total,
+        lead_in_run=params.lookahead.lead_in_run, gap_fill=lookahead.changes["gap_fill"], frame_count=total,
         score=score.outcomes(0) if score is not None else None)
 
 
