@@ -102,18 +102,20 @@ def test_disabled_classifier_is_not_adapted(enabled):
 
 def test_the_first_pass_leads_in_only_up_to_a_report(monkeypatch):
     """The adaptation's pseudo-labels come from the lead-in that stops at any report
-    (``lookahead.lead_in_through`` off), whatever the preset says for the final readout."""
+    (``lookahead.lead_in_through`` off) and no gap fill, whatever the preset says for the final
+    readout."""
     from badminton_gui.core import adaptation
     from badminton_gui.io.presets import load_preset
     seen = []
 
     class Spy(adaptation.CameraLookahead):
         def __init__(self, params):
-            seen.append((params.lookahead.lead_in_run, params.lookahead.lead_in_through))
+            seen.append((params.lookahead.lead_in_run, params.lookahead.lead_in_through,
+                         params.lookahead.gap_fill_frames))
             super().__init__(params)
     monkeypatch.setattr(adaptation, "CameraLookahead", Spy)
     params = load_preset("broadcast").with_value("lookahead.frames", 4)
     assert params.lookahead.lead_in_through
     classifier, harvest = adapt_to_recording(params, lambda: iter(()))
     assert classifier is None and harvest.runs == 0          # (an empty recording: nothing to learn)
-    assert seen == [(params.lookahead.lead_in_run, False)]
+    assert seen == [(params.lookahead.lead_in_run, False, 0)]

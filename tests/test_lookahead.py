@@ -468,3 +468,67 @@ def test_a_lead_in_replacing_more_reports_than_allowed_is_dropped_whole(cap, led
     else:
         assert xs == [600.0 + 20 * i for i in range(10)]
         assert la.changes["lead_in"] == 0 and la.changes["lead_in_refused"] == 1
+
+
+# --- gap fill (``lookahead.gap_fill_frames``): short gaps between detections ------------------
+
+def flight_with_gap(gap=(8, 9), off=0.0, n=20, coast=False):
+    """A shuttle flying 20 px a frame on tracklet 7 (too fast for the lead-in's 12-px steps),
+    detected, except in the ``gap`` frames where its blob (``off`` px off its path) was refused by
+    filter 1; a still light far away."""
+    stream = []
+    for i in range(n):
+        light = cand(900.0, 600.0, 1)
+        x = 100.0 + 20 * i
+        if i in gap:
+            short = Candidate(x, 300.0 + off, 4.0, 1.0, math.nan, 2.0, math.nan, 0.0, "length")
+            cands = (light, short)
+            det = None
+            if coast:   # the followed tracklet's coasting guess, off the path
+                det = Candidate(x + 15.0, 320.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, None, predicted=True, tracklet=7)
+                cands = cands + (det,)
+            stream.append(CameraResult(det, cands, image_size=(1280, 720)))
+        else:
+            stream.append(frame([light, cand(x, 300.0, 7)], 7))
+    return stream
+
+
+@pytest.mark.parametrize("k", [1, 4])
+def test_a_short_gap_takes_the_blob_on_the_line_between_its_detections(k):
+    out, la, _ = run_all(flight_with_gap(), params(k, lead_in_run=10, gap_fill_frames=6))
+    assert len(out) == 20
+    for i in (8, 9):
+        d = out[i].detection
+        assert (d.x, d.y, d.length, d.rejected_by) == (100.0 + 20 * i, 300.0, 4.0, None)
+    assert la.changes["gap_fill"] == 2
+    # A coasting guess in the gap is replaced too (marked as a loser, still there).
+    out, la, _ = run_all(flight_with_gap(coast=True), params(k, lead_in_run=10, gap_fill_frames=6))
+    assert [out[i].detection.x for i in (8, 9)] == [260.0, 280.0] and la.changes["gap_fill"] == 2
+    assert [c.rejected_by for c in out[8].candidates if c.predicted] == [REJECT_SCORE]
+
+
+def test_the_gap_fill_keeps_to_short_gaps_and_blobs_near_the_line():
+    # 11 px off the line at radius 10: nothing; at 9: taken.
+    out, la, _ = run_all(flight_with_gap(off=11.0), params(1, lead_in_run=10, gap_fill_frames=6))
+    assert out[8].detection is None and la.changes["gap_fill"] == 0
+    out, la, _ = run_all(flight_with_gap(off=9.0), params(1, lead_in_run=10, gap_fill_frames=6))
+    assert out[8].detection.y == 309.0 and la.changes["gap_fill"] == 2
+    # A gap of 7 frames is longer than 6: left as it is; 6 frames are filled.
+    out, la, _ = run_all(flight_with_gap(gap=range(5, 12)), params(1, lead_in_run=10, gap_fill_frames=6))
+    assert la.changes["gap_fill"] == 0 and all(out[i].detection is None for i in range(5, 12))
+    out, la, _ = run_all(flight_with_gap(gap=range(5, 11)), params(1, lead_in_run=10, gap_fill_frames=6))
+    assert la.changes["gap_fill"] == 6
+    # No detection after the gap (the end of the video): nothing to fill towards.
+    out, la, _ = run_all(flight_with_gap(gap=(18, 19)), params(1, lead_in_run=10, gap_fill_frames=6))
+    assert la.changes["gap_fill"] == 0 and out[19].detection is None
+
+
+def test_the_gap_fill_is_off_by_default_and_on_in_the_broadcast_preset():
+    assert TrackerParams().lookahead.gap_fill_frames == 0
+    assert load_preset("broadcast").lookahead.gap_fill_frames > 0
+    out, la, _ = run_all(flight_with_gap(), params(1, lead_in_run=10))
+    assert out[8].detection is None and la.changes["gap_fill"] == 0
+    # Never live (look-ahead 0), and only with the lead-in stage it shares its delay with.
+    for p in (params(0, lead_in_run=10, gap_fill_frames=6), params(1, gap_fill_frames=6)):
+        out, la, held_back = run_all(flight_with_gap(), p)
+        assert out[8].detection is None and la.changes["gap_fill"] == 0
