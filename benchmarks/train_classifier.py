@@ -193,9 +193,6 @@ def main() -> int:
                     help="MLPs averaged in logit (default: 9 for both two-camera kinds, 3 broadcast; "
                          "1 without patches)")
     args = ap.parse_args()
-    if args.leave_one_out and args.kind != "broadcast":
-        ap.error("--leave-one-out is for --kind broadcast (the two-camera kinds: leave-one-rally-out "
-                 "runs through accuracy.py)")
     # The TV and the default two-camera classifiers read the blob's patch too, as ensembles
     # (sixteenth round: leave-one-clip-out the shuttle ranked first among its frame's
     # candidates in 541–553 of 707 TV frames against 488–492, leave-one-rally-out in 9,707 of
@@ -249,7 +246,8 @@ def main() -> int:
     x = np.vstack([p[0] for p in parts])
     y = np.concatenate([p[1] for p in parts])
     if args.leave_one_out:
-        return leave_one_out(args, jobs, parts, lambda xs, ys: train(
+        fold = leave_one_out if args.kind == "broadcast" else rally_leave_one_out
+        return fold(args, jobs, parts, lambda xs, ys: train(
             xs, ys, hidden=args.hidden, epochs=args.epochs, name=out_name, feature_names=names))
     # Hold the last clip out of training, every change of it too, to report an honest
     # validation figure on that clip as it is.
@@ -298,6 +296,88 @@ def leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
     for setting in settings[1:]:
         print(f"  with {setting[0][0]} = {setting[0][1]}: {summary(totals[setting])}")
     return 0
+
+
+def rally_leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
+    """Per tuned-on NYCU rally: a classifier trained on the other rallies (and the demo court),
+    and the rally's `track` accuracy with it in both cameras (look-ahead 4, the file commands'
+    default); the total over the rallies. With ``--scan`` each setting is a paired run with the
+    same classifiers; ``classifier.adapt_min_run`` > 0 adapts each camera's classifier to its
+    recording first (core/adaptation.py)."""
+    import collections
+    from concurrent.futures import ProcessPoolExecutor as Pool
+    settings: list[tuple[tuple[str, str], ...]] = [()]
+    for scan in args.scan:
+        name, values = scan.split("=", 1)
+        settings += [((name, value),) for value in values.split(",")]
+    preset = "coarse" if args.kind == "stereo-coarse" else "default"
+    clips = [c for c in stereo_clips() if not c.held_out]
+    tasks = []
+    for clip in clips:
+        seen = (str(clip.left), str(clip.right))
+        rows = [p for p, job in zip(parts, jobs) if job[0] not in seen]
+        model = train(np.vstack([p[0] for p in rows]), np.concatenate([p[1] for p in rows]))
+        tasks += [(clip, preset, setting, model, args.adapt) for setting in settings]
+    with Pool(args.jobs) as pool:
+        results = list(pool.map(_track_fold, tasks))
+    totals = {setting: collections.Counter() for setting in settings}
+    for (clip, _p, setting, _m, _a), (left, right) in zip(tasks, results):
+        for cam, o in (("left", left), ("right", right)):
+            totals[setting].update({k: getattr(o, k) for k in ("tp", "tn", "fp1", "fp2", "fn")})
+        label = "trained without it" if not setting else f"{setting[0][0]} = {setting[0][1]}"
+        print(f"  {clip.name:15s} {label}: left {left.accuracy:.2%}, right {right.accuracy:.2%}")
+    for setting in settings:
+        t = totals[setting]
+        acc = (t["tp"] + t["tn"]) / max(sum(t.values()), 1)
+        label = "leave-one-rally-out total" if not setting else f"  with {setting[0][0]} = {setting[0][1]}"
+        print(f"{label}: {acc:.2%} ({', '.join(f'{k.upper()} {t[k]}' for k in ('tp', 'tn', 'fp1', 'fp2', 'fn'))})")
+    return 0
+
+
+def _track_fold(task: tuple):
+    """(left, right) outcomes of `track` on one rally with one classifier (and a setting)."""
+    import tempfile
+    from accuracy import read_track, score
+    from clips import nycu_cfgs
+    from badminton_gui.core.adaptation import DEFAULT_MIN_RUN, adapt_to_recording
+    from badminton_gui.io.nycu import rig_from_nycu
+    from badminton_gui.io.track_file import FILE_LOOKAHEAD, track_to_csv
+    from badminton_gui.io.video import VideoFile, VideoPair
+    clip, preset, setting, model, adapt = task
+    cv2.setNumThreads(1)
+    params = load_preset(preset).with_value("lookahead.frames", FILE_LOOKAHEAD)
+    for path, value in setting:
+        params = params.with_value(path, value)
+    classifiers = [model, model]
+    if adapt or (adapt is None and params.classifier.adapt_min_run > 0):
+        if params.classifier.adapt_min_run <= 0:
+            params = params.with_value("classifier.adapt_min_run", DEFAULT_MIN_RUN)
+        for cam, (video, labels) in enumerate(((clip.left, clip.left_labels),
+                                              (clip.right, clip.right_labels))):
+            times = read_timestamps(labels)[1]
+
+            def frames(video=video, times=times):
+                v = VideoFile(video)
+                try:
+                    i = 0
+                    while (image := v.read()) is not None:
+                        yield image, float(times[i]) if i < len(times) else i / v.fps
+                        i += 1
+                finally:
+                    v.close()
+            adapted, _harvest = adapt_to_recording(params, frames, classifier=model)
+            classifiers[cam] = adapted or model
+    rig = rig_from_nycu(*nycu_cfgs())
+    source = VideoPair(clip.left, clip.right, read_timestamps(clip.left_labels)[1],
+                       read_timestamps(clip.right_labels)[1])
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "track.csv"
+        try:
+            track_to_csv(source, rig, params, out, classifiers=tuple(classifiers))
+        finally:
+            source.close()
+        left, right, _rows = read_track(out)
+    return (score(left, clip.left_labels, 2048, None), score(right, clip.right_labels, 2048, None))
 
 
 def _auc(scores: np.ndarray, positive: np.ndarray) -> float:

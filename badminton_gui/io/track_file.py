@@ -78,7 +78,8 @@ class TrackFileSummary:
 def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Path, *,
                  max_frames: int | None = None, link=None,
                  progress: Callable[[int], None] | None = None,
-                 should_stop: Callable[[], bool] | None = None, truth=None) -> TrackFileSummary:
+                 should_stop: Callable[[], bool] | None = None, truth=None,
+                 classifiers: tuple | None = None) -> TrackFileSummary:
     """Track every pair ``source.read()`` gives (a ``FrameSource``: a ``VideoPair``, possibly
     behind a ``PrefetchingReader``) and write one row per step to ``output``: per left frame, and
     per right frame no left frame was paired with (free-running cameras, ``VideoPair``).
@@ -89,6 +90,8 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     pending rows are written and the summary says ``cancelled``. The source is not closed here.
     ``truth`` (io/truth.py ``LabelTruth``; default: the source's ``frame_truth``, as the GUI's
     sources carry): the written rows are scored against it (GUIDE §6) in the summary.
+    ``classifiers``: (left, right) candidate classifiers used instead of the preset's (one
+    adapted to each camera's recording, or a leave-one-rally-out study's).
     """
     if truth is None:
         truth = getattr(source, "frame_truth", None)
@@ -107,6 +110,9 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
 
     out_path = Path(output)
     tracker = StereoTracker(rig, params)
+    if classifiers is not None:
+        tracker.left.use_classifier(classifiers[0])
+        tracker.right.use_classifier(classifiers[1])
     lookahead = StereoLookahead(rig, params, tracker.epipolar_tolerance)
     n = hits3d = 0
     cancelled = False
