@@ -67,3 +67,39 @@ def test_a_full_disk_is_one_sentence(pair):
     with pytest.raises(TrackFileError, match="^cannot write the track: the disk is full writing /dev/full$"):
         track_to_csv(source, make_rig_for(), TrackerParams(), "/dev/full")
     source.close()
+
+
+
+class _Counting:
+    """A classifier that counts its calls (and scores as the one it wraps)."""
+
+    def __init__(self, inner) -> None:
+        self.inner, self.calls = inner, 0
+        self.name, self.feature_names = inner.name, inner.feature_names
+
+    def probability(self, features):
+        self.calls += 1
+        return self.inner.probability(features)
+
+
+def test_classifiers_given_replace_the_presets_per_camera(pair):
+    """``classifiers=(left, right)``: each camera scores its blobs with its own (an adapted or a
+    leave-one-rally-out classifier) instead of the preset's file."""
+    import dataclasses
+
+    from badminton_gui.core.classifier import load_classifier
+    shipped = load_classifier(TrackerParams().classifier.model)
+
+    def run(name, classifiers):
+        source = VideoPair(pair / "l.avi", pair / "r.avi")
+        track_to_csv(source, make_rig_for(), TrackerParams(), pair / name, classifiers=classifiers)
+        source.close()
+        return _rows(pair / name)
+    left, right = _Counting(shipped), _Counting(shipped)
+    assert run("given.csv", (left, right)) == run("preset.csv", None)
+    assert left.calls >= 40 and right.calls >= 40       # a call a frame with blobs (60 frames), each camera
+    # The output bias pushed down by 1000: every blob is clutter, and nothing is reported.
+    blind = dataclasses.replace(shipped, biases=(shipped.biases[0], shipped.biases[1] - 1e3))
+    rows = run("blind.csv", (blind, blind))
+    head = rows[0]
+    assert not any(r[head.index("VisL")] == "1" or r[head.index("VisR")] == "1" for r in rows[1:])
