@@ -183,8 +183,8 @@ def main() -> int:
                          "(with the same options) and print that clip's accuracy with it — broadcast: "
                          "`detect` (broadcast_census.py, look-ahead 4); the two-camera kinds: `track` "
                          "on each tuned-on rally, both cameras with the classifier (look-ahead 4; nine "
-                         "MLPs on ≈ 280,000 candidates a rally: ≈ 70 min of training on 2 cores, then "
-                         "≈ 15 min of tracking): how the classifier does on a clip it has not seen, "
+                         "MLPs on ≈ 290,000 candidates a fold: ≈ 65 min of training on 2 cores, then "
+                         "≈ 17 min of tracking): how the classifier does on a clip it has not seen, "
                          "without the held-out clips")
     ap.add_argument("--scan", action="append", default=[], metavar="GROUP.NAME=V1,V2,...",
                     help="with --leave-one-out: also score each left-out clip with each of these preset "
