@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from badminton_gui.cli import main
-from badminton_gui.core.lookahead import CameraLookahead, StereoLookahead
+from badminton_gui.core.lookahead import CONFIRM_HOLD_S, CameraLookahead, StereoLookahead
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.core.types import REJECT_MOTION, REJECT_SCORE, CameraResult, Candidate, TrackResult
+from badminton_gui.core.types import (REJECT_MOTION, REJECT_SCORE, CameraResult, Candidate, FlightInfo,
+                                      TrackResult)
 from badminton_gui.io.presets import load_preset
 
 from .test_cli import make_rig_for, moving_dot_frames, write_video
@@ -214,6 +215,41 @@ def test_stereo_lookahead_retriangulates_a_rewritten_pair():
     assert r.point[2] == pytest.approx(3.0, rel=1e-3)
     assert r.distance == pytest.approx(math.dist((0, 0, 0), r.point), rel=1e-6)
     assert out[6] is not None and out[6].point is None   # not rewritten: the online result as it was
+
+
+def _flight_from_held_points(k: int):
+    """Frames 0-39 at FPS; frames 4 and 36 had a point online; at frame 36 a flight begins from
+    the points of frames 1-36 (one every frame)."""
+    rig = make_rig_for((1280, 720))
+    la = StereoLookahead(rig, params(k), lambda: 6.0)
+    out = []
+    for i in range(40):
+        flight = FlightInfo(confirmed=tuple((j / FPS, 0.1 * j, 0.0, 3.0) for j in range(1, 37))
+                            if i == 36 else ())
+        point = (9.0, 9.0, 9.0) if i in (4, 36) else None
+        out += la.push(TrackResult(index=i, timestamp=i / FPS, left=frame([], None),
+                                   right=frame([], None), point=point, flight=flight))
+    out += la.flush()
+    assert [r.index for r in out] == list(range(40))
+    return rig, la, out
+
+
+def test_stereo_lookahead_gives_held_frames_the_points_a_new_flight_took_up():
+    rig, la, out = _flight_from_held_points(4)
+    # The file readout holds its decided frames CONFIRM_HOLD_S (25 frames here) after the
+    # newest: the frames since then get their points at frame 36; frame 4 keeps its own, the
+    # older frames have left, frames after 36 are not in the flight's list.
+    given = [i for i, r in enumerate(out) if r.point is not None and i not in (4, 36)]
+    assert given == list(range(given[0], 36)) and la.confirmed == len(given)
+    assert 36 - int(CONFIRM_HOLD_S * FPS) - 1 <= given[0] <= 36 - int(CONFIRM_HOLD_S * FPS)
+    assert out[4].point == (9.0, 9.0, 9.0) and out[36].point == (9.0, 9.0, 9.0)
+    assert out[20].point == pytest.approx((2.0, 0.0, 3.0)) and out[20].predicted_distance is None
+    assert out[20].distance == pytest.approx(math.dist((0, 0, 0), rig.to_left([(2.0, 0.0, 3.0)])[0]))
+
+
+def test_the_live_readout_gives_no_frame_a_point_afterwards():
+    _rig, la, out = _flight_from_held_points(0)
+    assert [i for i, r in enumerate(out) if r.point is not None] == [4, 36] and la.confirmed == 0
 
 
 def test_lookahead_range_is_validated():

@@ -165,6 +165,32 @@ def test_a_hit_starts_a_new_shot_and_reverses_the_prediction():
     assert pred.y < 0 and math.hypot(pred.x - landing_point[0], pred.y - landing_point[1]) < 0.1
 
 
+def test_a_new_flight_hands_back_the_points_it_grew_from():
+    """The update that makes a track of refused points the flight lists those points' times,
+    each with the track's fitted path there, so a delayed readout can give their frames the 3D
+    point the live one could not."""
+    times, truth, hit_time, _ = _clear_driven_back()
+    rng = np.random.default_rng(8)
+    points = [tuple(p) for p in truth + rng.normal(0, 0.01, truth.shape)]
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    history = fly(traj, times, points)
+    index = {round(t, 9): i for i, t in enumerate(times)}
+    handing = [(t, info) for t, info in history if info.confirmed]
+    # The first flight and the shot after the hit: once each, not on the updates after.
+    assert [info.shot_index for _, info in handing] == [0, 1]
+    fitted_off, measured_off = [], []
+    for t, info in handing:
+        assert len(info.confirmed) >= 3 and info.confirmed[-1][0] == pytest.approx(t)
+        for t_point, *xyz in info.confirmed:
+            i = index[round(t_point, 9)]
+            fitted_off.append(math.dist(xyz, truth[i]))
+            measured_off.append(math.dist(points[i], truth[i]))
+    # The path through all the track's points, not each point (1 cm of noise per axis).
+    assert max(fitted_off) < 0.04 and np.mean(fitted_off) < np.mean(measured_off)
+    # The new shot's points are the return's, none from before the hit.
+    assert handing[1][1].confirmed[0][0] >= hit_time - 1 / 120
+
+
 def test_a_long_gap_ends_the_flight_and_the_floor_lands_it():
     shot = landing.make_shot(np.random.default_rng(6), "drop", 4.8, dt=1e-3)
     times = np.arange(0.0, shot.duration, 1 / 120)

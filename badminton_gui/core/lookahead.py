@@ -31,7 +31,12 @@ its width along its tracklet's image velocity, measured on the tracklet's neighb
 candidates). For the stereo tracker (:class:`StereoLookahead`) each camera is re-decided on its
 own; a frame with no online 3D point whose two detections were both taken by the look-ahead gets
 the triangulation of their centroids when epipolar-consistent (the online flight filter's point
-stays everywhere else).
+stays everywhere else). A flight's first points have none online either: the flight filter
+refuses a point no flight explains, and those points grow the track that becomes the next
+flight a few frames later. When it does (``FlightInfo.confirmed``), the frames they came from get
+them; the file readout holds its decided frames ``CONFIRM_HOLD_S`` longer for it (NYCU tuned-on
+rallies: a 3D point on 92.3 -> 95.6 % of the frames in flight both cameras report, the new
+points median 2.9 cm / p90 5.0 cm from the triangulated labels; twenty-ninth round).
 
 A third rule, off unless ``lookahead.lead_in_run`` is set (the broadcast preset), runs on the
 decided frames: **lead-in**. A run of that many detections on one tracklet is followed back from
@@ -448,6 +453,10 @@ def _with_detection(result: CameraResult, chosen: Candidate) -> CameraResult:
     return dataclasses.replace(result, detection=chosen, candidates=tuple(cands))
 
 
+# s: how long the file readout holds its decided frames for a flight's first points (``_confirm``).
+CONFIRM_HOLD_S = 0.25
+
+
 class StereoLookahead:
     """Both cameras' readouts of :class:`TrackResult` delayed and re-decided (``track``).
 
@@ -471,18 +480,37 @@ class StereoLookahead:
         self._lefts: deque[CameraResult] = deque()
         self._rights: deque[CameraResult] = deque()
         self.retriangulated = 0
+        self.confirmed = 0   # held frames given a point a later flight took up (``_confirm``)
+        # Decided frames held on a while longer (look-ahead on only: the file readout), for a
+        # flight that begins from points older than the look-ahead's window.
+        self.confirm_hold = CONFIRM_HOLD_S if self.frames > 0 else 0.0
+        self._decided: deque[TrackResult] = deque()
 
     @property
     def frames(self) -> int:
         return self.left.frames
 
     def push(self, result: TrackResult) -> list[TrackResult]:
+        out = []
+        if self._decided and result.timestamp < self._decided[-1].timestamp:
+            # The clock went back (another recording): what was held goes out now, and no point
+            # of the new one is matched with a frame of the old by its time.
+            out += self._decided
+            self._decided.clear()
         self._results.append(result)
-        return self._zip(self.left.push(result.left, result.timestamp),
-                         self.right.push(result.right, result.timestamp))
+        if result.flight.confirmed:
+            self._confirm(result.flight.confirmed)
+        self._decided.extend(self._zip(self.left.push(result.left, result.timestamp),
+                                       self.right.push(result.right, result.timestamp)))
+        while self._decided and self._decided[0].timestamp <= result.timestamp - self.confirm_hold:
+            out.append(self._decided.popleft())
+        return out
 
     def flush(self) -> list[TrackResult]:
-        return self._zip(self.left.flush(), self.right.flush())
+        self._decided.extend(self._zip(self.left.flush(), self.right.flush()))
+        out = list(self._decided)
+        self._decided.clear()
+        return out
 
     def _zip(self, lefts: list[CameraResult], rights: list[CameraResult]) -> list[TrackResult]:
         self._lefts.extend(lefts)
@@ -496,6 +524,22 @@ class StereoLookahead:
                 continue
             out.append(self._rewrite(online, left, right))
         return out
+
+    def _confirm(self, points: tuple) -> None:
+        """A flight began at the newest frame from a track of points the online readout had
+        refused (``FlightInfo.confirmed``): each held frame with no 3D point whose time is one of
+        them gets its measured point. Online the robot got nothing there (the flight filter
+        cannot vouch for a flight's first points before it is one); K frames later it can."""
+        at = {round(p[0], 9): p[1:4] for p in points}
+        for frames in (self._decided, self._results):
+            for k, held in enumerate(frames):
+                xyz = at.get(round(held.timestamp, 9))
+                if xyz is None or held.point is not None:
+                    continue
+                frames[k] = dataclasses.replace(
+                    held, point=tuple(xyz), predicted_distance=None,
+                    distance=float(np.linalg.norm(self.rig.to_left([xyz])[0])))
+                self.confirmed += 1
 
     def _rewrite(self, online: TrackResult, left: CameraResult, right: CameraResult) -> TrackResult:
         dl, dr = left.detection, right.detection

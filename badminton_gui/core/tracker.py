@@ -533,7 +533,7 @@ class StereoTracker:
             # filter itself runs on, for the next serve).
             point_out = speed = None
             flight = dataclasses.replace(flight, velocity=None, prediction=None, in_flight=False,
-                                         withheld_reason=CAUGHT_REASON)
+                                         withheld_reason=CAUGHT_REASON, confirmed=())
             res_left, res_right = self._withhold_caught(res_left, res_right)
         if point_out is not None:
             self._last_point = (timestamp, float(point_out[2]))
@@ -628,7 +628,7 @@ class StereoTracker:
                 and t - self._caught_at <= sp.caught_hold):
             point_out = speed = None
             flight = dataclasses.replace(flight, velocity=None, prediction=None, in_flight=False,
-                                         withheld_reason=CAUGHT_REASON)
+                                         withheld_reason=CAUGHT_REASON, confirmed=())
             pair = [other, other]
             pair[cam] = result
             result = self._withhold_caught(*pair, cameras=(cam,))[cam]

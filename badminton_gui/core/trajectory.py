@@ -415,6 +415,10 @@ class Trajectory:
         self._accepted_now = False    # the last update's point extended the flight
         self._rejected_now = False    # ... was refused by a flight being followed
         self._extended_tentative = False  # ... extended the tentative track (not a restart)
+        # (t, x, y, z) for each point a flight took up from its tentative track at the last
+        # update, on that track's fitted path: earlier frames' points, refused then, which the
+        # flight now vouches for (``FlightInfo.confirmed``).
+        self._confirmed_now: tuple = ()
         self.shots_ended = 0
 
     # ---- read-only views for plots and tests ------------------------------------------------
@@ -548,6 +552,7 @@ class Trajectory:
             self.reset()        # the clock went back: a new video / replay
         self._last_t = t
         self._accepted_now = self._rejected_now = self._extended_tentative = False
+        self._confirmed_now = ()
 
     def _end_stale(self, t: float) -> None:
         """End a flight past its landing or unseen for ``max_gap``; forget an old tentative track."""
@@ -810,6 +815,12 @@ class Trajectory:
                 self._drop_oldest(tent)
                 return
         self._apart = 0
+        # Its own points' times, before a re-synchronised shot takes the old flight's in front of
+        # them, each with where the track's path puts the shuttle then (its final state carried
+        # back by the drag model: the fit through all its points, steadier than each point).
+        state, k = tuple(tent.x[:6].tolist()), float(tent.x[6])
+        self._confirmed_now = tuple((float(point[0]), *(float(v) for v in _propagate(state, k, point[0] - tent.t)[:3]))
+                                    for point in tent.points)
         new_shot = True
         if old is not None:
             t_first = tent.points[0][0]
@@ -1049,7 +1060,7 @@ class Trajectory:
             pred = None
         return FlightInfo(shot_index=self._shot_index, velocity=vel,
                           peak_speed=self._peak_speed_value(), prediction=pred,
-                          withheld_reason=reason, in_flight=True)
+                          withheld_reason=reason, in_flight=True, confirmed=self._confirmed_now)
 
     def _peak_speed_value(self) -> float | None:
         values = [v for v in (self._peak_speed, self._launch_speed) if v is not None]

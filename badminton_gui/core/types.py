@@ -151,6 +151,11 @@ class FlightInfo:
     prediction: LandingPrediction | None = None
     withheld_reason: str = ""   # why there is no prediction (e.g. "no court pose")
     in_flight: bool = False     # a flight is being followed (False: idle, or landed / ended)
+    # (t, x, y, z) for each point a new flight took up at this step from the track it grew out
+    # of, on that track's fitted path: points of earlier frames, refused then (no flight
+    # explained them yet), that the flight now vouches for. The look-ahead gives them to those
+    # frames (``StereoLookahead``).
+    confirmed: tuple = ()
 
 
 @dataclass(frozen=True, slots=True)
