@@ -362,7 +362,9 @@ def main() -> int:
                   f"{np.median(d):.3f} m, p90 {np.percentile(d, 90):.3f} m")
         flying, missing = sum(e[1] for e in errs), sum(e[2] for e in errs)
         if flying:
-            print(f"3D point for the robot on {100.0 * (flying - missing) / flying:.1f} % of the frames in "
+            # (the robot's live stream is the --lookahead 0 readout's: a flight's first points
+            # reach only the file readout, core/lookahead.py)
+            print(f"3D point on {100.0 * (flying - missing) / flying:.1f} % of the frames in "
                   f"flight that both cameras report ({missing} of {flying} without; flight: the left "
                   f"label moves > {FLIGHT_MOVE_PX:g} px over ±3 frames)")
         flying, missing = sum(e[3] for e in errs), sum(e[4] for e in errs)
