@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from badminton_gui.cli import main
-from badminton_gui.core.lookahead import CONFIRM_HOLD_S, CameraLookahead, StereoLookahead
+from badminton_gui.core.lookahead import CONFIRM_GATE_M, CONFIRM_HOLD_S, CameraLookahead, StereoLookahead
 from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.trajectory import position_on_path
 from badminton_gui.core.types import (REJECT_MOTION, REJECT_SCORE, CameraResult, Candidate, FlightInfo,
                                       TrackResult)
 from badminton_gui.io.presets import load_preset
@@ -245,6 +246,28 @@ def test_stereo_lookahead_gives_held_frames_the_points_a_new_flight_took_up():
     assert out[4].point == (9.0, 9.0, 9.0) and out[36].point == (9.0, 9.0, 9.0)
     assert out[20].point == pytest.approx((2.0, 0.0, 3.0)) and out[20].predicted_distance is None
     assert out[20].distance == pytest.approx(math.dist((0, 0, 0), rig.to_left([(2.0, 0.0, 3.0)])[0]))
+
+
+def test_held_frames_measured_near_the_new_flight_take_its_path():
+    """Frames the track left out (a point it dropped, one measured just before it began) get the
+    flight's path where their own measured point lies within CONFIRM_GATE_M of it."""
+    rig = make_rig_for((1280, 720))
+    la = StereoLookahead(rig, params(4), lambda: 6.0)
+    path = (0.36, 3.6, 0.0, 3.0, 10.0, 0.0, 2.0, 0.2)
+    on = {i: position_on_path(path, i / FPS) for i in range(40)}
+    measured = {27: np.add(on[27], (0.5 * CONFIRM_GATE_M, 0.0, 0.0)),    # near: taken
+                28: np.add(on[28], (2.0 * CONFIRM_GATE_M, 0.0, 0.0)),    # off the path: not
+                20: on[20]}                                              # long before the track
+    out = []
+    for i in range(40):
+        flight = (FlightInfo(confirmed=tuple((j / FPS, *on[j]) for j in range(30, 37)), confirmed_path=path)
+                  if i == 36 else FlightInfo())
+        out += la.push(TrackResult(index=i, timestamp=i / FPS, left=frame([], None), right=frame([], None),
+                                   point=on[i] if i == 36 else None, flight=flight,
+                                   measured_point=None if i not in measured else tuple(measured[i])))
+    out += la.flush()
+    assert [i for i, r in enumerate(out) if r.point is not None] == [27] + list(range(30, 37))
+    assert out[27].point == pytest.approx(on[27])
 
 
 def test_the_live_readout_gives_no_frame_a_point_afterwards():

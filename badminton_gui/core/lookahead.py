@@ -34,9 +34,10 @@ the triangulation of their centroids when epipolar-consistent (the online flight
 stays everywhere else). A flight's first points have none online either: the flight filter
 refuses a point no flight explains, and those points grow the track that becomes the next
 flight a few frames later. When it does (``FlightInfo.confirmed``), the frames they came from get
-them; the file readout holds its decided frames ``CONFIRM_HOLD_S`` longer for it (NYCU tuned-on
-rallies: a 3D point on 92.3 -> 95.6 % of the frames in flight both cameras report, the new
-points median 2.9 cm / p90 5.0 cm from the triangulated labels; twenty-ninth round).
+the track's fitted path there, and so does a frame the track left out whose measured point lies
+within ``CONFIRM_GATE_M`` of that path; the file readout holds its decided frames
+``CONFIRM_HOLD_S`` longer for it (NYCU tuned-on rallies: a 3D point on 92.3 -> 96.5 % of the
+frames in flight both cameras report; twenty-ninth round, benchmarks/README.md).
 
 A third rule, off unless ``lookahead.lead_in_run`` is set (the broadcast preset), runs on the
 decided frames: **lead-in**. A run of that many detections on one tracklet is followed back from
@@ -81,6 +82,7 @@ from typing import Callable
 import numpy as np
 
 from .params import TrackerParams
+from .trajectory import position_on_path
 from .types import REJECT_SCORE, CameraResult, Candidate, TrackResult
 
 
@@ -453,8 +455,16 @@ def _with_detection(result: CameraResult, chosen: Candidate) -> CameraResult:
     return dataclasses.replace(result, detection=chosen, candidates=tuple(cands))
 
 
-# s: how long the file readout holds its decided frames for a flight's first points (``_confirm``).
+# s: how long the file readout holds its decided frames for a flight's first points (``_confirm``;
+# 1.0 s gave the same points on the NYCU tuned-on rallies).
 CONFIRM_HOLD_S = 0.25
+# m: a held frame the new flight's track left out (a point it dropped as inconsistent, one
+# measured just before it) takes the flight's path where its own measured point lies this close
+# to it, from CONFIRM_BEFORE_S (s) before the track's first point on. At 0.10 m one of the NYCU
+# tuned-on rallies' 65 such points was a wrong 2D pair 51 cm off; at 0.05 m, 41 points, all
+# within 9 cm of the triangulated labels (twenty-ninth round).
+CONFIRM_GATE_M = 0.05
+CONFIRM_BEFORE_S = 0.05
 
 
 class StereoLookahead:
@@ -499,7 +509,7 @@ class StereoLookahead:
             self._decided.clear()
         self._results.append(result)
         if result.flight.confirmed:
-            self._confirm(result.flight.confirmed)
+            self._confirm(result.flight.confirmed, result.flight.confirmed_path)
         self._decided.extend(self._zip(self.left.push(result.left, result.timestamp),
                                        self.right.push(result.right, result.timestamp)))
         while self._decided and self._decided[0].timestamp <= result.timestamp - self.confirm_hold:
@@ -525,16 +535,25 @@ class StereoLookahead:
             out.append(self._rewrite(online, left, right))
         return out
 
-    def _confirm(self, points: tuple) -> None:
+    def _confirm(self, points: tuple, path: tuple = ()) -> None:
         """A flight began at the newest frame from a track of points the online readout had
         refused (``FlightInfo.confirmed``): each held frame with no 3D point whose time is one of
-        them gets its measured point. Online the robot got nothing there (the flight filter
-        cannot vouch for a flight's first points before it is one); K frames later it can."""
+        them gets the track's path there, and so does one whose measured point lies within
+        ``CONFIRM_GATE_M`` of the path (``path``: ``FlightInfo.confirmed_path``). Online the robot
+        got nothing there (the flight filter cannot vouch for a flight's first points before it
+        is one); a moment later it can."""
         at = {round(p[0], 9): p[1:4] for p in points}
+        first = min(p[0] for p in points)
         for frames in (self._decided, self._results):
             for k, held in enumerate(frames):
+                if held.point is not None:
+                    continue
                 xyz = at.get(round(held.timestamp, 9))
-                if xyz is None or held.point is not None:
+                if xyz is None and path and held.measured_point is not None and held.timestamp >= first - CONFIRM_BEFORE_S:
+                    on_path = position_on_path(path, held.timestamp)
+                    if math.dist(on_path, held.measured_point) <= CONFIRM_GATE_M:
+                        xyz = on_path
+                if xyz is None:
                     continue
                 frames[k] = dataclasses.replace(
                     held, point=tuple(xyz), predicted_distance=None,

@@ -533,7 +533,8 @@ class StereoTracker:
             # filter itself runs on, for the next serve).
             point_out = speed = None
             flight = dataclasses.replace(flight, velocity=None, prediction=None, in_flight=False,
-                                         withheld_reason=CAUGHT_REASON, confirmed=())
+                                         withheld_reason=CAUGHT_REASON, confirmed=(),
+                                         confirmed_path=())
             res_left, res_right = self._withhold_caught(res_left, res_right)
         if point_out is not None:
             self._last_point = (timestamp, float(point_out[2]))
@@ -628,7 +629,8 @@ class StereoTracker:
                 and t - self._caught_at <= sp.caught_hold):
             point_out = speed = None
             flight = dataclasses.replace(flight, velocity=None, prediction=None, in_flight=False,
-                                         withheld_reason=CAUGHT_REASON, confirmed=())
+                                         withheld_reason=CAUGHT_REASON, confirmed=(),
+                                         confirmed_path=())
             pair = [other, other]
             pair[cam] = result
             result = self._withhold_caught(*pair, cameras=(cam,))[cam]

@@ -186,6 +186,12 @@ _CHAINS_LOCK = threading.Lock()
 _CHAIN_KEY = struct.Struct("9d").pack
 
 
+def position_on_path(path: tuple, t: float) -> tuple[float, float, float]:
+    """Where the drag-model path ``(t0, x, y, z, vx, vy, vz, k)`` puts the shuttle at ``t``
+    (``FlightInfo.confirmed_path``)."""
+    return tuple(float(v) for v in _propagate(tuple(path[1:7]), float(path[7]), t - path[0])[:3])
+
+
 def _jacobians(vel: np.ndarray, k: np.ndarray | float) -> np.ndarray:
     """Continuous-time Jacobians F (n, 7, 7) of d(p, v, k)/dt at velocities ``vel`` (n, 3)."""
     vel = np.atleast_2d(vel)
@@ -419,6 +425,7 @@ class Trajectory:
         # update, on that track's fitted path: earlier frames' points, refused then, which the
         # flight now vouches for (``FlightInfo.confirmed``).
         self._confirmed_now: tuple = ()
+        self._confirmed_path: tuple = ()   # that track's state then: (t, x, y, z, vx, vy, vz, k)
         self.shots_ended = 0
 
     # ---- read-only views for plots and tests ------------------------------------------------
@@ -553,6 +560,7 @@ class Trajectory:
         self._last_t = t
         self._accepted_now = self._rejected_now = self._extended_tentative = False
         self._confirmed_now = ()
+        self._confirmed_path = ()
 
     def _end_stale(self, t: float) -> None:
         """End a flight past its landing or unseen for ``max_gap``; forget an old tentative track."""
@@ -821,6 +829,7 @@ class Trajectory:
         state, k = tuple(tent.x[:6].tolist()), float(tent.x[6])
         self._confirmed_now = tuple((float(point[0]), *(float(v) for v in _propagate(state, k, point[0] - tent.t)[:3]))
                                     for point in tent.points)
+        self._confirmed_path = (float(tent.t), *state, k)
         new_shot = True
         if old is not None:
             t_first = tent.points[0][0]
@@ -1060,7 +1069,8 @@ class Trajectory:
             pred = None
         return FlightInfo(shot_index=self._shot_index, velocity=vel,
                           peak_speed=self._peak_speed_value(), prediction=pred,
-                          withheld_reason=reason, in_flight=True, confirmed=self._confirmed_now)
+                          withheld_reason=reason, in_flight=True, confirmed=self._confirmed_now,
+                          confirmed_path=self._confirmed_path)
 
     def _peak_speed_value(self) -> float | None:
         values = [v for v in (self._peak_speed, self._launch_speed) if v is not None]
