@@ -549,7 +549,8 @@ class StereoLookahead:
                 if held.point is not None:
                     continue
                 xyz = at.get(round(held.timestamp, 9))
-                if xyz is None and path and held.measured_point is not None and held.timestamp >= first - CONFIRM_BEFORE_S:
+                if (xyz is None and path and held.measured_point is not None
+                        and held.timestamp >= first - CONFIRM_BEFORE_S):
                     on_path = position_on_path(path, held.timestamp)
                     if math.dist(on_path, held.measured_point) <= CONFIRM_GATE_M:
                         xyz = on_path

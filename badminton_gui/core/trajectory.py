@@ -827,8 +827,9 @@ class Trajectory:
         # them, each with where the track's path puts the shuttle then (its final state carried
         # back by the drag model: the fit through all its points, steadier than each point).
         state, k = tuple(tent.x[:6].tolist()), float(tent.x[6])
-        self._confirmed_now = tuple((float(point[0]), *(float(v) for v in _propagate(state, k, point[0] - tent.t)[:3]))
-                                    for point in tent.points)
+        self._confirmed_now = tuple(
+            (float(point[0]), *(float(v) for v in _propagate(state, k, point[0] - tent.t)[:3]))
+            for point in tent.points)
         self._confirmed_path = (float(tent.t), *state, k)
         new_shot = True
         if old is not None:
