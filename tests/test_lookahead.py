@@ -270,6 +270,27 @@ def test_held_frames_measured_near_the_new_flight_take_its_path():
     assert out[27].point == pytest.approx(on[27])
 
 
+def test_a_flight_taking_a_point_again_gives_the_gap_before_it_its_path():
+    """Frames the followed flight refused just before a point it took (no new flight) get its
+    path where their measured point lies near it, back to the last frame with a point."""
+    rig = make_rig_for((1280, 720))
+    la = StereoLookahead(rig, params(4), lambda: 6.0)
+    path = (0.09, 0.9, 0.0, 3.0, 10.0, 0.0, 2.0, 0.2)
+    on = {i: position_on_path(path, i / FPS) for i in range(20)}
+    near = {i: tuple(np.add(on[i], (0.5 * CONFIRM_GATE_M, 0.0, 0.0))) for i in range(20)}
+    measured = {3: near[3], 6: near[6], 7: near[7], 8: tuple(np.add(on[8], (2.0 * CONFIRM_GATE_M, 0, 0)))}
+    out = []
+    for i in range(20):
+        point = on[i] if i in (5, 9) else None
+        flight = FlightInfo(confirmed_path=path) if i == 9 else FlightInfo()
+        out += la.push(TrackResult(index=i, timestamp=i / FPS, left=frame([], None), right=frame([], None),
+                                   point=point, flight=flight, measured_point=measured.get(i)))
+    out += la.flush()
+    # Frame 8 is off the path; frame 3 lies before frame 5's point, where the gap begins.
+    assert [i for i, r in enumerate(out) if r.point is not None] == [5, 6, 7, 9]
+    assert out[6].point == pytest.approx(on[6])
+
+
 def test_the_live_readout_gives_no_frame_a_point_afterwards():
     _rig, la, out = _flight_from_held_points(0)
     assert [i for i, r in enumerate(out) if r.point is not None] == [4, 36] and la.confirmed == 0

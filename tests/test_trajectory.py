@@ -187,6 +187,10 @@ def test_a_new_flight_hands_back_the_points_it_grew_from():
             measured_off.append(math.dist(points[i], truth[i]))
     # The path through all the track's points, not each point (1 cm of noise per axis).
     assert max(fitted_off) < 0.04 and np.mean(fitted_off) < np.mean(measured_off)
+    # Every point a flight takes comes with its path at that moment (for the gap before it).
+    paths = [(t, info) for t, info in history if info.confirmed_path]
+    assert len(paths) > 0.8 * len(history)
+    assert all(info.confirmed_path[0] == pytest.approx(t) for t, info in paths)
     # The new shot's points are the return's, none from before the hit.
     assert handing[1][1].confirmed[0][0] >= hit_time - 1 / 120
 

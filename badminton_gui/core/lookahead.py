@@ -35,9 +35,11 @@ stays everywhere else). A flight's first points have none online either: the fli
 refuses a point no flight explains, and those points grow the track that becomes the next
 flight a few frames later. When it does (``FlightInfo.confirmed``), the frames they came from get
 the track's fitted path there, and so does a frame the track left out whose measured point lies
-within ``CONFIRM_GATE_M`` of that path; the file readout holds its decided frames
-``CONFIRM_HOLD_S`` longer for it (NYCU tuned-on rallies: a 3D point on 92.3 -> 96.5 % of the
-frames in flight both cameras report; twenty-ninth round, benchmarks/README.md).
+within ``CONFIRM_GATE_M`` of that path; likewise, when the followed flight takes a point again
+after refusing a few, those frames whose measured point lies that close to its path
+(``FlightInfo.confirmed_path``). The file readout holds its decided frames ``CONFIRM_HOLD_S``
+longer for it (NYCU rallies: a 3D point on 92.3 -> 96.8 % of the frames in flight both cameras
+report; twenty-ninth round, benchmarks/README.md).
 
 A third rule, off unless ``lookahead.lead_in_run`` is set (the broadcast preset), runs on the
 decided frames: **lead-in**. A run of that many detections on one tracklet is followed back from
@@ -508,7 +510,7 @@ class StereoLookahead:
             out += self._decided
             self._decided.clear()
         self._results.append(result)
-        if result.flight.confirmed:
+        if result.flight.confirmed or result.flight.confirmed_path:
             self._confirm(result.flight.confirmed, result.flight.confirmed_path)
         self._decided.extend(self._zip(self.left.push(result.left, result.timestamp),
                                        self.right.push(result.right, result.timestamp)))
@@ -539,27 +541,34 @@ class StereoLookahead:
         """A flight began at the newest frame from a track of points the online readout had
         refused (``FlightInfo.confirmed``): each held frame with no 3D point whose time is one of
         them gets the track's path there, and so does one whose measured point lies within
-        ``CONFIRM_GATE_M`` of the path (``path``: ``FlightInfo.confirmed_path``). Online the robot
-        got nothing there (the flight filter cannot vouch for a flight's first points before it
-        is one); a moment later it can."""
+        ``CONFIRM_GATE_M`` of the path (``path``: ``FlightInfo.confirmed_path``). Without
+        ``points`` (the followed flight took the newest frame's point), only the frames since
+        the last one with a point are looked at. Online the robot got nothing there (the flight
+        filter cannot vouch for a flight's first points before it is one); a moment later it can."""
         at = {round(p[0], 9): p[1:4] for p in points}
-        first = min(p[0] for p in points)
-        for frames in (self._decided, self._results):
-            for k, held in enumerate(frames):
-                if held.point is not None:
-                    continue
-                xyz = at.get(round(held.timestamp, 9))
-                if (xyz is None and path and held.measured_point is not None
-                        and held.timestamp >= first - CONFIRM_BEFORE_S):
-                    on_path = position_on_path(path, held.timestamp)
-                    if math.dist(on_path, held.measured_point) <= CONFIRM_GATE_M:
-                        xyz = on_path
-                if xyz is None:
-                    continue
-                frames[k] = dataclasses.replace(
-                    held, point=tuple(xyz), predicted_distance=None,
-                    distance=float(np.linalg.norm(self.rig.to_left([xyz])[0])))
-                self.confirmed += 1
+        # A new flight: from a moment before its first point. A point the flight took: the frames
+        # since the last one with a point.
+        first = min(p[0] for p in points) - CONFIRM_BEFORE_S if points else None
+        held = [(frames, k) for frames in (self._decided, self._results) for k in range(len(frames))]
+        for frames, k in reversed(held[:-1]):   # (the newest is the step that brought them)
+            frame = frames[k]
+            if frame.point is not None:
+                if first is None:
+                    break
+                continue
+            if first is not None and frame.timestamp < first:
+                continue
+            xyz = at.get(round(frame.timestamp, 9))
+            if xyz is None and path and frame.measured_point is not None:
+                on_path = position_on_path(path, frame.timestamp)
+                if math.dist(on_path, frame.measured_point) <= CONFIRM_GATE_M:
+                    xyz = on_path
+            if xyz is None:
+                continue
+            frames[k] = dataclasses.replace(
+                frame, point=tuple(xyz), predicted_distance=None,
+                distance=float(np.linalg.norm(self.rig.to_left([xyz])[0])))
+            self.confirmed += 1
 
     def _rewrite(self, online: TrackResult, left: CameraResult, right: CameraResult) -> TrackResult:
         dl, dr = left.detection, right.detection

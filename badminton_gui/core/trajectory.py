@@ -425,7 +425,9 @@ class Trajectory:
         # update, on that track's fitted path: earlier frames' points, refused then, which the
         # flight now vouches for (``FlightInfo.confirmed``).
         self._confirmed_now: tuple = ()
-        self._confirmed_path: tuple = ()   # that track's state then: (t, x, y, z, vx, vy, vz, k)
+        # ... and that track's state then, or the flight's when it took the last update's point:
+        # (t, x, y, z, vx, vy, vz, k) (``FlightInfo.confirmed_path``).
+        self._confirmed_path: tuple = ()
         self.shots_ended = 0
 
     # ---- read-only views for plots and tests ------------------------------------------------
@@ -493,6 +495,11 @@ class Trajectory:
                 extra = None if extra_noise is None else np.asarray(extra_noise, dtype=float)
                 accepted = self._feed(t, z, self._noise_matrix(noise_shape), extra)
                 self._rejected_now = following and not accepted
+        if accepted and not self._confirmed_path and self._flight is not None:
+            # The flight took this point: its path now, for frames just before it that it
+            # refused (``FlightInfo.confirmed_path``).
+            f = self._flight
+            self._confirmed_path = (float(f.t), *(float(v) for v in f.x[:7]))
         self._accepted_now = accepted
         return self._info(t, accepted)
 

@@ -156,8 +156,9 @@ class FlightInfo:
     # explained them yet), that the flight now vouches for. The look-ahead gives them to those
     # frames (``StereoLookahead``).
     confirmed: tuple = ()
-    # That track's state at this step, (t, x, y, z, vx, vy, vz, k): with the drag model, where it
-    # puts the shuttle a moment earlier (``trajectory.position_on_path``). () when none began.
+    # The state, (t, x, y, z, vx, vy, vz, k), of that track at this step, or of the flight when
+    # it took this step's point: with the drag model, where it puts the shuttle a moment earlier
+    # (``trajectory.position_on_path``), for frames it refused just before. () otherwise.
     confirmed_path: tuple = ()
 
 
