@@ -833,11 +833,9 @@ class Trajectory:
         # Its own points' times, before a re-synchronised shot takes the old flight's in front of
         # them, each with where the track's path puts the shuttle then (its final state carried
         # back by the drag model: the fit through all its points, steadier than each point).
-        state, k = tuple(tent.x[:6].tolist()), float(tent.x[6])
-        self._confirmed_now = tuple(
-            (float(point[0]), *(float(v) for v in _propagate(state, k, point[0] - tent.t)[:3]))
-            for point in tent.points)
-        self._confirmed_path = (float(tent.t), *state, k)
+        self._confirmed_path = (float(tent.t), *(float(v) for v in tent.x[:7]))
+        self._confirmed_now = tuple((float(point[0]), *position_on_path(self._confirmed_path, point[0]))
+                                    for point in tent.points)
         new_shot = True
         if old is not None:
             t_first = tent.points[0][0]
