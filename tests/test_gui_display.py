@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 
+import numpy as np
 import pytest
 
 pytest.importorskip("pytestqt")
@@ -306,3 +307,93 @@ def test_the_display_shrink_is_close_to_an_area_average(size, box):
     if box[0] < w:
         ref = cv2.resize(img, box, interpolation=cv2.INTER_AREA)
         assert np.abs(out.astype(int) - ref.astype(int)).mean() < 3.0
+
+
+def _run_to_the_end(worker, timeout_s: float = 60.0) -> list:
+    """Run a TrackingWorker in a plain thread until its source ends; the packets it built when
+    asked after each one (every decided result, as fast as the test takes them)."""
+    import threading
+    import time
+
+    from PySide6.QtCore import Qt
+
+    ended = threading.Event()
+    # Direct: no event loop runs in this thread to deliver a queued call.
+    worker.ended.connect(lambda *_: ended.set(), Qt.ConnectionType.DirectConnection)
+    worker.error.connect(lambda *_: ended.set(), Qt.ConnectionType.DirectConnection)
+    packets = []
+    thread = threading.Thread(target=worker.run, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + timeout_s
+    while not ended.is_set() and time.monotonic() < deadline:
+        if (packet := worker.output.take()) is not None:
+            packets.append(packet)
+            worker.request_display()
+        time.sleep(0.001)
+    worker.abort()
+    thread.join(30)
+    assert ended.is_set(), "the worker did not reach the end of the video in time"
+    return packets
+
+
+def _play_dot_video(folder, k: int):
+    """A one-camera video of a dot, tiny in frame 5, played by the worker with a view of
+    ``k`` frames of look-ahead, and written by `detect`'s loop with the same look-ahead (without
+    the classifier's adaptation pass): (the rows' score, the worker's last stats, its packets,
+    the dot's true centres)."""
+    from badminton_gui.gui.settings import SourceSpec
+    from badminton_gui.gui.sources import open_spec
+    from badminton_gui.gui.worker import TrackingWorker
+    from badminton_gui.io.detect_file import detect_to_csv
+    from badminton_gui.io.labels import read_point_labels
+    from badminton_gui.io.presets import load_preset
+
+    from .test_cli import moving_dot_frames, write_labels, write_video
+
+    import cv2
+
+    folder.mkdir()
+    frames, truth = moving_dot_frames()
+    # Frame 5: the bare floor (the dot drawn off the picture) with a dot too small for the
+    # filters, which only the look-ahead's gap fill takes.
+    frames[5] = moving_dot_frames(1, offset=-1000)[0][0]
+    cv2.circle(frames[5], tuple(int(v) for v in truth[5]), 1, (245, 245, 245), -1)
+    write_video(folder / "dot.avi", frames)
+    write_labels(folder / "dot_ball.csv", truth)
+    params = load_preset("broadcast").with_value("lookahead.frames", k)
+    summary = detect_to_csv(folder / "dot.avi", params, folder / "rows.csv", adapt=False,
+                            labels=read_point_labels(folder / "dot_ball.csv").as_dict())
+    spec = SourceSpec("single", str(folder / "dot.avi"), realtime=False,
+                      left_labels=str(folder / "dot_ball.csv"))
+    worker = TrackingWorker(lambda context: open_spec(spec, context), load_preset("broadcast"),
+                            realtime=False, lookahead_frames=k)
+    packets = _run_to_the_end(worker)
+    assert worker.latest_stats.frames == len(frames)
+    return summary.score, worker.latest_stats, packets, truth
+
+
+@pytest.mark.parametrize("k", [0, 4])
+def test_the_view_scores_what_detect_writes_each_result_on_its_own_frame(qapp, tmp_path, k):
+    """The view ends on the score of `detect`'s rows with the same look-ahead, and each packet
+    draws its result on the frame it was made from, K steps after that frame was tracked."""
+    import math
+
+    import cv2
+
+    rows_score, stats, packets, truth = _play_dot_video(tmp_path / "v", k)
+    assert stats.lookahead_frames == k and stats.score_left == rows_score
+    assert packets and all(p.stats.lookahead_frames == k for p in packets)
+    assert [p.result.index for p in packets] == sorted({p.result.index for p in packets})
+    for packet in packets:
+        if packet.result.index == 5:        # (the blank frame)
+            continue
+        image = cv2.GaussianBlur(cv2.cvtColor(packet.left, cv2.COLOR_BGRA2GRAY), (5, 5), 0)
+        y, x = np.unravel_index(np.argmax(image), image.shape)
+        tx, ty = truth[packet.result.index]
+        assert math.hypot(x / packet.display_scale - tx, y / packet.display_scale - ty) < 3
+
+
+def test_the_look_ahead_view_finds_what_the_live_view_lost(qapp, tmp_path):
+    live, _, _, _ = _play_dot_video(tmp_path / "live", 0)
+    ahead, _, _, _ = _play_dot_video(tmp_path / "ahead", 4)
+    assert ahead.tp > live.tp

@@ -378,6 +378,31 @@ def test_the_newest_pair_only_choice_reaches_the_running_grabber_and_is_remember
     assert reader.slot.capacity == 2
 
 
+def test_the_look_ahead_view_is_on_by_default_and_its_choice_reaches_the_worker(main_window, qtbot):
+    """Playback ▸ Look-ahead view: the feeds show each pair re-decided FILE_LOOKAHEAD pairs
+    later (the readouts say so), or live once it is off — at once for the running source, and
+    remembered for the next window."""
+    from badminton_gui.io.track_file import FILE_LOOKAHEAD
+
+    window = main_window()
+    assert window.lookahead_action.isChecked()
+    window.realtime_action.setChecked(False)
+    window.start_opener(_demo_opener, "demo")
+    qtbot.waitUntil(lambda: window.latest_packet is not None
+                    and window.packet_shown_in("readouts") is window.latest_packet, timeout=WAIT_MS)
+    assert window.worker.lookahead_frames == FILE_LOOKAHEAD
+    assert window.latest_packet.stats.lookahead_frames == FILE_LOOKAHEAD
+    assert " ms · view " in window.readouts.values["latency"].text()
+    assert f"next {FILE_LOOKAHEAD} are tracked" in window.readouts.values["latency"].toolTip()
+    window.lookahead_action.trigger()
+    assert window.worker.lookahead_frames == 0
+    qtbot.waitUntil(lambda: window.latest_packet.stats.lookahead_frames == 0
+                    and window.packet_shown_in("readouts") is window.latest_packet, timeout=WAIT_MS)
+    assert "view" not in window.readouts.values["latency"].text()
+    assert str(window.settings.value("view/lookahead")) == "false"
+    assert not main_window().lookahead_action.isChecked()
+
+
 def test_ctrl_c_closes_cleanly(tmp_path):
     """Ctrl+C in the terminal closes the window with exit code 0 and nothing on stderr.
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from badminton_gui.cli import main
-from badminton_gui.core.lookahead import CONFIRM_GATE_M, CONFIRM_HOLD_S, CameraLookahead, StereoLookahead
+from badminton_gui.core.lookahead import (CONFIRM_GATE_M, CONFIRM_HOLD_S, CameraLookahead, DelayedReadout,
+                                         StereoLookahead)
 from badminton_gui.core.params import TrackerParams
 from badminton_gui.core.trajectory import position_on_path
 from badminton_gui.core.types import (REJECT_MOTION, REJECT_SCORE, CameraResult, Candidate, FlightInfo,
@@ -612,3 +613,51 @@ def test_the_gap_fill_is_off_by_default_and_on_in_the_broadcast_preset():
     for p in (params(0, lead_in_run=10, gap_fill_frames=6), params(1, gap_fill_frames=6)):
         out, la, held_back = run_all(flight_with_gap(), p)
         assert out[8].detection is None and la.changes["gap_fill"] == 0
+
+
+# --- the GUI's look-ahead view (``DelayedReadout``): each decided result with its own frame ------
+
+def test_the_live_view_passes_each_result_straight_through():
+    readout = DelayedReadout(load_preset("broadcast"), 0)
+    result = TrackResult(index=0, timestamp=0.0, left=frame([], None), right=frame([], None))
+    assert readout.push(result, "frame 0") == [(result, "frame 0")]
+    assert readout.flush() == [] and readout.held == 0
+
+
+def test_a_one_camera_view_shows_detects_rows_each_with_its_own_frame():
+    """A TV clip's view: the broadcast preset's look-ahead (lead-in included) decides the rows
+    `detect` writes, and each comes out with the payload of the frame it was made from."""
+    stream = held_then_served()
+    p = params(4, lead_in_run=10)
+    readout = DelayedReadout(p, 4)
+    shown = []
+    for i, res in enumerate(stream):
+        shown += readout.push(TrackResult(index=i, timestamp=i / FPS, left=res,
+                                          right=CameraResult(None, image_size=(1280, 720))), f"frame {i}")
+        assert readout.held == i + 1 - len(shown)
+    shown += readout.flush()
+    assert readout.held == 0
+    assert [payload for _, payload in shown] == [f"frame {i}" for i in range(len(stream))]
+    assert [r.index for r, _ in shown] == list(range(len(stream)))
+    expected, _, _ = run_all(stream, p)            # the rows of `detect` (CameraLookahead)
+    assert [(r.left.detection.x, r.left.detection.y) for r, _ in shown] == \
+        [(r.detection.x, r.detection.y) for r in expected]
+    assert shown[0][0].left.detection.rejected_by is None      # led in: the held shuttle shown
+
+
+def test_a_stereo_view_waits_exactly_its_frames_and_shows_the_new_flights_points():
+    """No extra hold for the 3D points of a flight's start (the file readout's CONFIRM_HOLD_S):
+    the view waits its K frames, and held frames still get them when the flight begins in time."""
+    rig = make_rig_for((1280, 720))
+    readout = DelayedReadout(params(4), 4, rig, lambda: 6.0)
+    shown = []
+    for i in range(40):
+        flight = FlightInfo(confirmed=tuple((j / FPS, 0.1 * j, 0.0, 3.0) for j in range(33, 37))
+                            if i == 36 else ())
+        shown += readout.push(TrackResult(index=i, timestamp=i / FPS, left=frame([], None),
+                                          right=frame([], None), flight=flight), i)
+        assert readout.held == min(i + 1, 4)
+    shown += readout.flush()
+    assert [payload for _, payload in shown] == [r.index for r, _ in shown] == list(range(40))
+    with_point = [r.index for r, _ in shown if r.point is not None]
+    assert with_point == [33, 34, 35]     # 36 is the flight's own frame (its point came online)

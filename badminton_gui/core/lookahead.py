@@ -477,7 +477,8 @@ class StereoLookahead:
     """
 
     def __init__(self, rig, params: TrackerParams | None = None,
-                 tolerance: Callable[[], float] | None = None) -> None:
+                 tolerance: Callable[[], float] | None = None,
+                 confirm_hold: float | None = None) -> None:
         self.rig = rig
         self.params = params or TrackerParams()
         self.left = CameraLookahead(self.params)
@@ -494,8 +495,12 @@ class StereoLookahead:
         self.retriangulated = 0
         self.confirmed = 0   # held frames given a point a later flight took up (``_confirm``)
         # Decided frames held on a while longer (look-ahead on only: the file readout), for a
-        # flight that begins from points older than the look-ahead's window.
-        self.confirm_hold = CONFIRM_HOLD_S if self.frames > 0 else 0.0
+        # flight that begins from points older than the look-ahead's window. ``confirm_hold``
+        # given: that long instead (the GUI's delayed view gives 0: its display waits for the
+        # readout, so it holds exactly the look-ahead's frames and no more).
+        if confirm_hold is None:
+            confirm_hold = CONFIRM_HOLD_S if self.frames > 0 else 0.0
+        self.confirm_hold = float(confirm_hold)
         self._decided: deque[TrackResult] = deque()
 
     @property
@@ -597,3 +602,83 @@ class StereoLookahead:
         return dataclasses.replace(online, left=left, right=right, point=point, distance=distance,
                                    epipolar_error=epi,
                                    predicted_distance=None if point is not None else online.predicted_distance)
+
+
+class MonoLookahead:
+    """One camera's :class:`TrackResult` readout (``MonoTracker``: a TV clip played in the GUI)
+    delayed and re-decided by :class:`CameraLookahead` — the rules ``detect`` applies to a file,
+    lead-in and gap fill included, so the desktop tool shows the command line's rows."""
+
+    def __init__(self, params: TrackerParams | None = None) -> None:
+        self.camera = CameraLookahead(params)
+        self._online: deque[TrackResult] = deque()
+
+    @property
+    def params(self) -> TrackerParams:
+        return self.camera.params
+
+    @property
+    def frames(self) -> int:
+        return self.camera.frames
+
+    def push(self, result: TrackResult) -> list[TrackResult]:
+        """This step's online result in; the results now decided out, in order (one per push in
+        the end)."""
+        self._online.append(result)
+        return self._zip(self.camera.push(result.left, result.timestamp))
+
+    def flush(self) -> list[TrackResult]:
+        return self._zip(self.camera.flush())
+
+    def _zip(self, decided: list[CameraResult]) -> list[TrackResult]:
+        out = []
+        for camera in decided:
+            online = self._online.popleft()
+            out.append(online if camera is online.left else dataclasses.replace(online, left=camera))
+        return out
+
+
+class DelayedReadout:
+    """The look-ahead readout with what came with each frame: a display shows a frame only with
+    its decided result, so it keeps the frame (its image, labels, arrival time: ``payload``) until
+    the look-ahead hands that frame's result out.
+
+    ``frames`` 0 passes every result straight through (the live view). Else a one-camera
+    readout (``rig`` None) goes through :class:`MonoLookahead`, a stereo one through
+    :class:`StereoLookahead` without the file readout's extra hold (``confirm_hold`` 0), so a
+    display waits exactly ``frames`` steps. The look-ahead's other rules come from ``params``."""
+
+    def __init__(self, params: TrackerParams, frames: int, rig=None,
+                 tolerance: Callable[[], float] | None = None) -> None:
+        self.frames = max(0, int(frames))
+        self._payloads: deque = deque()
+        self._lookahead: StereoLookahead | MonoLookahead | None = None
+        if self.frames > 0:
+            params = params.with_value("lookahead.frames", self.frames)
+            self._lookahead = (MonoLookahead(params) if rig is None
+                               else StereoLookahead(rig, params, tolerance, confirm_hold=0.0))
+
+    def push(self, result: TrackResult, payload) -> list[tuple[TrackResult, object]]:
+        """This step's online result and its payload in; (decided result, its payload) out for
+        every frame now decided, oldest first."""
+        if self._lookahead is None:
+            return [(result, payload)]
+        self._payloads.append(payload)
+        return self._paired(self._lookahead.push(result))
+
+    def flush(self) -> list[tuple[TrackResult, object]]:
+        """Every frame still held, decided with the future there is (the source ended, the
+        settings changed)."""
+        if self._lookahead is None:
+            return []
+        return self._paired(self._lookahead.flush())
+
+    @property
+    def held(self) -> int:
+        """Frames pushed and not yet handed out."""
+        return len(self._payloads)
+
+    def _paired(self, decided: list[TrackResult]) -> list[tuple[TrackResult, object]]:
+        # Both look-aheads hand out one result per result pushed, in order (a stereo step that
+        # brought one camera's image only included), so the payloads pair first in, first out.
+        return [(result, self._payloads.popleft()) for result in decided]

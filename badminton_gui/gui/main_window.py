@@ -33,6 +33,7 @@ from ..core.params import TrackerParams
 from ..core.rig import StereoRig
 from ..io.sources import SourceError
 from ..io.presets import load_preset
+from ..io.track_file import FILE_LOOKAHEAD
 from ..io.track_log import RecordingError, TrackRecorder
 from . import settings as st
 from .court_views import CourtGLView, CourtPlanView, SideView, gl_unavailable_reason
@@ -147,6 +148,24 @@ def distance_text(measured: float | None, predicted: float | None) -> str:
     return "—"
 
 
+def latency_text(stats) -> str:
+    """The robot's latency (frame available → result sent) and, with the look-ahead view, the
+    feeds' (the pair shown also waited for the next frames)."""
+    text = f"{stats.latency_ms:.1f} ms"
+    if stats.lookahead_frames > 0:
+        text += f" · view {stats.shown_latency_ms:.0f} ms"
+    return text
+
+
+def latency_tooltip(stats) -> str:
+    text = "Frame available → result sent to the robot"
+    if stats.lookahead_frames > 0:
+        text += (f"; the feeds and these readouts show each pair once the next "
+                 f"{stats.lookahead_frames} are tracked (Playback ▸ Look-ahead view), "
+                 f"{stats.shown_latency_ms:.0f} ms after it was available")
+    return text
+
+
 def score_text(left: Outcomes | None, right: Outcomes | None, truth_name: str) -> str:
     """The live score: each camera's accuracy against the source's truth (GUIDE §6's protocol)
     since the parameters last changed, or why there is none."""
@@ -247,7 +266,8 @@ class Readouts(QWidget):
                              f"{display_hz:.0f} Hz<br><span style='color:#e8a33c'>court views "
                              f"{slowed_views_hz:.0f} Hz, tracker behind</span>")
         v["dropped"].setText(str(s.dropped))
-        v["latency"].setText(f"{s.latency_ms:.1f} ms")
+        v["latency"].setText(latency_text(s))
+        v["latency"].setToolTip(latency_tooltip(s))
         v["playback"].setText(f"{s.playback_speed:.2f}× real time")
         v["rig"].setText(rig_readout_text(s.rig_epipolar_px, r.left.image_size[0]))
         v["score"].setText(score_text(s.score_left, s.score_right, s.truth_name))
@@ -417,6 +437,19 @@ class MainWindow(QMainWindow):
             "slow pair then costs a dropped pair. Off: the grabber keeps two pairs, so a slow pair is "
             "taken up late instead of lost (at most one camera period more latency)")
 
+        # The feeds show each pair with the file commands' readout: re-decided once the next
+        # FILE_LOOKAHEAD pairs are tracked (a flight's first frames, the shuttle leaving the
+        # racket; on TV the held shuttle's lead-in). It costs the view that many frames of
+        # delay (34 ms at 119 fps, 133 ms at 30 fps); the robot gets every result at once.
+        self.lookahead_action = self._action(play, "&Look-ahead view", self._lookahead_changed,
+                                             checkable=True)
+        self.lookahead_action.setChecked(str(self.settings.value("view/lookahead", "true")) == "true")
+        self.lookahead_action.setToolTip(
+            f"Show each frame once the next {FILE_LOOKAHEAD} are tracked, re-decided as "
+            f"'badminton-track detect' and 'track' decide a file's rows (a flight's first frames, "
+            f"the shuttle just off the racket). The view is {FILE_LOOKAHEAD} frames late; the robot "
+            f"link and recordings get every result at once. Off: each frame as soon as it is tracked")
+
         view = menu.addMenu("&View")
         self.mask_action = self._action(view, "Foreground &mask", self._overlays_changed, "M", checkable=True)
         self.rejected_action = self._action(view, "&Rejected candidates", self._overlays_changed, "C",
@@ -494,7 +527,8 @@ class MainWindow(QMainWindow):
         self.latest_packet = None
         worker = TrackingWorker(opener, self.params, realtime=self.realtime_action.isChecked(),
                                 show_mask=self.mask_action.isChecked(),
-                                live_buffer_pairs=self._live_buffer_pairs())
+                                live_buffer_pairs=self._live_buffer_pairs(),
+                                lookahead_frames=self._view_lookahead())
         thread = QThread(self)
         thread.setObjectName("tracking")
         worker.moveToThread(thread)
@@ -742,6 +776,14 @@ class MainWindow(QMainWindow):
         st.save_source_spec(self.settings, self.spec)
         if self.worker is not None:
             self.worker.set_realtime(self.realtime_action.isChecked())
+
+    def _view_lookahead(self) -> int:
+        return FILE_LOOKAHEAD if self.lookahead_action.isChecked() else 0
+
+    def _lookahead_changed(self) -> None:
+        self.settings.setValue("view/lookahead", "true" if self.lookahead_action.isChecked() else "false")
+        if self.worker is not None:
+            self.worker.set_lookahead(self._view_lookahead())
 
     def _live_buffer_pairs(self) -> int:
         return 1 if self.newest_only_action.isChecked() else LIVE_BUFFER_PAIRS

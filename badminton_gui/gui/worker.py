@@ -33,6 +33,7 @@ fast as possible" switches that off).
 from __future__ import annotations
 
 import collections
+import dataclasses
 import inspect
 import logging
 import threading
@@ -45,6 +46,7 @@ import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from ..core.evaluation import Label, LiveScore, Outcomes
+from ..core.lookahead import DelayedReadout
 from ..core.params import ParamError, TrackerParams
 from ..core.rig import RigError, StereoRig
 from ..core.mono import MonoTracker
@@ -170,7 +172,11 @@ class WorkerStats:
     capture_fps_left: float = 0.0    # frames per second of each camera (source clock)
     capture_fps_right: float = 0.0
     dropped: int = 0                 # camera frames never processed (live) — newest frame wins
-    latency_ms: float = 0.0          # frame available → result ready
+    latency_ms: float = 0.0          # frame available → result ready (what the robot waits)
+    # The view's look-ahead: frames each shown result waited for its future (0: live), and the
+    # wait of the result shown, frame available → decided.
+    lookahead_frames: int = 0
+    shown_latency_ms: float = 0.0
     processing_ms: float = 0.0       # tracker time for this pair
     playback_speed: float = 1.0      # source seconds per wall second (file/demo sources)
     live: bool = False               # a camera pair: newest frame wins, drops counted
@@ -290,8 +296,11 @@ class TrackingWorker(QObject):
     finished = Signal()
 
     def __init__(self, open_source: SourceOpener, params: TrackerParams, realtime: bool = True,
-                 show_mask: bool = False, live_buffer_pairs: int | None = None) -> None:
+                 show_mask: bool = False, live_buffer_pairs: int | None = None,
+                 lookahead_frames: int = 0) -> None:
         super().__init__()
+        self._lookahead_frames = max(0, int(lookahead_frames))
+        self._lookahead_changed = False
         self._live_buffer_pairs = live_buffer_pairs or LIVE_BUFFER_PAIRS
         self._reader: _LiveReader | None = None
         self._open_source = open_source
@@ -372,6 +381,18 @@ class TrackingWorker(QObject):
         """Process exactly one more frame pair while paused."""
         with self._lock:
             self._steps += 1
+
+    def set_lookahead(self, frames: int) -> None:
+        """Show each pair once ``frames`` later pairs re-decided it (core/lookahead.py: the file
+        commands' readout); 0: as soon as it is tracked. The robot and the result taps get every
+        result at once either way."""
+        with self._lock:
+            self._lookahead_frames = max(0, int(frames))
+            self._lookahead_changed = True
+
+    @property
+    def lookahead_frames(self) -> int:
+        return self._lookahead_frames
 
     def set_realtime(self, realtime: bool) -> None:
         with self._lock:
@@ -455,6 +476,43 @@ class TrackingWorker(QObject):
             text = mismatch(getattr(source, "frame_count", 0) or 0)
             if text:
                 self.warning.emit(text[:1].upper() + text[1:])
+        readout = self._readout(tracker)
+
+        def show(decided: list, stepping: bool = False) -> None:
+            """Score, trail and (when the GUI asked for one) publish each decided result."""
+            nonlocal unshown
+            for result, (frame, labels, t_available, live_stats) in decided:
+                if score is not None:
+                    # A camera that brought no new image this step was scored on its last one.
+                    if frame.fresh_left:
+                        score.add(0, result.left.detection, labels[0])
+                    if frame.fresh_right:
+                        score.add(1, result.right.detection, labels[1])
+                t_step = frame.timestamp
+                for trail, cam, fresh in zip(trails, (result.left, result.right),
+                                             (frame.fresh_left, frame.fresh_right)):
+                    if cam.detection is not None and fresh:
+                        trail.append((t_step, cam.detection.x, cam.detection.y))
+                    while trail and (trail[0][0] < t_step - TRAIL_SECONDS or trail[0][0] > t_step):
+                        trail.popleft()
+                t_shown = time.perf_counter()
+                stats = dataclasses.replace(
+                    live_stats, lookahead_frames=readout.frames,
+                    shown_latency_ms=(t_shown - t_available) * 1000.0,
+                    score_left=None if score is None else score.outcomes(0),
+                    score_right=None if score is None else score.outcomes(1))
+                self.latest_stats = stats
+                with self._lock:
+                    due = self._display_due
+                    wanted = stepping or (due is not None and t_shown >= due)
+                    if wanted:
+                        self._display_due = None
+                unshown = (frame, result, stats, show_mask, display_box, labels)
+                if wanted:
+                    self._publish(unshown, trails, tracker)
+                    unshown = None
+
+        show_mask, display_box = self._show_mask, self._display_box
         while not self._abort.is_set():
             with self._lock:
                 params, self._pending_params = self._pending_params, None
@@ -465,6 +523,11 @@ class TrackingWorker(QObject):
                 stepping = paused and self._steps > 0
                 if stepping:
                     self._steps -= 1
+                lookahead_changed, self._lookahead_changed = self._lookahead_changed, False
+            if params is not None or new_rig is not None or lookahead_changed:
+                # The held pairs are decided with what future there is, under the settings they
+                # were tracked with; the next pair starts a look-ahead of the new settings.
+                show(readout.flush())
             if params is not None:
                 try:
                     tracker.set_params(params)
@@ -476,6 +539,8 @@ class TrackingWorker(QObject):
                     self.warning.emit("Parameters not applied: " + _one_sentence(exc))
             if new_rig is not None:
                 tracker = self._switch_rig(tracker, new_rig, source)
+            if params is not None or new_rig is not None or lookahead_changed:
+                readout = self._readout(tracker)
             if paused and not stepping:
                 # Paused: the display shows the pair the tracker stopped on (so a step shows the
                 # next one), even if the throttle had not asked for it.
@@ -492,6 +557,7 @@ class TrackingWorker(QObject):
                     if reader.error is not None:
                         raise reader.error
                     if reader.ended:
+                        show(readout.flush())
                         self._publish(unshown, trails, tracker)
                         self.ended.emit("the cameras stopped delivering frames")
                         return
@@ -503,6 +569,7 @@ class TrackingWorker(QObject):
                 frame = source.read()
                 t_available = time.perf_counter()
                 if frame is None:
+                    show(readout.flush())
                     self._publish(unshown, trails, tracker)
                     what = "video" if getattr(source, "cameras", 2) == 1 else "videos"
                     self.ended.emit(f"end of the {what}: choose Source ▸ Restart to play again")
@@ -528,6 +595,7 @@ class TrackingWorker(QObject):
             result = tracker.process_frame(frame)
             t_done = time.perf_counter()
             frames += 1
+            # The robot and the taps get the live result at once, whatever the view waits for.
             for tap in taps:
                 tap(result)
             rate.tick(t_done)
@@ -539,22 +607,7 @@ class TrackingWorker(QObject):
                     except USER_ERRORS as exc:
                         self.link_error = _one_sentence(exc)
 
-            labels = (None, None)
-            if score is not None:
-                labels = truth.for_frame(frame)
-                # A camera that brought no new image this step was scored on its last one.
-                if frame.fresh_left:
-                    score.add(0, result.left.detection, labels[0])
-                if frame.fresh_right:
-                    score.add(1, result.right.detection, labels[1])
-            t_step = frame.timestamp
-            for trail, cam, fresh in zip(trails, (result.left, result.right),
-                                         (frame.fresh_left, frame.fresh_right)):
-                if cam.detection is not None and fresh:
-                    trail.append((t_step, cam.detection.x, cam.detection.y))
-                while trail and (trail[0][0] < t_step - TRAIL_SECONDS or trail[0][0] > t_step):
-                    trail.popleft()
-
+            labels = truth.for_frame(frame) if truth is not None else (None, None)
             if reader is not None:
                 cap_l, cap_r, dropped = reader.left_rate.rate(), reader.right_rate.rate(), reader.slot.overwritten
             else:
@@ -563,25 +616,22 @@ class TrackingWorker(QObject):
             if len(speed_meter) >= 2 and speed_meter[-1][0] > speed_meter[0][0]:
                 playback = ((speed_meter[-1][1] - speed_meter[0][1])
                             / (speed_meter[-1][0] - speed_meter[0][0]))
-            stats = WorkerStats(frames=frames, processing_fps=rate.rate(), capture_fps_left=cap_l,
-                                capture_fps_right=cap_r, dropped=dropped,
-                                latency_ms=(t_done - t_available) * 1000.0,
-                                processing_ms=result.processing_ms, playback_speed=playback,
-                                live=reader is not None, paced=reader is None and realtime and not stepping,
-                                rig_epipolar_px=tracker.rig_epipolar_px,
-                                score_left=None if score is None else score.outcomes(0),
-                                score_right=None if score is None else score.outcomes(1),
-                                truth_name="" if truth is None else truth.name)
-            self.latest_stats = stats
-            with self._lock:
-                due = self._display_due
-                wanted = stepping or (due is not None and t_done >= due)
-                if wanted:
-                    self._display_due = None
-            unshown = (frame, result, stats, show_mask, display_box, labels)
-            if wanted:
-                self._publish(unshown, trails, tracker)
-                unshown = None
+            live_stats = WorkerStats(frames=frames, processing_fps=rate.rate(), capture_fps_left=cap_l,
+                                     capture_fps_right=cap_r, dropped=dropped,
+                                     latency_ms=(t_done - t_available) * 1000.0,
+                                     processing_ms=result.processing_ms, playback_speed=playback,
+                                     live=reader is not None,
+                                     paced=reader is None and realtime and not stepping,
+                                     rig_epipolar_px=tracker.rig_epipolar_px,
+                                     truth_name="" if truth is None else truth.name)
+            show(readout.push(result, (frame, labels, t_available, live_stats)), stepping)
+
+    def _readout(self, tracker) -> DelayedReadout:
+        """A look-ahead of the view's frames for this tracker and the parameters in use."""
+        if isinstance(tracker, MonoTracker):
+            return DelayedReadout(self._params_in_use, self._lookahead_frames)
+        return DelayedReadout(self._params_in_use, self._lookahead_frames, tracker.rig,
+                              tracker.epipolar_tolerance)
 
     def _switch_rig(self, tracker: StereoTracker, rig: StereoRig, source: FrameSource) -> StereoTracker:
         """A new tracker on ``rig`` in place of ``tracker``; the old one when the rig does not fit
