@@ -333,14 +333,16 @@ def _run_to_the_end(worker, timeout_s: float = 60.0) -> list:
     worker.abort()
     thread.join(30)
     assert ended.is_set(), "the worker did not reach the end of the video in time"
+    if (packet := worker.output.take()) is not None:     # the last one, published at the end
+        packets.append(packet)
     return packets
 
 
 def _play_dot_video(folder, k: int):
     """A one-camera video of a dot, tiny in frame 5, played by the worker with a view of
-    ``k`` frames of look-ahead, and written by `detect`'s loop with the same look-ahead (without
-    the classifier's adaptation pass): (the rows' score, the worker's last stats, its packets,
-    the dot's true centres)."""
+    ``k`` frames of look-ahead under the broadcast preset, and written by `detect`'s loop with
+    the same look-ahead (and so the classifier's adaptation pass when k > 0): (the rows' detect
+    summary, the worker's last stats, its packets, the dot's true centres, the worker)."""
     from badminton_gui.gui.settings import SourceSpec
     from badminton_gui.gui.sources import open_spec
     from badminton_gui.gui.worker import TrackingWorker
@@ -361,7 +363,7 @@ def _play_dot_video(folder, k: int):
     write_video(folder / "dot.avi", frames)
     write_labels(folder / "dot_ball.csv", truth)
     params = load_preset("broadcast").with_value("lookahead.frames", k)
-    summary = detect_to_csv(folder / "dot.avi", params, folder / "rows.csv", adapt=False,
+    summary = detect_to_csv(folder / "dot.avi", params, folder / "rows.csv",
                             labels=read_point_labels(folder / "dot_ball.csv").as_dict())
     spec = SourceSpec("single", str(folder / "dot.avi"), realtime=False,
                       left_labels=str(folder / "dot_ball.csv"))
@@ -369,19 +371,22 @@ def _play_dot_video(folder, k: int):
                             realtime=False, lookahead_frames=k)
     packets = _run_to_the_end(worker)
     assert worker.latest_stats.frames == len(frames)
-    return summary.score, worker.latest_stats, packets, truth
+    return summary, worker.latest_stats, packets, truth, worker
 
 
 @pytest.mark.parametrize("k", [0, 4])
 def test_the_view_scores_what_detect_writes_each_result_on_its_own_frame(qapp, tmp_path, k):
     """The view ends on the score of `detect`'s rows with the same look-ahead, and each packet
-    draws its result on the frame it was made from, K steps after that frame was tracked."""
+    draws its result on the frame it was made from (not on the newest frame tracked)."""
     import math
 
     import cv2
 
-    rows_score, stats, packets, truth = _play_dot_video(tmp_path / "v", k)
-    assert stats.lookahead_frames == k and stats.score_left == rows_score
+    rows, stats, packets, truth, worker = _play_dot_video(tmp_path / "v", k)
+    assert stats.lookahead_frames == k and stats.score_left == rows.score
+    # With the look-ahead the classifier was adapted to the recording first, as `detect` does.
+    assert rows.adapted == (k > 0)
+    assert worker.adaptation_text.startswith("classifier adapted to the recording: 1 runs") == (k > 0)
     assert packets and all(p.stats.lookahead_frames == k for p in packets)
     assert [p.result.index for p in packets] == sorted({p.result.index for p in packets})
     for packet in packets:
@@ -394,6 +399,60 @@ def test_the_view_scores_what_detect_writes_each_result_on_its_own_frame(qapp, t
 
 
 def test_the_look_ahead_view_finds_what_the_live_view_lost(qapp, tmp_path):
-    live, _, _, _ = _play_dot_video(tmp_path / "live", 0)
-    ahead, _, _, _ = _play_dot_video(tmp_path / "ahead", 4)
+    live = _play_dot_video(tmp_path / "live", 0)[0].score
+    ahead = _play_dot_video(tmp_path / "ahead", 4)[0].score
     assert ahead.tp > live.tp
+
+
+def test_the_adaptation_pass_is_an_opening_step_stop_gives_up_and_tuning_keeps(qapp, tmp_path):
+    """Opening a TV clip with the look-ahead view adapts the classifier first, reported as a step
+    of opening; aborting then gives it up before the source is ever opened. Once adapted, a
+    filter moved in the Tuning dialog keeps the adapted classifier; a changed classifier setting
+    goes back to the preset's."""
+    import threading
+
+    from PySide6.QtCore import Qt
+
+    from badminton_gui.core.mono import MonoTracker
+    from badminton_gui.gui.settings import SourceSpec
+    from badminton_gui.gui.sources import open_spec
+    from badminton_gui.gui.worker import TrackingWorker
+    from badminton_gui.io.presets import load_preset
+
+    from .test_cli import moving_dot_frames, write_video
+
+    write_video(tmp_path / "dot.avi", moving_dot_frames()[0])
+    spec = SourceSpec("single", str(tmp_path / "dot.avi"), realtime=False)
+    params = load_preset("broadcast")
+    worker = TrackingWorker(lambda context: open_spec(spec, context), params, realtime=False,
+                            lookahead_frames=4)
+    steps, opened = [], []
+    direct = Qt.ConnectionType.DirectConnection
+
+    def on_opening(text: str) -> None:
+        steps.append(text)
+        if text.startswith("adapting"):
+            worker.abort()
+    worker.opening.connect(on_opening, direct)
+    worker.opened.connect(lambda *args: opened.append(args), direct)
+    thread = threading.Thread(target=worker.run, daemon=True)
+    thread.start()
+    thread.join(30)
+    assert not thread.is_alive() and not opened
+    assert steps and steps[0].startswith("adapting the classifier to the recording: ")
+    assert worker.adaptation_text == ""
+
+    worker = TrackingWorker(lambda context: open_spec(spec, context), params, realtime=False,
+                            lookahead_frames=4)
+    _run_to_the_end(worker)
+    adapted = worker._adapted[0]
+    tracker = MonoTracker(params)
+    tracker.detector.use_classifier(adapted)
+    tuned = params.with_value("contour_length.min_length", params.contour_length.min_length + 2)
+    tracker.set_params(tuned)
+    worker._keep_adapted(tracker, tuned)
+    assert tracker.detector._classifier is adapted
+    other = tuned.with_value("classifier.enabled", False)
+    tracker.set_params(other)
+    worker._keep_adapted(tracker, other)
+    assert tracker.detector._classifier is not adapted and worker._adapted is None

@@ -654,8 +654,9 @@ def test_a_source_without_truth_says_so_in_the_readouts():
 
 def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window, qtbot, tmp_path, monkeypatch):
     """Source ▸ One video (TV broadcast)…: the picture in the left feed, the right one says why it
-    is empty, the broadcast preset is in use, the live score covers the one camera, and no rig,
-    3D point or landing call is invented."""
+    is empty, the broadcast preset is in use (its classifier adapted to the video for the
+    look-ahead view), the live score covers the one camera, and no rig, 3D point or landing call
+    is invented."""
     from badminton_gui.gui import main_window as mw
 
     from .test_cli import moving_dot_frames, write_video
@@ -684,6 +685,8 @@ def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window,
     assert window.right_feed._message == mw.ONE_CAMERA_TEXT and window.right_feed._qimage is None
     assert window.left_feed.title == "Camera"
     assert "no second camera" in window.status_source.text()
+    # The look-ahead view (on by default) adapted the preset's classifier to the video first.
+    assert "classifier adapted to the recording: 1 runs" in window.status_source.text()
     qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)
     packet = window.latest_packet
     assert packet.right is None and packet.result.point is None and packet.result.flight.prediction is None

@@ -605,8 +605,9 @@ class TrajectoryParams(ParamGroup):
 class LookaheadParams(ParamGroup):
     """The readout held back K frames and re-decided from the tracklets' futures (core/lookahead.py).
 
-    Read by the file commands (`detect`, `track --lookahead N`) and the benchmarks; the GUI's
-    live readout and the robot stream stay frame by frame whatever is set here.
+    Read by the file commands (`detect`, `track --lookahead N`), the benchmarks and the GUI's
+    look-ahead view (these rules, with the file commands' 4 frames: Playback ▸ Look-ahead view);
+    the robot stream stays frame by frame whatever is set here.
     """
 
     TITLE: ClassVar[str] = "Look-ahead"

@@ -447,8 +447,10 @@ class MainWindow(QMainWindow):
         self.lookahead_action.setToolTip(
             f"Show each frame once the next {FILE_LOOKAHEAD} are tracked, re-decided as "
             f"'badminton-track detect' and 'track' decide a file's rows (a flight's first frames, "
-            f"the shuttle just off the racket). The view is {FILE_LOOKAHEAD} frames late; the robot "
-            f"link and recordings get every result at once. Off: each frame as soon as it is tracked")
+            f"the shuttle just off the racket). The view is {FILE_LOOKAHEAD} frames late (with the "
+            f"broadcast preset's lead-in to the served shuttle, 70 more; a TV recording's classifier "
+            f"is adapted to it first, as 'detect' does); the robot link and recordings get every "
+            f"result at once. Off: each frame as soon as it is tracked")
 
         view = menu.addMenu("&View")
         self.mask_action = self._action(view, "Foreground &mask", self._overlays_changed, "M", checkable=True)
@@ -700,8 +702,10 @@ class MainWindow(QMainWindow):
         if rig is None:
             # One camera's video: its picture in the left feed, 2D only.
             self.setWindowTitle(f"Badminton shuttle tracker — {name}")
+            adapted = self.worker.adaptation_text if self.worker is not None else ""
             self.status_source.setText(f"{name} — no second camera: the shuttle in the picture only, "
-                                       f"no 3D, distance, speed or landing")
+                                       f"no 3D, distance, speed or landing"
+                                       + (f"; {adapted}" if adapted else ""))
             self.right_feed.show_text(ONE_CAMERA_TEXT)
             if self.gl_view is not None:
                 self.gl_view.set_rig(None)

@@ -76,6 +76,10 @@ def open_spec(spec: SourceSpec, context: OpeningContext | None = None) -> tuple[
                 raise SourceError(f"{exc} (clear the label file to play the video without a score)") from None
         reader = PrefetchingReader(SingleVideo(spec.left))
         reader.frame_truth = truth
+        # For the classifier's adaptation pass (the worker's, with the look-ahead view): the
+        # recording read again from its start, as `detect` reads it.
+        from ..io.detect_file import recording_frames
+        reader.recording_frames = lambda progress=None, path=spec.left: recording_frames(path, progress)
         return reader, None
     if spec.kind == "cameras":
         from ..io.cameras import CameraPair

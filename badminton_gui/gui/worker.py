@@ -15,6 +15,13 @@ display that shows 30. The GUI asks for the first result finished after a given 
 before its next tick — so it gets a fresh packet and the worker builds about one per tick (fewer
 when the GUI runs late, none with no GUI at all).
 
+The feeds may show each pair with the file commands' look-ahead readout instead of the live one
+(:meth:`TrackingWorker.set_lookahead`, Playback ▸ Look-ahead view): the worker keeps each pair's
+images until core/lookahead.py's ``DelayedReadout`` has decided its result K pairs later, then
+scores, trails and shows that result on that pair — a recording then shows the rows `detect` and
+`track` write (a TV clip's classifier adapted to it first, as `detect` does, as a step of
+opening it). The robot link and the result taps still get every live result at once.
+
 Two more hooks serve the refine dialog (gui/refine_dialog.py): *result taps*, cheap functions
 the worker calls with every result at the tracking rate (the display packets are throttled to
 ~30 Hz, far too few for collecting the shuttle's stereo pairs; the session recorder of
@@ -45,6 +52,7 @@ import cv2
 import numpy as np
 from PySide6.QtCore import QObject, Signal
 
+from ..core.adaptation import adapt_to_recording
 from ..core.evaluation import Label, LiveScore, Outcomes
 from ..core.lookahead import DelayedReadout
 from ..core.params import ParamError, TrackerParams
@@ -52,6 +60,7 @@ from ..core.rig import RigError, StereoRig
 from ..core.mono import MonoTracker
 from ..core.tracker import StereoTracker
 from ..core.types import TrackResult
+from ..io.detect_file import adaptation_asked
 from ..io.sources import FrameSource, SourceError
 
 _log = logging.getLogger(__name__)
@@ -301,6 +310,10 @@ class TrackingWorker(QObject):
         super().__init__()
         self._lookahead_frames = max(0, int(lookahead_frames))
         self._lookahead_changed = False
+        # The classifier adapted to the recording (``_adapt``) and the classifier settings it
+        # was adapted from: kept through tuning that leaves those settings as they are.
+        self._adapted: tuple[Any, Any] | None = None
+        self.adaptation_text = ""
         self._live_buffer_pairs = live_buffer_pairs or LIVE_BUFFER_PAIRS
         self._reader: _LiveReader | None = None
         self._open_source = open_source
@@ -425,12 +438,15 @@ class TrackingWorker(QObject):
     def run(self) -> None:
         source = reader = tracker = None
         try:
-            source, rig = _call_opener(self._open_source,
-                                       OpeningContext(self._abort, self.opening.emit))
+            context = OpeningContext(self._abort, self.opening.emit)
+            source, rig = _call_opener(self._open_source, context)
             if getattr(source, "cameras", 2) == 1:
                 # One view (a TV clip): the per-camera detector alone, no rig, no 3D.
                 tracker = self._tracker = MonoTracker(self._params_in_use)
                 rig = None
+                self._adapt(source, tracker, context)
+                if self._abort.is_set():
+                    return
             else:
                 rig.check_image_size(*source.image_size, what="the source's frames")
                 tracker = self._tracker = StereoTracker(rig, self._params_in_use)
@@ -532,6 +548,7 @@ class TrackingWorker(QObject):
                 try:
                     tracker.set_params(params)
                     self._params_in_use = params
+                    self._keep_adapted(tracker, params)
                     if score is not None:
                         score.reset()       # the score belongs to the settings on screen
                 except USER_ERRORS as exc:   # e.g. a classifier model that is not there
@@ -625,6 +642,46 @@ class TrackingWorker(QObject):
                                      rig_epipolar_px=tracker.rig_epipolar_px,
                                      truth_name="" if truth is None else truth.name)
             show(readout.push(result, (frame, labels, t_available, live_stats)), stepping)
+
+    def _adapt(self, source: FrameSource, tracker: MonoTracker, context: OpeningContext) -> None:
+        """A recorded TV clip viewed with the look-ahead gets `detect`'s rows: when the preset
+        adapts its classifier to each recording (``classifier.adapt_min_run``, the broadcast
+        preset), a first pass over the file does so now (core/adaptation.py), shown as a step
+        of opening the source that Stop gives up. A live view keeps the shipped classifier."""
+        frames = getattr(source, "recording_frames", None)
+        with self._lock:
+            k = self._lookahead_frames
+        params = self._params_in_use.with_value("lookahead.frames", k)
+        if frames is None or k <= 0 or not adaptation_asked(params, None):
+            return
+        what = "adapting the classifier to the recording"
+        progress, stop = context.for_step(what, 0, 1)
+        start = time.perf_counter()
+        classifier, harvest = adapt_to_recording(
+            params, lambda: frames(lambda done, total: progress(done / total if total else 0.0)),
+            should_stop=stop)
+        if stop():
+            return
+        if classifier is None:
+            self.adaptation_text = "no run of detections long enough to adapt the classifier to"
+            return
+        tracker.detector.use_classifier(classifier)
+        self._adapted = (classifier, params.classifier)
+        self.adaptation_text = (f"classifier adapted to the recording: {harvest.runs} runs, "
+                                f"{harvest.frames} frames ({time.perf_counter() - start:.1f} s)")
+        self.opening.emit(self.adaptation_text)
+
+    def _keep_adapted(self, tracker, params: TrackerParams) -> None:
+        """After new parameters: the adapted classifier again while the classifier settings it
+        came from hold (a filter slider moved), the preset's once they changed."""
+        if self._adapted is None:
+            return
+        classifier, settings = self._adapted
+        if params.classifier == settings:
+            tracker.detector.use_classifier(classifier)
+        else:
+            self._adapted = None
+            self.adaptation_text = ""
 
     def _readout(self, tracker) -> DelayedReadout:
         """A look-ahead of the view's frames for this tracker and the parameters in use."""

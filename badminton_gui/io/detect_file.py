@@ -184,6 +184,14 @@ def detect_to_csv(video: str | Path, params: TrackerParams, output: str | Path, 
 
 def _frames(video: str | Path, stage: str, progress):
     """The video's (image, time) from its start, decoded ahead on a reader thread."""
+    return recording_frames(video, None if progress is None else
+                            (lambda done, total: progress(stage, done, total)))
+
+
+def recording_frames(video: str | Path, progress: Callable[[int, int], None] | None = None):
+    """The video's (image, time) from its start, decoded ahead on a reader thread: what the
+    classifier's adaptation pass reads (``detect`` and the GUI's look-ahead view of a TV clip).
+    ``progress(frames done, frames in all or 0)`` after each."""
     source = PrefetchingReader(VideoFile(video))
     total = int(source.frame_count or 0)
     try:
@@ -192,6 +200,6 @@ def _frames(video: str | Path, stage: str, progress):
             yield frame, i / source.fps
             i += 1
             if progress is not None:
-                progress(stage, i, total)
+                progress(i, total)
     finally:
         source.close()
