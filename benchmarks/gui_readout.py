@@ -7,7 +7,8 @@ Why this file exists: the command line's figures (accuracy.py) come from the fil
 operator watching a recording sees the worker's readout instead, which until the thirtieth round
 was the live one only. This prints the score the "Against the truth" readout would end on, per
 clip and summed, for each view; `--lookahead` picks the views. Tuned-on clips unless `--held-out`.
-The steps/s include opening the source (a TV clip's adaptation pass with the look-ahead view).
+The steps/s include opening the source (a TV clip's adaptation pass with the look-ahead view);
+"+MB" is the most the run added to the process's resident memory.
 
     .venv/bin/python benchmarks/gui_readout.py                       # TV clips, 0 and 4 frames
     .venv/bin/python benchmarks/gui_readout.py --stereo --only 46-04  # a NYCU rally too
@@ -31,8 +32,21 @@ from badminton_gui.io.presets import load_preset  # noqa: E402
 from clips import broadcast_clips, nycu_cfgs, stereo_clips  # noqa: E402
 
 
-def run_worker(spec, params, lookahead: int) -> tuple[Outcomes | None, Outcomes | None, float, int]:
-    """The worker's final scores per camera, its wall time and the results it produced."""
+def _rss_mb() -> float:
+    """This process's resident memory now (Linux), MB; nan elsewhere."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return float("nan")
+
+
+def run_worker(spec, params, lookahead: int) -> tuple[Outcomes | None, Outcomes | None, float, int, float]:
+    """The worker's final scores per camera, its wall time, the results it produced and the most
+    its run added to the process's resident memory (MB; sampled every 20 ms)."""
     from PySide6.QtCore import Qt
 
     from badminton_gui.gui.sources import open_spec
@@ -47,15 +61,17 @@ def run_worker(spec, params, lookahead: int) -> tuple[Outcomes | None, Outcomes 
     worker.ended.connect(lambda *_: done.set(), direct)
     worker.error.connect(lambda text: (errors.append(text), done.set()), direct)
     start = time.perf_counter()
+    base = peak = _rss_mb()
     thread = threading.Thread(target=worker.run, daemon=True)
     thread.start()
-    done.wait()
+    while not done.wait(0.02):
+        peak = max(peak, _rss_mb())
     worker.abort()
     thread.join(60)
     if errors:
         raise SystemExit(f"{spec.describe()}: {errors[0]}")
     stats = worker.latest_stats
-    return stats.score_left, stats.score_right, time.perf_counter() - start, stats.frames
+    return stats.score_left, stats.score_right, time.perf_counter() - start, stats.frames, peak - base
 
 
 def main() -> int:
@@ -90,13 +106,14 @@ def main() -> int:
         for name, held_out, spec in jobs:
             line = f"{name:16s}{' (held out)' if held_out else '':11s}"
             for k in args.lookahead:
-                left, right, seconds, frames = run_worker(spec, params, k)
+                left, right, seconds, frames, memory = run_worker(spec, params, k)
                 both = Outcomes()
                 for s in (left, right):
                     if s is not None:
                         both = both + s
                 totals[k] = totals[k] + both
-                line += f"  view {k}: {100 * both.accuracy:6.2f} % ({frames / seconds:5.1f} steps/s)"
+                line += (f"  view {k}: {100 * both.accuracy:6.2f} % ({frames / seconds:5.1f} steps/s, "
+                         f"+{memory:.0f} MB)")
             print(line, flush=True)
         print("total           " + " " * 11 + "".join(
             f"  view {k}: {100 * t.accuracy:6.2f} % (TP {t.tp} TN {t.tn} FP1 {t.fp1} FP2 {t.fp2} FN {t.fn})"
