@@ -456,3 +456,56 @@ def test_the_adaptation_pass_is_an_opening_step_stop_gives_up_and_tuning_keeps(q
     tracker.set_params(other)
     worker._keep_adapted(tracker, other)
     assert tracker.detector._classifier is not adapted and worker._adapted is None
+
+
+def test_tuning_a_filter_does_not_restart_the_look_ahead_view(qapp):
+    """A filter tuned while watching reaches the held pairs' decisions without flushing them, so
+    the view goes on a pair per step (a broadcast view holds 74 frames: a flush and refill per
+    slider step would freeze it 2.5 s each time); other look-ahead rules (a preset chosen) are a
+    new readout: the held pairs are shown at once. Scored: only pairs tracked since the change."""
+    import threading
+    import time
+
+    from badminton_gui.core.params import TrackerParams
+    from badminton_gui.gui.worker import TrackingWorker
+
+    def demo_with_truth():
+        from badminton_gui.io.truth import DemoTruth
+        scene, rig = _demo_opener()
+        scene.frame_truth = DemoTruth(scene)
+        return scene, rig
+
+    params = TrackerParams()
+    worker = TrackingWorker(demo_with_truth, params, realtime=False, lookahead_frames=4)
+    worker.set_paused(True)
+    tracked = []
+    worker.set_result_tap(tracked.append)
+    thread = threading.Thread(target=worker.run, daemon=True)
+    thread.start()
+
+    def step_to(n: int):
+        worker.step()
+        deadline = time.monotonic() + 30
+        while len(tracked) < n and time.monotonic() < deadline:
+            time.sleep(0.002)
+        assert len(tracked) == n
+        time.sleep(0.05)                       # (the step's packet is published after the tap)
+        return worker.output.take()
+
+    try:
+        for n in range(1, 11):
+            packet = step_to(n)
+        assert packet.result.index == 5                    # 10 pairs tracked, 4 held
+        worker.set_params(params.with_value("contour_length.min_length",
+                                            params.contour_length.min_length + 1))
+        assert step_to(11).result.index == 6                # no flush: one more pair decided
+        assert worker.latest_stats.score_left.total == 0    # pair 6 was tracked before the change
+        worker.set_params(params.with_value("lookahead.min_support", params.lookahead.min_support + 1))
+        assert step_to(12).result.index == 10               # the held 7-10 shown, 11 held anew
+        for n in range(13, 17):
+            step_to(n)
+        # Scored since the last change: pair 11 only (12-15 held), each camera.
+        assert worker.latest_stats.score_left.total == worker.latest_stats.score_right.total == 1
+    finally:
+        worker.abort()
+        thread.join(30)

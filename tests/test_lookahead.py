@@ -661,3 +661,25 @@ def test_a_stereo_view_waits_exactly_its_frames_and_shows_the_new_flights_points
     assert [payload for _, payload in shown] == [r.index for r, _ in shown] == list(range(40))
     with_point = [r.index for r, _ in shown if r.point is not None]
     assert with_point == [33, 34, 35]     # 36 is the flight's own frame (its point came online)
+
+
+def test_a_filter_tuned_mid_view_applies_to_the_held_frames_and_other_rules_are_refused():
+    """``DelayedReadout.set_params``: the frames held keep their place and are decided with the
+    new values (here the lead to the cork); other look-ahead rules need a new readout."""
+    stream = held_then_served(held=0, flight=12)
+    p = params(4)
+    readout = DelayedReadout(p, 4)
+    shown = []
+    for i, res in enumerate(stream[:6]):
+        shown += readout.push(TrackResult(index=i, timestamp=i / FPS, left=res,
+                                          right=CameraResult(None, image_size=(1280, 720))), i)
+    assert readout.held == 4
+    readout.set_params(p.with_value("colour.head_lead", 1.0))
+    assert readout.held == 4
+    with pytest.raises(ValueError, match="new DelayedReadout"):
+        readout.set_params(p.with_value("lookahead.min_support", 3))
+    assert readout.params.colour.head_lead == 1.0 and readout.params.lookahead.frames == 4
+    stereo = DelayedReadout(p, 4, make_rig_for((1280, 720)), lambda: 6.0)
+    stereo.set_params(p.with_value("colour.head_lead", 1.0))
+    assert stereo.params.colour.head_lead == 1.0
+    assert DelayedReadout(p, 0).params is None

@@ -674,6 +674,25 @@ class DelayedReadout:
         return self._paired(self._lookahead.flush())
 
     @property
+    def params(self) -> TrackerParams | None:
+        """The parameters the look-ahead decides with (None: the live view, nothing decided)."""
+        return None if self._lookahead is None else self._lookahead.params
+
+    def set_params(self, params: TrackerParams) -> None:
+        """Decide with these parameters from now on, the frames held included (a filter tuned
+        while watching). The look-ahead's own group must not change: another look-ahead is a
+        new readout."""
+        if self._lookahead is None:
+            return
+        params = params.with_value("lookahead.frames", self.frames)
+        if params.lookahead != self._lookahead.params.lookahead:
+            raise ValueError("other look-ahead rules need a new DelayedReadout")
+        if isinstance(self._lookahead, MonoLookahead):
+            self._lookahead.camera.params = params
+        else:
+            self._lookahead.params = self._lookahead.left.params = self._lookahead.right.params = params
+
+    @property
     def held(self) -> int:
         """Frames pushed and not yet handed out."""
         return len(self._payloads)

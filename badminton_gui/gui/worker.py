@@ -493,12 +493,15 @@ class TrackingWorker(QObject):
             if text:
                 self.warning.emit(text[:1].upper() + text[1:])
         readout = self._readout(tracker)
+        # Counts the parameter changes: a held pair tracked with the settings before the last
+        # change is shown but not scored (the score belongs to the settings on screen).
+        generation = 0
 
         def show(decided: list, stepping: bool = False) -> None:
             """Score, trail and (when the GUI asked for one) publish each decided result."""
             nonlocal unshown
-            for result, (frame, labels, t_available, live_stats) in decided:
-                if score is not None:
+            for result, (frame, labels, t_available, live_stats, tracked_in) in decided:
+                if score is not None and tracked_in == generation:
                     # A camera that brought no new image this step was scored on its last one.
                     if frame.fresh_left:
                         score.add(0, result.left.detection, labels[0])
@@ -540,15 +543,20 @@ class TrackingWorker(QObject):
                 if stepping:
                     self._steps -= 1
                 lookahead_changed, self._lookahead_changed = self._lookahead_changed, False
-            if params is not None or new_rig is not None or lookahead_changed:
-                # The held pairs are decided with what future there is, under the settings they
-                # were tracked with; the next pair starts a look-ahead of the new settings.
+            # A new rig, another look-ahead or other look-ahead rules (a preset chosen) start a new
+            # readout; the held pairs are decided first with what future there is. Tuning the
+            # filters does not: the held pairs go on to be decided as usual, so dragging a slider
+            # does not stall the view (a broadcast view holds 74 frames, 2.5 s at 30 fps).
+            restart = (new_rig is not None or lookahead_changed
+                       or (params is not None and params.lookahead != self._params_in_use.lookahead))
+            if restart:
                 show(readout.flush())
             if params is not None:
                 try:
                     tracker.set_params(params)
                     self._params_in_use = params
                     self._keep_adapted(tracker, params)
+                    generation += 1
                     if score is not None:
                         score.reset()       # the score belongs to the settings on screen
                 except USER_ERRORS as exc:   # e.g. a classifier model that is not there
@@ -556,8 +564,10 @@ class TrackingWorker(QObject):
                     self.warning.emit("Parameters not applied: " + _one_sentence(exc))
             if new_rig is not None:
                 tracker = self._switch_rig(tracker, new_rig, source)
-            if params is not None or new_rig is not None or lookahead_changed:
+            if restart:
                 readout = self._readout(tracker)
+            elif params is not None:
+                readout.set_params(self._params_in_use)
             if paused and not stepping:
                 # Paused: the display shows the pair the tracker stopped on (so a step shows the
                 # next one), even if the throttle had not asked for it.
@@ -641,7 +651,7 @@ class TrackingWorker(QObject):
                                      paced=reader is None and realtime and not stepping,
                                      rig_epipolar_px=tracker.rig_epipolar_px,
                                      truth_name="" if truth is None else truth.name)
-            show(readout.push(result, (frame, labels, t_available, live_stats)), stepping)
+            show(readout.push(result, (frame, labels, t_available, live_stats, generation)), stepping)
 
     def _adapt(self, source: FrameSource, tracker: MonoTracker, context: OpeningContext) -> None:
         """A recorded TV clip viewed with the look-ahead gets `detect`'s rows: when the preset
