@@ -408,7 +408,7 @@ def test_the_adaptation_pass_is_an_opening_step_stop_gives_up_and_tuning_keeps(q
     """Opening a TV clip with the look-ahead view adapts the classifier first, reported as a step
     of opening; aborting then gives it up before the source is ever opened. Once adapted, a
     filter moved in the Tuning dialog keeps the adapted classifier; a changed classifier setting
-    goes back to the preset's."""
+    goes back to the preset's. Opened again (Source ▸ Restart), the file is not adapted again."""
     import threading
 
     from PySide6.QtCore import Qt
@@ -446,6 +446,14 @@ def test_the_adaptation_pass_is_an_opening_step_stop_gives_up_and_tuning_keeps(q
                             lookahead_frames=4)
     _run_to_the_end(worker)
     adapted = worker._adapted[0]
+    # Source ▸ Restart: the same file with the same parameters is not adapted again.
+    again = TrackingWorker(lambda context: open_spec(spec, context), params, realtime=False,
+                           lookahead_frames=4)
+    steps.clear()
+    again.opening.connect(steps.append, direct)
+    _run_to_the_end(again)
+    assert again._adapted[0] is adapted and again.adaptation_text == worker.adaptation_text
+    assert not any(text.startswith("adapting") for text in steps)
     tracker = MonoTracker(params)
     tracker.detector.use_classifier(adapted)
     tuned = params.with_value("contour_length.min_length", params.contour_length.min_length + 2)

@@ -7,6 +7,7 @@ device indices; listing cameras (which opens each device) runs on a background t
 
 from __future__ import annotations
 
+import os
 import threading
 from pathlib import Path
 
@@ -80,6 +81,8 @@ def open_spec(spec: SourceSpec, context: OpeningContext | None = None) -> tuple[
         # recording read again from its start, as `detect` reads it.
         from ..io.detect_file import recording_frames
         reader.recording_frames = lambda progress=None, path=spec.left: recording_frames(path, progress)
+        stat = os.stat(spec.left)
+        reader.recording_key = (os.path.abspath(spec.left), stat.st_size, stat.st_mtime_ns)
         return reader, None
     if spec.kind == "cameras":
         from ..io.cameras import CameraPair

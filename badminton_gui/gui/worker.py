@@ -83,6 +83,10 @@ RESYNC_AFTER = 0.25            # s behind the source clock before real-time paci
 # latency (the readouts' latency includes the wait), and a tracker that is simply too slow
 # still drops the same share (and gets the faster-preset advice, gui/keep_up.py).
 LIVE_BUFFER_PAIRS = 2
+# Classifiers adapted to recordings (TrackingWorker._adapt), by (file, size, modification time)
+# and parameters, shared by the workers of one session: the most recent ADAPTED_KEPT.
+_ADAPTED: dict = {}
+ADAPTED_KEPT = 4
 
 
 class LatestSlot:
@@ -664,21 +668,32 @@ class TrackingWorker(QObject):
         params = self._params_in_use.with_value("lookahead.frames", k)
         if frames is None or k <= 0 or not adaptation_asked(params, None):
             return
-        what = "adapting the classifier to the recording"
-        progress, stop = context.for_step(what, 0, 1)
-        start = time.perf_counter()
-        classifier, harvest = adapt_to_recording(
-            params, lambda: frames(lambda done, total: progress(done / total if total else 0.0)),
-            should_stop=stop)
-        if stop():
-            return
+        # Source ▸ Restart (the clip played again) finds the pass it made already: the same
+        # file, unchanged, with the same parameters.
+        key = (getattr(source, "recording_key", None), params)
+        cached = _ADAPTED.get(key) if key[0] is not None else None
+        if cached is None:
+            what = "adapting the classifier to the recording"
+            progress, stop = context.for_step(what, 0, 1)
+            start = time.perf_counter()
+            classifier, harvest = adapt_to_recording(
+                params, lambda: frames(lambda done, total: progress(done / total if total else 0.0)),
+                should_stop=stop)
+            if stop():
+                return
+            text = ("no run of detections long enough to adapt the classifier to" if classifier is None
+                    else f"classifier adapted to the recording: {harvest.runs} runs, {harvest.frames} "
+                         f"frames ({time.perf_counter() - start:.1f} s)")
+            cached = (classifier, text)
+            if key[0] is not None:
+                _ADAPTED[key] = cached
+                while len(_ADAPTED) > ADAPTED_KEPT:
+                    _ADAPTED.pop(next(iter(_ADAPTED)))
+        classifier, self.adaptation_text = cached
         if classifier is None:
-            self.adaptation_text = "no run of detections long enough to adapt the classifier to"
             return
         tracker.detector.use_classifier(classifier)
         self._adapted = (classifier, params.classifier)
-        self.adaptation_text = (f"classifier adapted to the recording: {harvest.runs} runs, "
-                                f"{harvest.frames} frames ({time.perf_counter() - start:.1f} s)")
         self.opening.emit(self.adaptation_text)
 
     def _keep_adapted(self, tracker, params: TrackerParams) -> None:
