@@ -439,7 +439,7 @@ def test_the_adaptation_pass_is_an_opening_step_stop_gives_up_and_tuning_keeps(q
     thread.start()
     thread.join(30)
     assert not thread.is_alive() and not opened
-    assert steps and steps[0].startswith("adapting the classifier to the recording: ")
+    assert steps and steps[0].startswith("adapting the classifier to the recording (")
     assert worker.adaptation_text == ""
 
     worker = TrackingWorker(lambda context: open_spec(spec, context), params, realtime=False,
@@ -517,3 +517,32 @@ def test_tuning_a_filter_does_not_restart_the_look_ahead_view(qapp):
     finally:
         worker.abort()
         thread.join(30)
+
+
+def test_turning_the_view_live_during_the_adaptation_pass_skips_it_and_plays(qapp, tmp_path):
+    """A long TV recording to watch at once: the view turned live while its classifier is being
+    adapted gives up the pass only; the video plays, live, with the preset's classifier."""
+    from PySide6.QtCore import Qt
+
+    from badminton_gui.gui.settings import SourceSpec
+    from badminton_gui.gui.sources import open_spec
+    from badminton_gui.gui.worker import TrackingWorker
+    from badminton_gui.io.presets import load_preset
+
+    from .test_cli import moving_dot_frames, write_video
+
+    write_video(tmp_path / "dot.avi", moving_dot_frames()[0])
+    spec = SourceSpec("single", str(tmp_path / "dot.avi"), realtime=False)
+    worker = TrackingWorker(lambda context: open_spec(spec, context), load_preset("broadcast"),
+                            realtime=False, lookahead_frames=4)
+    steps = []
+
+    def on_opening(text: str) -> None:
+        steps.append(text)
+        if text.startswith("adapting"):
+            worker.set_lookahead(0)
+    worker.opening.connect(on_opening, Qt.ConnectionType.DirectConnection)
+    _run_to_the_end(worker)
+    assert steps and "turn the look-ahead view off to skip" in steps[0]
+    assert worker._adapted is None and worker.adaptation_text == ""
+    assert worker.latest_stats.lookahead_frames == 0 and worker.latest_stats.frames == 40

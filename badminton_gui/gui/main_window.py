@@ -449,8 +449,9 @@ class MainWindow(QMainWindow):
             f"'badminton-track detect' and 'track' decide a file's rows (a flight's first frames, "
             f"the shuttle just off the racket). The view is {FILE_LOOKAHEAD} frames late (with the "
             f"broadcast preset's lead-in to the served shuttle, 70 more; a TV recording's classifier "
-            f"is adapted to it first, as 'detect' does); the robot link and recordings get every "
-            f"result at once. Off: each frame as soon as it is tracked")
+            f"is adapted to it first, as 'detect' does: turning the view off meanwhile skips that); "
+            f"the robot link and recordings get every result at once. Off: each frame as soon as "
+            f"it is tracked")
 
         view = menu.addMenu("&View")
         self.mask_action = self._action(view, "Foreground &mask", self._overlays_changed, "M", checkable=True)

@@ -661,7 +661,8 @@ class TrackingWorker(QObject):
         """A recorded TV clip viewed with the look-ahead gets `detect`'s rows: when the preset
         adapts its classifier to each recording (``classifier.adapt_min_run``, the broadcast
         preset), a first pass over the file does so now (core/adaptation.py), shown as a step
-        of opening the source that Stop gives up. A live view keeps the shipped classifier."""
+        of opening the source that Stop gives up with the source, and turning the view live
+        gives up alone. A live view keeps the shipped classifier."""
         frames = getattr(source, "recording_frames", None)
         with self._lock:
             k = self._lookahead_frames
@@ -673,8 +674,13 @@ class TrackingWorker(QObject):
         key = (getattr(source, "recording_key", None), params)
         cached = _ADAPTED.get(key) if key[0] is not None else None
         if cached is None:
-            what = "adapting the classifier to the recording"
-            progress, stop = context.for_step(what, 0, 1)
+            what = "adapting the classifier to the recording (turn the look-ahead view off to skip)"
+            progress, cancelled = context.for_step(what, 0, 1)
+
+            def stop() -> bool:
+                # Stop (or another source) gives the source up; the view turned live (a long
+                # recording to watch at once) gives up the pass only.
+                return cancelled() or self._lookahead_frames == 0
             start = time.perf_counter()
             classifier, harvest = adapt_to_recording(
                 params, lambda: frames(lambda done, total: progress(done / total if total else 0.0)),
