@@ -546,3 +546,32 @@ def test_turning_the_view_live_during_the_adaptation_pass_skips_it_and_plays(qap
     assert steps and "turn the look-ahead view off to skip" in steps[0]
     assert worker._adapted is None and worker.adaptation_text == ""
     assert worker.latest_stats.lookahead_frames == 0 and worker.latest_stats.frames == 40
+
+
+def test_the_look_ahead_views_flight_ends_at_the_pair_shown(qapp):
+    """The tracker is K pairs ahead of the look-ahead view: the solid flight ends at the shown
+    pair's point (the red dot) and what the tracker knows after it is drawn as prediction."""
+    from badminton_gui.core.params import TrackerParams
+    from badminton_gui.gui.worker import TrackingWorker
+
+    worker = TrackingWorker(_demo_opener, TrackerParams(), realtime=False, lookahead_frames=4)
+    worker.set_display_size(320, 180)
+    packets = []
+
+    def flying() -> list:
+        return [p for p in packets if p.result.point is not None and p.result.flight.in_flight
+                and p.flight is not None and len(p.flight) and p.predicted is not None and len(p.predicted)]
+
+    def take_and_ask() -> bool:
+        if len(flying()) < 8 and (packet := worker.output.take()) is not None:
+            packets.append(packet)
+            worker.request_display()
+        return len(flying()) >= 8
+
+    _run_headless(worker, take_and_ask)
+    for p in flying():
+        assert p.flight[:, 0].max() <= p.result.timestamp + 1e-9
+        assert p.flight[-1, 0] == pytest.approx(p.result.timestamp)
+        assert np.allclose(p.flight[-1, 1:4], p.result.point, atol=1e-6)
+        # The prediction takes up where the flight ends: the next pairs' path, a step away.
+        assert np.linalg.norm(p.predicted[0] - p.flight[-1, 1:4]) < 0.5

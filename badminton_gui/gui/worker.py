@@ -782,6 +782,7 @@ class TrackingWorker(QObject):
                 flight = trajectory.current_flight()
             if hasattr(trajectory, "predicted_path"):
                 predicted = trajectory.predicted_path()
+            flight, predicted = _as_of(flight, predicted, result.timestamp)
         return DisplayPacket(
             left=images[0], right=images[1], display_scale=scale, result=result,
             trail_left=np.array(trails[0], dtype=float).reshape(-1, 3),
@@ -789,6 +790,22 @@ class TrackingWorker(QObject):
             flight=None if flight is None else np.asarray(flight, dtype=float),
             predicted=None if predicted is None else np.asarray(predicted, dtype=float),
             stats=stats, label_left=labels[0], label_right=labels[1])
+
+
+def _as_of(flight, predicted, t: float):
+    """The flight as the pair shown at time ``t`` sees it: the tracker may be ahead of the view
+    (the look-ahead view shows pairs K steps late), so the part of its path after ``t`` belongs
+    to the dashed prediction, not to the solid flight that ends at the red dot."""
+    if flight is None or not len(flight):
+        return flight, predicted
+    flight = np.asarray(flight, dtype=float)
+    later = flight[:, 0] > t + 1e-9
+    if not later.any():
+        return flight, predicted
+    ahead = flight[later, 1:4]
+    if predicted is not None and len(predicted):
+        ahead = np.vstack([ahead, np.asarray(predicted, dtype=float).reshape(-1, 3)])
+    return flight[~later], ahead
 
 
 def _shrink(img: np.ndarray, width: int, height: int) -> np.ndarray:
