@@ -125,20 +125,27 @@ def demo_packets(qapp):
     from badminton_gui.gui.worker import TrackingWorker
 
     worker = TrackingWorker(_demo_opener, TrackerParams(), realtime=False)
+    return _packets_until(worker, lambda p: p.result.point is not None and p.flight is not None
+                          and len(p.flight))
+
+
+def _packets_until(worker, keep, count: int = 8) -> list:
+    """Display packets of a headless demo-court worker, one asked for after each, until
+    ``count`` of them pass ``keep``; those."""
     worker.set_display_size(320, 180)
     packets = []
 
-    def flying() -> list:
-        return [p for p in packets if p.result.point is not None and p.flight is not None and len(p.flight)]
+    def kept() -> list:
+        return [p for p in packets if keep(p)]
 
     def take_and_ask() -> bool:
-        if len(flying()) < 8 and (packet := worker.output.take()) is not None:
+        if len(kept()) < count and (packet := worker.output.take()) is not None:
             packets.append(packet)
             worker.request_display()
-        return len(flying()) >= 8
+        return len(kept()) >= count
 
     _run_headless(worker, take_and_ask)
-    return flying()
+    return kept()
 
 
 def test_display_tick_feeds_every_packet_and_throttles_the_slow_views(main_window, qtbot, monkeypatch,
@@ -555,21 +562,10 @@ def test_the_look_ahead_views_flight_ends_at_the_pair_shown(qapp):
     from badminton_gui.gui.worker import TrackingWorker
 
     worker = TrackingWorker(_demo_opener, TrackerParams(), realtime=False, lookahead_frames=4)
-    worker.set_display_size(320, 180)
-    packets = []
-
-    def flying() -> list:
-        return [p for p in packets if p.result.point is not None and p.result.flight.in_flight
-                and p.flight is not None and len(p.flight) and p.predicted is not None and len(p.predicted)]
-
-    def take_and_ask() -> bool:
-        if len(flying()) < 8 and (packet := worker.output.take()) is not None:
-            packets.append(packet)
-            worker.request_display()
-        return len(flying()) >= 8
-
-    _run_headless(worker, take_and_ask)
-    for p in flying():
+    flying = _packets_until(worker, lambda p: p.result.point is not None and p.result.flight.in_flight
+                            and p.flight is not None and len(p.flight)
+                            and p.predicted is not None and len(p.predicted))
+    for p in flying:
         assert p.flight[:, 0].max() <= p.result.timestamp + 1e-9
         assert p.flight[-1, 0] == pytest.approx(p.result.timestamp)
         assert np.allclose(p.flight[-1, 1:4], p.result.point, atol=1e-6)
