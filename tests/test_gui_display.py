@@ -555,6 +555,56 @@ def test_turning_the_view_live_during_the_adaptation_pass_skips_it_and_plays(qap
     assert worker.latest_stats.lookahead_frames == 0 and worker.latest_stats.frames == 40
 
 
+def test_turning_the_view_on_while_a_tv_clip_plays_adapts_its_classifier(qapp, tmp_path):
+    """A TV clip opened with the view off plays live with the preset's classifier; the view
+    turned on meanwhile adapts it to the recording then, as opening with the view would have
+    (a step shown over the feed), and scores only the pairs after it. Another classifier setting
+    while it plays adapts it again for those settings; a filter tuned does not."""
+    from PySide6.QtCore import Qt
+
+    from badminton_gui.gui.settings import SourceSpec
+    from badminton_gui.gui.sources import open_spec
+    from badminton_gui.gui.worker import TrackingWorker
+    from badminton_gui.io.presets import load_preset
+
+    from .test_cli import moving_dot_frames, write_labels, write_video
+
+    frames, truth = moving_dot_frames()
+    write_video(tmp_path / "dot.avi", frames)
+    write_labels(tmp_path / "dot_ball.csv", truth)
+    spec = SourceSpec("single", str(tmp_path / "dot.avi"), realtime=False,
+                      left_labels=str(tmp_path / "dot_ball.csv"))
+    params = load_preset("broadcast")
+    worker = TrackingWorker(lambda context: open_spec(spec, context), params, realtime=False,
+                            lookahead_frames=0)
+    steps, tracked, used = [], [], []
+    worker.busy.connect(steps.append, Qt.ConnectionType.DirectConnection)
+
+    def tap(result) -> None:
+        tracked.append(result)
+        used.append(worker._tracker.detector.classifier)
+        if len(tracked) == 10:
+            worker.set_lookahead(4)
+        elif len(tracked) == 20:
+            worker.set_params(params.with_value("classifier.adapt_min_run", 20))
+        elif len(tracked) == 25:
+            worker.set_params(params.with_value("classifier.adapt_min_run", 20)
+                              .with_value("contour_length.min_length", params.contour_length.min_length + 1))
+    worker.set_result_tap(tap)
+    _run_to_the_end(worker)
+    passes = [i for i, text in enumerate(steps) if text.startswith("adapting the classifier")]
+    done = [text for text in steps if text.startswith("classifier adapted to the recording: 1 runs")]
+    assert len(passes) >= 2 and len(done) == 2          # at the view turned on, at the new setting
+    assert worker._adapted is not None and worker._adapted[1].adapt_min_run == 20
+    shipped, first, second = used[0], used[12], used[-1]
+    assert all(c is shipped for c in used[:10]) and first is not shipped
+    assert second is not shipped and second is not first
+    stats = worker.latest_stats
+    assert stats.lookahead_frames == 4 and stats.frames == 40
+    # Scored since the last change (the filter tuned after pair 25): 26-40, every one found.
+    assert stats.score_left.total == 15 and stats.score_left.tp == 15
+
+
 def test_the_look_ahead_views_flight_ends_at_the_pair_shown(qapp):
     """The tracker is K pairs ahead of the look-ahead view: the solid flight ends at the shown
     pair's point (the red dot) and what the tracker knows after it is drawn as prediction."""

@@ -304,6 +304,7 @@ class TrackingWorker(QObject):
     rig_applied = Signal(object)      # the StereoRig set_rig asked for is now tracked with
     error = Signal(str)               # one sentence for the banner; the worker has stopped
     opening = Signal(str)             # how a long step of opening the source is going
+    busy = Signal(str)                # how a long step while playing is going ("" when done)
     warning = Signal(str)             # one sentence for the banner; the worker goes on
     ended = Signal(str)               # the source ran out (not an error)
     finished = Signal()
@@ -318,6 +319,7 @@ class TrackingWorker(QObject):
         # was adapted from: kept through tuning that leaves those settings as they are.
         self._adapted: tuple[Any, Any] | None = None
         self.adaptation_text = ""
+        self._adapt_tried: tuple | None = None     # the last (recording, parameters) passed over
         self._live_buffer_pairs = live_buffer_pairs or LIVE_BUFFER_PAIRS
         self._reader: _LiveReader | None = None
         self._open_source = open_source
@@ -448,7 +450,8 @@ class TrackingWorker(QObject):
                 # One view (a TV clip): the per-camera detector alone, no rig, no 3D.
                 tracker = self._tracker = MonoTracker(self._params_in_use)
                 rig = None
-                self._adapt(source, tracker, context)
+                if self._adapt(source, tracker, context):
+                    self.opening.emit(self.adaptation_text)
                 if self._abort.is_set():
                     return
             else:
@@ -572,6 +575,25 @@ class TrackingWorker(QObject):
                 readout = self._readout(tracker)
             elif params is not None:
                 readout.set_params(self._params_in_use)
+            if ((restart or params is not None) and isinstance(tracker, MonoTracker)
+                    and self._adapted is None):
+                # The view turned on (or another preset chosen) while a TV clip plays: its
+                # classifier is adapted now as it would have been on opening, a step shown
+                # over the feed; the pairs after it are scored anew.
+                context = OpeningContext(self._abort, self.busy.emit)
+                if self._adapt(source, tracker, context, while_playing=True):
+                    show(readout.flush())
+                    readout = self._readout(tracker)
+                    generation += 1
+                    if score is not None:
+                        score.reset()
+                    # The pass is no slow playback: the speed is measured afresh, and real-time
+                    # pacing starts again from the next frame.
+                    speed_meter.clear()
+                    pace_wall = None
+                    self.busy.emit(self.adaptation_text)
+                if self._abort.is_set():
+                    return
             if paused and not stepping:
                 # Paused: the display shows the pair the tracker stopped on (so a step shows the
                 # next one), even if the throttle had not asked for it.
@@ -657,21 +679,28 @@ class TrackingWorker(QObject):
                                      truth_name="" if truth is None else truth.name)
             show(readout.push(result, (frame, labels, t_available, live_stats, generation)), stepping)
 
-    def _adapt(self, source: FrameSource, tracker: MonoTracker, context: OpeningContext) -> None:
+    def _adapt(self, source: FrameSource, tracker: MonoTracker, context: OpeningContext,
+               while_playing: bool = False) -> bool:
         """A recorded TV clip viewed with the look-ahead gets `detect`'s rows: when the preset
         adapts its classifier to each recording (``classifier.adapt_min_run``, the broadcast
         preset), a first pass over the file does so now (core/adaptation.py), shown as a step
         of opening the source that Stop gives up with the source, and turning the view live
-        gives up alone. A live view keeps the shipped classifier."""
+        gives up alone. A live view keeps the shipped classifier. The same when the view is
+        turned on, or another preset chosen, while the clip plays (``while_playing``: once per
+        view and parameters, whatever the pass found). True: an adapted classifier is in use."""
         frames = getattr(source, "recording_frames", None)
         with self._lock:
             k = self._lookahead_frames
+        if frames is None or k <= 0:
+            return False
         params = self._params_in_use.with_value("lookahead.frames", k)
-        if frames is None or k <= 0 or not adaptation_asked(params, None):
-            return
+        if not adaptation_asked(params, None):
+            return False
         # Source ▸ Restart (the clip played again) finds the pass it made already: the same
         # file, unchanged, with the same parameters.
         key = (getattr(source, "recording_key", None), params)
+        if while_playing and key == self._adapt_tried:
+            return False      # (no run long enough: not passed over again at each change)
         cached = _ADAPTED.get(key) if key[0] is not None else None
         if cached is None:
             what = "adapting the classifier to the recording (turn the look-ahead view off to skip)"
@@ -686,7 +715,7 @@ class TrackingWorker(QObject):
                 params, lambda: frames(lambda done, total: progress(done / total if total else 0.0)),
                 should_stop=stop)
             if stop():
-                return
+                return False
             text = ("no run of detections long enough to adapt the classifier to" if classifier is None
                     else f"classifier adapted to the recording: {harvest.runs} runs, {harvest.frames} "
                          f"frames ({time.perf_counter() - start:.1f} s)")
@@ -695,12 +724,13 @@ class TrackingWorker(QObject):
                 _ADAPTED[key] = cached
                 while len(_ADAPTED) > ADAPTED_KEPT:
                     _ADAPTED.pop(next(iter(_ADAPTED)))
+        self._adapt_tried = key
         classifier, self.adaptation_text = cached
         if classifier is None:
-            return
+            return False
         tracker.detector.use_classifier(classifier)
         self._adapted = (classifier, params.classifier)
-        self.opening.emit(self.adaptation_text)
+        return True
 
     def _keep_adapted(self, tracker, params: TrackerParams) -> None:
         """After new parameters: the adapted classifier again while the classifier settings it
