@@ -652,11 +652,9 @@ def test_a_source_without_truth_says_so_in_the_readouts():
     assert text.startswith("L 95.0 % · R 100.0 %") and "labels · 100 frames" in text
 
 
-def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window, qtbot, tmp_path, monkeypatch):
-    """Source ▸ One video (TV broadcast)…: the picture in the left feed, the right one says why it
-    is empty, the broadcast preset is in use (its classifier adapted to the video for the
-    look-ahead view), the live score covers the one camera, and no rig, 3D point or landing call
-    is invented."""
+def _choose_a_labelled_tv_video(main_window, tmp_path, monkeypatch, lookahead_view: bool = True):
+    """A window that opened a 5-s video of a moving dot with its labels through Source ▸ One
+    video (TV broadcast)…, played in real time, the look-ahead view on or off."""
     from badminton_gui.gui import main_window as mw
 
     from .test_cli import moving_dot_frames, write_video
@@ -675,8 +673,20 @@ def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window,
     monkeypatch.setattr(mw, "SingleVideoDialog", Chosen)
     window = main_window()
     window.realtime_action.setChecked(True)
+    window.lookahead_action.setChecked(lookahead_view)
     window.choose_single_video()
     assert window.spec.kind == "single"
+    return window
+
+
+def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window, qtbot, tmp_path, monkeypatch):
+    """Source ▸ One video (TV broadcast)…: the picture in the left feed, the right one says why it
+    is empty, the broadcast preset is in use (its classifier adapted to the video for the
+    look-ahead view), the live score covers the one camera, and no rig, 3D point or landing call
+    is invented."""
+    from badminton_gui.gui import main_window as mw
+
+    window = _choose_a_labelled_tv_video(main_window, tmp_path, monkeypatch)
     qtbot.waitUntil(lambda: window.worker is not None and window.worker.latest_stats is not None
                     and window.worker.latest_stats.frames >= 20, timeout=WAIT_MS)
     assert window.params.association.exit_margin > 0           # the broadcast preset's own rule
@@ -697,6 +707,27 @@ def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window,
     # A rig cannot be applied to one camera: said, and tracking goes on.
     window.worker.set_rig(make_rig())
     qtbot.waitUntil(lambda: "one camera" in window.banner.text, timeout=WAIT_MS)
+
+
+def test_the_view_turned_on_while_a_tv_video_plays_adapts_and_says_so(main_window, qtbot, tmp_path, monkeypatch):
+    """A TV video opened with the look-ahead view off plays live; turned on, the view first
+    adapts the classifier to the video (the step over the feed and in the status line), then the
+    status line says what it did, and the feeds' pause for it is not taken for a tracker behind."""
+    window = _choose_a_labelled_tv_video(main_window, tmp_path, monkeypatch, lookahead_view=False)
+    qtbot.waitUntil(lambda: window.worker is not None and window.worker.latest_stats is not None
+                    and window.worker.latest_stats.frames >= 10, timeout=WAIT_MS)
+    assert "classifier adapted" not in window.status_source.text()
+    steps = []
+    window.worker.busy.connect(steps.append)
+    window.lookahead_action.trigger()
+    qtbot.waitUntil(lambda: "classifier adapted to the recording: 1 runs" in window.status_source.text(),
+                    timeout=WAIT_MS)
+    assert steps[0].startswith("adapting the classifier to the recording")
+    assert "no second camera" in window.status_source.text()
+    qtbot.waitUntil(lambda: window.worker.latest_stats.lookahead_frames > 0, timeout=WAIT_MS)
+    qtbot.wait(300)
+    assert not window._display_yield.slowed
+    assert window.worker.latest_stats.playback_speed > 0.9
 
 
 def test_labels_of_another_recording_are_named_in_the_banner(main_window, qtbot, tmp_path):

@@ -287,6 +287,7 @@ class MainWindow(QMainWindow):
         self.params = params or st.load_params(self.settings) or TrackerParams()
         self.spec = spec or st.load_source_spec(self.settings)
         self.rig: StereoRig | None = None
+        self._source_name = "the source"     # as the worker named it when it opened
         self.worker: TrackingWorker | None = None
         self.thread: QThread | None = None
         self.latest_packet: DisplayPacket | None = None
@@ -540,6 +541,7 @@ class MainWindow(QMainWindow):
         worker.opened.connect(self._on_opened)
         worker.error.connect(self._on_error)
         worker.opening.connect(self._on_opening)
+        worker.busy.connect(self._on_busy)
         worker.warning.connect(self.banner.show_message)
         worker.ended.connect(self._on_ended)
         worker.rig_applied.connect(self._on_rig_applied)
@@ -563,7 +565,7 @@ class MainWindow(QMainWindow):
         worker.set_result_tap(None, key="record")
         # Queued signals of the old worker may still arrive; drop them.
         for sig, slot in ((worker.opened, self._on_opened), (worker.error, self._on_error),
-                          (worker.opening, self._on_opening),
+                          (worker.opening, self._on_opening), (worker.busy, self._on_busy),
                           (worker.warning, self.banner.show_message), (worker.ended, self._on_ended),
                           (worker.rig_applied, self._on_rig_applied)):
             try:
@@ -694,8 +696,29 @@ class MainWindow(QMainWindow):
         for feed in (self.left_feed, self.right_feed):
             feed.set_message(text)
 
+    def _on_busy(self, step: str) -> None:
+        """A long step while the source plays (a TV clip's classifier adapted when the look-ahead
+        view is turned on): how it goes over the feed, then what it did in the status line."""
+        if self.worker is None or self.sender() not in (None, self.worker):
+            return
+        if step.startswith("adapting"):
+            self.left_feed.set_message(step[:1].upper() + step[1:])   # the next frame clears it
+            self.status_source.setText(f"{self._source_name} — {step}")
+        else:
+            # The step is over: the pause it made in the feeds is no sign of a tracker behind.
+            self._keep_up.reset()
+            self._display_yield.reset()
+            if self.rig is None:
+                self.status_source.setText(self._one_camera_status(self._source_name))
+
+    def _one_camera_status(self, name: str) -> str:
+        adapted = self.worker.adaptation_text if self.worker is not None else ""
+        return (f"{name} — no second camera: the shuttle in the picture only, "
+                f"no 3D, distance, speed or landing" + (f"; {adapted}" if adapted else ""))
+
     def _on_opened(self, name: str, rig: StereoRig | None) -> None:
         self.rig = rig
+        self._source_name = name
         self._keep_up.reset()
         self._rig_check.reset()
         self._display_yield.reset()
@@ -703,10 +726,7 @@ class MainWindow(QMainWindow):
         if rig is None:
             # One camera's video: its picture in the left feed, 2D only.
             self.setWindowTitle(f"Badminton shuttle tracker — {name}")
-            adapted = self.worker.adaptation_text if self.worker is not None else ""
-            self.status_source.setText(f"{name} — no second camera: the shuttle in the picture only, "
-                                       f"no 3D, distance, speed or landing"
-                                       + (f"; {adapted}" if adapted else ""))
+            self.status_source.setText(self._one_camera_status(name))
             self.right_feed.show_text(ONE_CAMERA_TEXT)
             if self.gl_view is not None:
                 self.gl_view.set_rig(None)
