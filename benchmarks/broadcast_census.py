@@ -200,9 +200,14 @@ def dataclass_without_mask(result):
     return dataclasses.replace(result, mask=None)
 
 
+def accuracy_of(total: collections.Counter) -> float:
+    n = sum(total[k] for k in ("TP", "TN", "FP1", "FP2", "FN"))
+    return (total["TP"] + total["TN"]) / n if n else 0.0
+
+
 def summary(total: collections.Counter) -> str:
     n = sum(total[k] for k in ("TP", "TN", "FP1", "FP2", "FN"))
-    return (f"{n} frames, accuracy {(total['TP'] + total['TN']) / n:.4f}  (TP {total['TP']} TN {total['TN']} "
+    return (f"{n} frames, accuracy {accuracy_of(total):.4f}  (TP {total['TP']} TN {total['TN']} "
             f"FP1 {total['FP1']} FP2 {total['FP2']} FN {total['FN']})")
 
 

@@ -12,6 +12,7 @@ logit: nine for the two two-camera kinds, three for TV (broadcast).
     .venv/bin/python benchmarks/train_classifier.py --kind broadcast   # → resources/candidate_classifier_broadcast.json
     .venv/bin/python benchmarks/train_classifier.py --kind stereo-coarse   # → resources/candidate_classifier_coarse.json
     .venv/bin/python benchmarks/train_classifier.py --kind broadcast --leave-one-out   # no file: each TV clip scored by a classifier trained without it
+    .venv/bin/python benchmarks/train_classifier.py --kind broadcast --leave-one-out --seeds 0 1 2 --scan G.N=V   # per seed and the mean (≈ 5 min)
     .venv/bin/python benchmarks/train_classifier.py --kind stereo --leave-one-out      # no file: each tuned-on rally tracked with one trained without it (≈ 90 min)
     (adapted to the clip first as `detect` does, core/adaptation.py; --no-adapt: as trained)
 
@@ -167,6 +168,10 @@ def main() -> int:
     ap.add_argument("--patches", action=argparse.BooleanOptionalAction, default=None,
                     help="add the blob's grey patch to the features (default: on)")
     ap.add_argument("--seed", type=int, default=0, help="the MLPs' random start")
+    ap.add_argument("--seeds", type=int, nargs="+", default=None, metavar="S",
+                    help="broadcast --leave-one-out: one run per seed (the candidates dumped once), then "
+                         "each setting's accuracy per seed and its mean — one seed's figure moves by "
+                         "points when a few training rows change (thirty-first round, benchmarks/README.md)")
     ap.add_argument("--demo-seeds", type=int, nargs="*", default=(0, 1, 4, 5),
                     help="demo court seeds among the stereo kind's training videos (the tests use 3; "
                          "with 0 and 1 × 600 frames only the patch classifier scored demo clutter "
@@ -250,9 +255,25 @@ def main() -> int:
     x = np.vstack([p[0] for p in parts])
     y = np.concatenate([p[1] for p in parts])
     if args.leave_one_out:
-        fold = leave_one_out if args.kind == "broadcast" else rally_leave_one_out
-        return fold(args, jobs, parts, lambda xs, ys: train(
-            xs, ys, hidden=args.hidden, epochs=args.epochs, name=out_name, feature_names=names))
+        def fold_train(xs, ys):
+            return train(xs, ys, hidden=args.hidden, epochs=args.epochs, name=out_name, feature_names=names)
+        if args.kind != "broadcast":
+            return rally_leave_one_out(args, jobs, parts, fold_train)
+        per_seed = {}
+        for seed in args.seeds or [args.seed]:
+            args.seed = seed
+            if args.seeds:
+                print(f"seed {seed}:", flush=True)
+            per_seed[seed] = leave_one_out(args, jobs, parts, fold_train)
+        if args.seeds and len(args.seeds) > 1:
+            from broadcast_census import accuracy_of
+            print(f"seeds {' / '.join(map(str, per_seed))}:")
+            for setting in per_seed[args.seeds[0]]:
+                figures = [100.0 * accuracy_of(totals[setting]) for totals in per_seed.values()]
+                name = f"{setting[0][0]} = {setting[0][1]}" if setting else "as the preset says"
+                print(f"  {name}: {' / '.join(f'{v:.2f}' for v in figures)} %, "
+                      f"mean {sum(figures) / len(figures):.2f} %")
+        return 0
     # Hold the last clip out of training, every change of it too, to report an honest
     # validation figure on that clip as it is.
     last = jobs[-1][0]
@@ -275,9 +296,10 @@ def main() -> int:
     return 0
 
 
-def leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
+def leave_one_out(args, jobs: list[tuple], parts: list, train) -> dict:
     """Per tuned-on TV clip: a classifier trained on the other clips (every change of them),
-    and the clip's accuracy with it; the total over the clips."""
+    and the clip's accuracy with it; the total over the clips. Returns each setting's (``--scan``)
+    outcome counts summed over the clips."""
     import collections
     from broadcast_census import census, summary
     settings: list[tuple[tuple[str, str], ...]] = [()]
@@ -299,7 +321,7 @@ def leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
     print("  " + "; ".join(f"{v} {outcome} {cause}" for (outcome, cause), v in causes))
     for setting in settings[1:]:
         print(f"  with {setting[0][0]} = {setting[0][1]}: {summary(totals[setting])}")
-    return 0
+    return totals
 
 
 def rally_leave_one_out(args, jobs: list[tuple], parts: list, train) -> int:
