@@ -605,6 +605,43 @@ def test_turning_the_view_on_while_a_tv_clip_plays_adapts_its_classifier(qapp, t
     assert stats.score_left.total == 15 and stats.score_left.tp == 15
 
 
+def test_a_mid_clip_pass_that_finds_no_run_says_so_once(qapp, tmp_path):
+    """The view turned on over a TV clip with nothing to follow: the pass finds no run long
+    enough, says so (the window's step ends), keeps the preset's classifier, and is not made
+    again when a filter is tuned."""
+    from PySide6.QtCore import Qt
+
+    from badminton_gui.gui.settings import SourceSpec
+    from badminton_gui.gui.sources import open_spec
+    from badminton_gui.gui.worker import TrackingWorker
+    from badminton_gui.io.presets import load_preset
+
+    from .test_cli import moving_dot_frames, write_video
+
+    write_video(tmp_path / "floor.avi", moving_dot_frames(40, offset=-1000)[0])   # no dot
+    spec = SourceSpec("single", str(tmp_path / "floor.avi"), realtime=False)
+    params = load_preset("broadcast")
+    worker = TrackingWorker(lambda context: open_spec(spec, context), params, realtime=False,
+                            lookahead_frames=0)
+    steps, tracked = [], []
+    worker.busy.connect(steps.append, Qt.ConnectionType.DirectConnection)
+
+    def tap(result) -> None:
+        tracked.append(result)
+        if len(tracked) == 10:
+            worker.set_lookahead(4)
+        elif len(tracked) == 20:
+            worker.set_params(params.with_value("contour_length.min_length",
+                                                params.contour_length.min_length + 1))
+    worker.set_result_tap(tap)
+    _run_to_the_end(worker)
+    ends = [text for text in steps if not text.startswith("adapting")]
+    assert ends == ["no run of detections long enough to adapt the classifier to"]
+    # One pass: its progress, then its end; the tuned filter made none.
+    assert steps[0].startswith("adapting the classifier") and steps[-1] == ends[0]
+    assert worker._adapted is None and worker.latest_stats.frames == 40
+
+
 def test_the_look_ahead_views_flight_ends_at_the_pair_shown(qapp):
     """The tracker is K pairs ahead of the look-ahead view: the solid flight ends at the shown
     pair's point (the red dot) and what the tracker knows after it is drawn as prediction."""

@@ -319,7 +319,8 @@ class TrackingWorker(QObject):
         # was adapted from: kept through tuning that leaves those settings as they are.
         self._adapted: tuple[Any, Any] | None = None
         self.adaptation_text = ""
-        self._adapt_tried: tuple | None = None     # the last (recording, parameters) passed over
+        # The last (recording, classifier settings, view frames) passed over (``_adapt``).
+        self._adapt_tried: tuple | None = None
         self._live_buffer_pairs = live_buffer_pairs or LIVE_BUFFER_PAIRS
         self._reader: _LiveReader | None = None
         self._open_source = open_source
@@ -581,19 +582,22 @@ class TrackingWorker(QObject):
                 # classifier is adapted now as it would have been on opening, a step shown
                 # over the feed; the pairs after it are scored anew.
                 context = OpeningContext(self._abort, self.busy.emit)
+                tried = self._adapt_tried
                 if self._adapt(source, tracker, context, while_playing=True):
                     show(readout.flush())
                     readout = self._readout(tracker)
                     generation += 1
                     if score is not None:
                         score.reset()
-                    # The pass is no slow playback: the speed is measured afresh, and real-time
-                    # pacing starts again from the next frame.
+                if self._abort.is_set():
+                    return
+                if self._adapt_tried is not tried:
+                    # A pass was made (or found made), adapted or not ("no run long enough"):
+                    # it is no slow playback — the speed is measured afresh, real-time pacing
+                    # starts again from the next frame — and the window hears it is over.
                     speed_meter.clear()
                     pace_wall = None
                     self.busy.emit(self.adaptation_text)
-                if self._abort.is_set():
-                    return
             if paused and not stepping:
                 # Paused: the display shows the pair the tracker stopped on (so a step shows the
                 # next one), even if the throttle had not asked for it.
@@ -699,8 +703,11 @@ class TrackingWorker(QObject):
         # Source ▸ Restart (the clip played again) finds the pass it made already: the same
         # file, unchanged, with the same parameters.
         key = (getattr(source, "recording_key", None), params)
-        if while_playing and key == self._adapt_tried:
-            return False      # (no run long enough: not passed over again at each change)
+        # A pass that found no run long enough is not made again while only the filters are
+        # tuned (seconds a slider step), as an adapted classifier is kept through them.
+        tried = (key[0], params.classifier, k)
+        if while_playing and tried == self._adapt_tried:
+            return False
         cached = _ADAPTED.get(key) if key[0] is not None else None
         if cached is None:
             what = "adapting the classifier to the recording (turn the look-ahead view off to skip)"
@@ -724,7 +731,7 @@ class TrackingWorker(QObject):
                 _ADAPTED[key] = cached
                 while len(_ADAPTED) > ADAPTED_KEPT:
                     _ADAPTED.pop(next(iter(_ADAPTED)))
-        self._adapt_tried = key
+        self._adapt_tried = tried
         classifier, self.adaptation_text = cached
         if classifier is None:
             return False
