@@ -21,6 +21,7 @@ candidates and mask at the label:
     .venv/bin/python benchmarks/broadcast_census.py --set association.hop_distance=0  # one value changed
     .venv/bin/python benchmarks/broadcast_census.py --lone 0.75   # what association.lone_quality would report
     .venv/bin/python benchmarks/broadcast_census.py --no-adapt   # the shipped classifier, not adapted to each clip
+    .venv/bin/python benchmarks/broadcast_census.py --oracle     # the ceiling: candidates scored from the labels
 
 Held-out clips are refused unless --held-out is given (they are for the final measurement only).
 """
@@ -41,6 +42,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from badminton_gui.core import detector as detector_module  # noqa: E402
 from badminton_gui.core.adaptation import DEFAULT_MIN_RUN, adapt_to_recording  # noqa: E402
 from badminton_gui.core.detector import CameraDetector  # noqa: E402
 from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
@@ -53,6 +55,48 @@ from clips import broadcast_clips  # noqa: E402
 # px² of mask: a connected foreground region at the label larger than this is "a large blob"
 # (a shuttle at 1280 px is at most ~15 × 15 px with the mask's dilation).
 LARGE_AREA = 400
+
+
+class LabelOracle:
+    """A classifier that cannot be beaten: it scores each candidate from the labels (``SHUTTLE``
+    within the protocol tolerance of a visible label, ``OTHER`` elsewhere and in every frame
+    labelled not visible). What the chain scores with it is the ceiling of any classifier on the
+    candidates the detector makes — the errors left are the candidates' and the association's,
+    not the classifier's. For measuring only: it reads the labels at run time.
+
+    Installed on one detector (``install``); ``label`` is set before each frame. The candidates'
+    positions are taken from ``detector.measure_blobs``, which the detector calls once for its
+    blobs and once more for parts split off merged blobs, before it scores them all in one call.
+    """
+    SHUTTLE, OTHER = 0.99, 0.01
+
+    def __init__(self, tol: float):
+        self.tol = tol
+        self.label: tuple[bool, float, float] = (False, 0.0, 0.0)
+        self._xs: list[np.ndarray] = []
+        self._ys: list[np.ndarray] = []
+
+    def install(self, det: CameraDetector) -> None:
+        original = detector_module.measure_blobs
+
+        def recording(*a, **kw):
+            out = original(*a, **kw)
+            self._xs.append(np.asarray(out[0], float))
+            self._ys.append(np.asarray(out[1], float))
+            return out
+        detector_module.measure_blobs = recording
+        det.use_classifier(None)
+        det._qualities = self._scores
+
+    def _scores(self, lengths: np.ndarray, contrasts: np.ndarray, features: np.ndarray) -> np.ndarray:
+        xs, ys = np.concatenate(self._xs), np.concatenate(self._ys)
+        self._xs.clear()
+        self._ys.clear()
+        assert len(xs) == len(lengths), "the oracle lost track of the candidates"
+        visible, lx, ly = self.label
+        if not visible:
+            return np.full(len(xs), self.OTHER)
+        return np.where(np.hypot(xs - lx, ys - ly) <= self.tol, self.SHUTTLE, self.OTHER)
 
 
 def label_cause(det: CameraDetector, result, x: float, y: float, tol: float) -> str:
@@ -81,7 +125,7 @@ def label_cause(det: CameraDetector, result, x: float, y: float, tol: float) -> 
 
 def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
            overrides: tuple[tuple[str, str], ...] = (), transform=None,
-           classifier=None, adapt: bool | None = None) -> collections.Counter:
+           classifier=None, adapt: bool | None = None, oracle: bool = False) -> collections.Counter:
     """Outcome counts of one clip, and (outcome, cause) counts of its wrong frames.
 
     ``transform``: an object with ``frame(image) -> image`` and ``point(x, y) -> (x, y) | None``
@@ -89,12 +133,13 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
     (benchmarks/augment.py). ``classifier``: a CandidateClassifier used instead of the preset's
     (a leave-one-clip-out study, ``train_classifier.py --leave-one-out``). ``adapt``: adapt that
     classifier to the clip first as `detect` does (core/adaptation.py); None: as the preset says,
-    and never for the live readout (look-ahead 0: the GUI does not adapt)."""
+    and never for the live readout (look-ahead 0: the GUI does not adapt). ``oracle``: score the
+    candidates from the labels instead (``LabelOracle``; no adaptation)."""
     params = load_preset(preset).with_value("lookahead.frames", lookahead)
     for path, value in overrides:
         params = params.with_value(path, value)
     if adapt is None:
-        adapt = lookahead > 0 and params.classifier.adapt_min_run > 0
+        adapt = lookahead > 0 and params.classifier.adapt_min_run > 0 and not oracle
     if adapt:
         if params.classifier.adapt_min_run <= 0:
             params = params.with_value("classifier.adapt_min_run", DEFAULT_MIN_RUN)
@@ -113,6 +158,11 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
     det, la = CameraDetector(params), CameraLookahead(params)
     if classifier is not None:
         det.use_classifier(classifier)
+    tol = tolerance_px(1280)
+    judge = LabelOracle(tol) if oracle else None
+    restore = detector_module.measure_blobs
+    if judge is not None:
+        judge.install(det)
     labels = read_point_labels(clip.labels).as_dict()
     if transform is not None:
         moved = {}
@@ -121,19 +171,23 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
             moved[f] = (True, *xy) if xy is not None else (False, 0.0, 0.0)
         labels = moved
     video = VideoFile(clip.video)
-    tol = tolerance_px(1280)
     causes: dict[int, str] = {}
     decided = []
     i = 0
-    while (frame := video.read()) is not None:
-        if transform is not None:
-            frame = transform.frame(frame)
-        res = det.process(frame, i / video.fps, keep_mask=True)
-        visible, x, y = labels.get(i, (False, 0.0, 0.0))
-        if visible:
-            causes[i] = label_cause(det, res, x, y, tol)
-        decided += la.push(dataclass_without_mask(res), i / video.fps)
-        i += 1
+    try:
+        while (frame := video.read()) is not None:
+            if transform is not None:
+                frame = transform.frame(frame)
+            visible, x, y = labels.get(i, (False, 0.0, 0.0))
+            if judge is not None:
+                judge.label = (visible, x, y)
+            res = det.process(frame, i / video.fps, keep_mask=True)
+            if visible:
+                causes[i] = label_cause(det, res, x, y, tol)
+            decided += la.push(dataclass_without_mask(res), i / video.fps)
+            i += 1
+    finally:
+        detector_module.measure_blobs = restore
     decided += la.flush()
     video.close()
     out = collections.Counter()
@@ -224,6 +278,9 @@ def main() -> int:
     ap.add_argument("--lone", type=float, default=None, metavar="Q",
                     help="instead: the frames with no report where a refused blob scores >= Q "
                          "(online, lone_quality off), and where that blob lies")
+    ap.add_argument("--oracle", action="store_true",
+                    help="score the candidates from the labels (a perfect classifier): the ceiling "
+                         "the candidates and the association leave")
     ap.add_argument("--set", action="append", default=[], metavar="GROUP.NAME=VALUE",
                     help="override one preset value (repeatable), e.g. association.hop_distance=25")
     args = ap.parse_args()
@@ -248,7 +305,8 @@ def main() -> int:
     lines: list[str] | None = [] if args.frames else None
     per_clip = []
     for clip in clips:
-        counts = census(clip, args.preset, args.lookahead, lines, overrides, adapt=args.adapt)
+        counts = census(clip, args.preset, args.lookahead, lines, overrides, adapt=args.adapt,
+                        oracle=args.oracle)
         per_clip.append(f"{clip.name} {summary(counts)}")
         total += counts
     if lines:
