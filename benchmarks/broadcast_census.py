@@ -159,10 +159,6 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
     if classifier is not None:
         det.use_classifier(classifier)
     tol = tolerance_px(1280)
-    judge = LabelOracle(tol) if oracle else None
-    restore = detector_module.measure_blobs
-    if judge is not None:
-        judge.install(det)
     labels = read_point_labels(clip.labels).as_dict()
     if transform is not None:
         moved = {}
@@ -174,7 +170,11 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
     causes: dict[int, str] = {}
     decided = []
     i = 0
+    judge = LabelOracle(tol) if oracle else None
+    restore = detector_module.measure_blobs
     try:
+        if judge is not None:
+            judge.install(det)
         while (frame := video.read()) is not None:
             if transform is not None:
                 frame = transform.frame(frame)
