@@ -22,6 +22,7 @@ candidates and mask at the label:
     .venv/bin/python benchmarks/broadcast_census.py --lone 0.75   # what association.lone_quality would report
     .venv/bin/python benchmarks/broadcast_census.py --no-adapt   # the shipped classifier, not adapted to each clip
     .venv/bin/python benchmarks/broadcast_census.py --oracle     # the ceiling: candidates scored from the labels
+    .venv/bin/python benchmarks/broadcast_census.py --skip-disputed   # without the frames the clips' labels disagree on
 
 Held-out clips are refused unless --held-out is given (they are for the final measurement only).
 """
@@ -50,7 +51,7 @@ from badminton_gui.core.lookahead import CameraLookahead  # noqa: E402
 from badminton_gui.io.labels import read_point_labels  # noqa: E402
 from badminton_gui.io.presets import load_preset  # noqa: E402
 from badminton_gui.io.video import VideoFile  # noqa: E402
-from clips import broadcast_clips  # noqa: E402
+from clips import DISPUTED_FRAMES, broadcast_clips  # noqa: E402
 
 # px² of mask: a connected foreground region at the label larger than this is "a large blob"
 # (a shuttle at 1280 px is at most ~15 × 15 px with the mask's dilation).
@@ -125,7 +126,8 @@ def label_cause(det: CameraDetector, result, x: float, y: float, tol: float) -> 
 
 def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
            overrides: tuple[tuple[str, str], ...] = (), transform=None,
-           classifier=None, adapt: bool | None = None, oracle: bool = False) -> collections.Counter:
+           classifier=None, adapt: bool | None = None, oracle: bool = False,
+           skip_frames: frozenset[int] = frozenset()) -> collections.Counter:
     """Outcome counts of one clip, and (outcome, cause) counts of its wrong frames.
 
     ``transform``: an object with ``frame(image) -> image`` and ``point(x, y) -> (x, y) | None``
@@ -134,7 +136,8 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
     (a leave-one-clip-out study, ``train_classifier.py --leave-one-out``). ``adapt``: adapt that
     classifier to the clip first as `detect` does (core/adaptation.py); None: as the preset says,
     and never for the live readout (look-ahead 0: the GUI does not adapt). ``oracle``: score the
-    candidates from the labels instead (``LabelOracle``; no adaptation)."""
+    candidates from the labels instead (``LabelOracle``; no adaptation). ``skip_frames``: frames
+    left out of the counts (counted as ``skipped``: clips.DISPUTED_FRAMES)."""
     params = load_preset(preset).with_value("lookahead.frames", lookahead)
     for path, value in overrides:
         params = params.with_value(path, value)
@@ -192,6 +195,9 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
     video.close()
     out = collections.Counter()
     for f, (visible, x, y) in sorted(labels.items()):
+        if f in skip_frames:
+            out["skipped"] += 1
+            continue
         d = decided[f].detection if f < len(decided) else None
         if d is None:
             outcome = "FN" if visible else "TN"
@@ -281,6 +287,9 @@ def main() -> int:
     ap.add_argument("--oracle", action="store_true",
                     help="score the candidates from the labels (a perfect classifier): the ceiling "
                          "the candidates and the association leave")
+    ap.add_argument("--skip-disputed", action="store_true",
+                    help="leave out the frames whose labels contradict another clip's "
+                         "(clips.DISPUTED_FRAMES: a held serve labelled both ways)")
     ap.add_argument("--set", action="append", default=[], metavar="GROUP.NAME=VALUE",
                     help="override one preset value (repeatable), e.g. association.hop_distance=25")
     args = ap.parse_args()
@@ -306,7 +315,8 @@ def main() -> int:
     per_clip = []
     for clip in clips:
         counts = census(clip, args.preset, args.lookahead, lines, overrides, adapt=args.adapt,
-                        oracle=args.oracle)
+                        oracle=args.oracle, skip_frames=DISPUTED_FRAMES.get(clip.name, frozenset())
+                        if args.skip_disputed else frozenset())
         per_clip.append(f"{clip.name} {summary(counts)}")
         total += counts
     if lines:

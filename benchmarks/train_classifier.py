@@ -42,7 +42,7 @@ from badminton_gui.core.detector import FEATURE_NAMES, PATCH_NAMES, CameraDetect
 from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
 from badminton_gui.io.labels import read_point_labels, read_timestamps  # noqa: E402
 from badminton_gui.io.presets import load_preset  # noqa: E402
-from clips import broadcast_clips, stereo_clips  # noqa: E402
+from clips import DISPUTED_FRAMES, broadcast_clips, stereo_clips  # noqa: E402
 
 
 CACHE_DIR = Path("/tmp/badminton_classifier_cache")
@@ -198,6 +198,9 @@ def main() -> int:
                     help="with --leave-one-out: adapt each left-out classifier to its clip first "
                          "(core/adaptation.py; default: as `detect`, the preset's "
                          "classifier.adapt_min_run; --no-adapt: the classifier as trained)")
+    ap.add_argument("--skip-disputed", action="store_true",
+                    help="broadcast --leave-one-out: leave out the frames whose labels contradict the "
+                         "other clip's (clips.DISPUTED_FRAMES: a held serve labelled both ways)")
     ap.add_argument("--members", type=int, default=None,
                     help="MLPs averaged in logit (default: 9 for both two-camera kinds, 3 broadcast; "
                          "1 without patches)")
@@ -311,7 +314,9 @@ def leave_one_out(args, jobs: list[tuple], parts: list, train) -> dict:
         rows = [p for p, job in zip(parts, jobs) if job[0] != str(clip.video)]
         model = train(np.vstack([p[0] for p in rows]), np.concatenate([p[1] for p in rows]))
         for setting in settings:
-            counts = census(clip, "broadcast", 4, None, setting, classifier=model, adapt=args.adapt)
+            counts = census(clip, "broadcast", 4, None, setting, classifier=model, adapt=args.adapt,
+                            skip_frames=DISPUTED_FRAMES.get(clip.name, frozenset()) if args.skip_disputed
+                            else frozenset())
             totals[setting] += counts
             if not setting:
                 print(f"  {clip.name:10s} trained without it: {summary(counts)}", flush=True)

@@ -90,3 +90,20 @@ def test_the_oracle_decides_what_the_chain_reports_and_leaves_the_detector_as_it
     assert detector_module.measure_blobs is original
     assert right["TP"] >= 35, right
     assert wrong["FN"] >= 35 and wrong["FP1"] <= 5, wrong
+
+
+def test_skipped_frames_leave_the_counts_and_are_counted_apart(tmp_path):
+    clip = _dot_clip(tmp_path, 0.0)
+    whole = broadcast_census.census(clip, "broadcast", 4, None, oracle=True)
+    part = broadcast_census.census(clip, "broadcast", 4, None, oracle=True, skip_frames=frozenset(range(10)))
+    outcomes = ("TP", "TN", "FP1", "FP2", "FN")
+    assert sum(whole[k] for k in outcomes) == 45 and sum(part[k] for k in outcomes) == 35
+    assert part["skipped"] == 10
+    # The frames counted are the same frames, scored alike.
+    assert part["TP"] >= whole["TP"] - 10
+
+
+def test_the_disputed_frames_are_the_held_serves_of_the_tuned_on_tv_clips():
+    import clips
+    assert set(clips.DISPUTED_FRAMES) == {"bwf_00001", "bwf_00025"}
+    assert not any(name in clips.HELD_OUT for name in clips.DISPUTED_FRAMES)
