@@ -2,7 +2,8 @@
 
 Why this file exists: ``broadcast_census.py --oracle`` scores every candidate from the labels to
 say what a perfect classifier would leave (the thirty-second round's finding: on the TV clips the
-ceiling sits near the goal, so the next rounds go to the candidates, not the classifier). An
+ceiling sits below the 90 % goal, so the next rounds go to the candidates and the data, not the
+classifier). An
 oracle that scored the wrong rows, or that stayed installed in the detector module after its
 census, would report a ceiling that is not there — and would silently change every later run in
 the same process.
