@@ -14,4 +14,22 @@ from .core.types import CameraResult, Candidate, StereoFrame, TrackResult
 
 __all__ = ["StereoTracker", "StereoRig", "RigError", "TrackerParams", "TrackResult",
            "CameraResult", "Candidate", "StereoFrame"]
-__version__ = "0.1.0"
+
+
+def _version() -> str:
+    """The version has one source, pyproject.toml: read from the installed package's metadata,
+    or from pyproject.toml itself when this checkout was never installed."""
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("badminton-gui")
+    except PackageNotFoundError:
+        import tomllib
+        from pathlib import Path
+        try:
+            with open(Path(__file__).resolve().parents[1] / "pyproject.toml", "rb") as fh:
+                return str(tomllib.load(fh)["project"]["version"])
+        except (OSError, KeyError, tomllib.TOMLDecodeError):
+            return "unknown"
+
+
+__version__ = _version()

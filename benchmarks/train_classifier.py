@@ -38,7 +38,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from badminton_gui.core.classifier import RESOURCES_DIR, train_ensemble, train_mlp  # noqa: E402
+from badminton_gui.core.classifier import train_ensemble, train_mlp  # noqa: E402
 from badminton_gui.core.detector import FEATURE_NAMES, PATCH_NAMES, CameraDetector, patch_features  # noqa: E402
 from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
 from badminton_gui.io.labels import read_point_labels, read_timestamps  # noqa: E402
@@ -294,7 +294,7 @@ def main() -> int:
           f"AUC {auc:.3f}, recall@0.5 {np.mean(pv[yv] > 0.5):.3f}, "
           f"false-positive rate@0.5 {np.mean(pv[~yv] > 0.5):.3f}")
     model = train(x, y, hidden=args.hidden, epochs=args.epochs, name=out_name, feature_names=names)
-    out = Path(args.out) if args.out else RESOURCES_DIR / f"{out_name}.json"
+    out = Path(args.out) if args.out else ROOT / "resources" / f"{out_name}.json"
     model.save(out)
     print(f"→ {out}")
     return 0

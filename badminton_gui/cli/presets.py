@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..io.presets import DEFAULT_PRESET, PRESETS_DIR, list_presets
+from ..io.presets import DEFAULT_PRESET, list_presets, presets_dir
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,5 +19,5 @@ def run(args: argparse.Namespace) -> int:
     for name, description in presets.items():
         mark = " (default)" if name == DEFAULT_PRESET else ""
         print(f"{name:<{width}}  {description}{mark}")
-    print(f"\n{len(presets)} presets in {PRESETS_DIR}; use --preset NAME, or a .json path.")
+    print(f"\n{len(presets)} presets in {presets_dir()}; use --preset NAME, or a .json path.")
     return 0

@@ -6,7 +6,8 @@ hands, shoes, shirts, rackets and lights by a *combination* of them (small, brig
 surroundings, isolated, not saturated). A tiny multilayer perceptron on hand-crafted features
 (``detector.FEATURE_NAMES``; the TV classifier also the blob's grey patch, ``PATCH_NAMES``)
 turns them into one probability that the association step uses as the candidate's quality. It is numpy-only (OpenCV 5 ships no ``ml`` module) and its weights
-live in a small JSON file in ``resources/`` written by ``benchmarks/train_classifier.py``.
+live in a small JSON file shipped in ``resources/`` (``core/resources.py``), written by
+``benchmarks/train_classifier.py``.
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-RESOURCES_DIR = Path(__file__).resolve().parents[2] / "resources"
+from .resources import resource_path
+
 
 
 class ClassifierError(ValueError):
@@ -55,10 +57,10 @@ class CandidateClassifier:
 
 
 def load_classifier(name_or_path: str) -> CandidateClassifier:
-    """A classifier by name (``resources/<name>.json``) or by path."""
+    """A shipped classifier by name (``resources/<name>.json``) or a classifier file by path."""
     path = Path(name_or_path)
     if path.suffix != ".json":
-        path = RESOURCES_DIR / f"{name_or_path}.json"
+        path = resource_path(f"{name_or_path}.json")
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
         return CandidateClassifier(

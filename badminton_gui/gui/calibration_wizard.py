@@ -47,9 +47,11 @@ from ..core.calibration import (EPIPOLAR_ACCEPTABLE_PX, EPIPOLAR_EXCELLENT_PX,
                                 rectified_preview, solve_stereo)
 from ..core.court import court_lines
 from ..core.rig import RigError, StereoRig
+from ..io.app_dirs import rig_dir
 from ..io.sources import FrameSource, SourceError
 
-DEFAULT_SAVE_DIR = Path(__file__).resolve().parents[2] / "calibration"
+# The checkout's calibration/ folder, or a per-user folder when the package is installed.
+DEFAULT_SAVE_DIR = rig_dir()
 DISPLAY_MAX_WIDTH = 640          # the worker shrinks frames to this before handing them over
 SEARCH_MAX_SIDE = 800            # board search resolution in live use (refined at full res)
 GRADE_COLOURS = {"excellent": "#1b8a2e", "acceptable": "#b07800", "poor": "#c0392b"}

@@ -1,4 +1,4 @@
-"""Parameter presets: one readable JSON file per kind of set-up, in ``resources/presets/``.
+"""Parameter presets: one readable JSON file per kind of set-up, shipped in ``resources/presets/``.
 
 Why this file exists: the operator picks a set-up (two fixed high-speed cameras, a broadcast
 camera) rather than tuning thirty thresholds; the CLI (`--preset`), the GUI and `presets` list
@@ -11,16 +11,20 @@ import json
 from pathlib import Path
 
 from ..core.params import ParamError, TrackerParams
+from ..core.resources import resource_path
 
-RESOURCES_DIR = Path(__file__).resolve().parents[2] / "resources"
-PRESETS_DIR = RESOURCES_DIR / "presets"
 DEFAULT_PRESET = "default"
+
+
+def presets_dir() -> Path:
+    """The folder of the shipped presets (inside the installed package)."""
+    return resource_path("presets")
 
 
 def list_presets() -> dict[str, str]:
     """Preset name → its one-line description."""
     out = {}
-    for path in sorted(PRESETS_DIR.glob("*.json")):
+    for path in sorted(presets_dir().glob("*.json")):
         try:
             description = json.loads(path.read_text(encoding="utf-8")).get("_description", "")
         except (OSError, json.JSONDecodeError):
@@ -33,7 +37,7 @@ def preset_path(name_or_path: str) -> Path:
     candidate = Path(name_or_path)
     if candidate.suffix == ".json" and candidate.is_file():
         return candidate
-    path = PRESETS_DIR / f"{name_or_path}.json"
+    path = presets_dir() / f"{name_or_path}.json"
     if not path.is_file():
         known = ", ".join(list_presets()) or "none"
         raise ParamError(f"no preset {name_or_path!r} (known presets: {known}; or give a .json path)")
