@@ -19,8 +19,8 @@ pytest.importorskip("PySide6")
 pytestmark = [pytest.mark.gui,
               pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (run under Xvfb)")]
 
-from PySide6.QtCore import QMimeData, QPointF, Qt, QUrl  # noqa: E402
-from PySide6.QtGui import QDropEvent, QKeySequence  # noqa: E402
+from PySide6.QtCore import QMimeData, QPoint, QPointF, Qt, QUrl  # noqa: E402
+from PySide6.QtGui import QDragEnterEvent, QDropEvent, QKeySequence  # noqa: E402
 from PySide6.QtWidgets import QApplication, QFileDialog, QPushButton  # noqa: E402
 
 import badminton_gui  # noqa: E402
@@ -68,6 +68,9 @@ def test_about_shows_the_version_licence_and_the_three_folders(main_window, isol
     for version in (PySide6.__version__, cv2.__version__, numpy.__version__):
         assert version in text
     assert str(app_dirs.log_dir()) in about.report_text()
+    for name, path in expected.items():
+        about.copy_buttons[name].click()
+        assert QApplication.clipboard().text() == str(path)
 
 
 def test_about_folder_link_opens_that_folder(main_window, opened_urls):
@@ -153,6 +156,23 @@ def _drop(window, paths) -> None:
                        Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier)
     window.dropEvent(event)
     assert event.isAccepted()
+
+
+def test_files_dragged_over_any_view_are_taken_by_the_window(main_window):
+    window = main_window()
+    for target in (window.left_feed, window.plan.widget, window.readouts):
+        files = QMimeData()
+        files.setUrls([QUrl.fromLocalFile("/data/rig.yaml")])
+        event = QDragEnterEvent(QPoint(10, 10), Qt.DropAction.CopyAction, files,
+                                Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier)
+        QApplication.sendEvent(target, event)
+        assert event.isAccepted(), type(target).__name__
+    text = QMimeData()
+    text.setText("not a file")
+    event = QDragEnterEvent(QPoint(10, 10), Qt.DropAction.CopyAction, text,
+                            Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier)
+    QApplication.sendEvent(window.left_feed, event)
+    assert not event.isAccepted()
 
 
 def test_dropping_an_unknown_file_says_so_in_the_status_line(main_window, qtbot, tmp_path):
@@ -246,6 +266,21 @@ def test_tuning_undo_and_redo_walk_the_parameter_snapshots(main_window):
     # A new change forgets what was undone.
     tuning.editors["binarize.threshold"].spin.setValue(130)
     assert not tuning.redo_action.isEnabled()
+
+
+def test_ctrl_z_in_the_tuning_dialog_undoes(main_window, qtbot):
+    window = main_window(params=TrackerParams())
+    window.open_tuning()
+    tuning = window._tuning
+    tuning.activateWindow()
+    qtbot.waitUntil(tuning.isActiveWindow, timeout=5000)
+    tuning.editors["binarize.threshold"].spin.setValue(120)
+    tuning.group_list.setFocus()
+    qtbot.keyClick(tuning.group_list, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert tuning.params == TrackerParams()
+    qtbot.keyClick(tuning.group_list, Qt.Key.Key_Z,
+                   Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    assert tuning.params.binarize.threshold == 120
 
 
 def test_a_slider_drag_is_one_undo_step(main_window):
@@ -347,3 +382,19 @@ def test_the_recording_dialog_opens_in_the_last_recording_folder(main_window, tm
     window.stop_recording()
     assert not window.start_recording()
     assert Path(asked[-1]).parent == folder
+
+
+def test_the_process_dialog_output_opens_where_tracks_went_last(qtbot, tmp_path, monkeypatch):
+    from badminton_gui.gui.process_dialog import ProcessDialog
+    folder = tmp_path / "tracks"
+    folder.mkdir()
+    asked: list[str] = []
+    monkeypatch.setattr(QFileDialog, "getSaveFileName",
+                        staticmethod(lambda parent, caption, where, filter_:
+                                     (asked.append(where) or str(folder / "rally.csv"), "")))
+    for _ in range(2):
+        dialog = ProcessDialog(st.SourceSpec(), TrackerParams())      # no recording chosen yet
+        qtbot.addWidget(dialog)
+        dialog._browse_output()
+        assert dialog.output.text() == str(folder / "rally.csv")
+    assert asked == [str(Path.home()), str(folder)]

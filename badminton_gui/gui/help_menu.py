@@ -100,6 +100,7 @@ class AboutDialog(QDialog):
         self.folders: dict[str, Path] = {"Rigs": app_dirs.rig_dir(), "Settings": settings_file(),
                                          "Logs": app_dirs.log_dir()}
         self.folder_labels: dict[str, QLabel] = {}
+        self.copy_buttons: dict[str, QPushButton] = {}
         grid = QGridLayout()
         grid.setColumnStretch(1, 1)
         for row, (name, path) in enumerate(self.folders.items()):
@@ -117,6 +118,7 @@ class AboutDialog(QDialog):
             copy.clicked.connect(lambda _checked=False, path=path: QGuiApplication.clipboard().setText(str(path)))
             grid.addWidget(copy, row, 2)
             self.folder_labels[name] = link
+            self.copy_buttons[name] = copy
 
         self.versions_label = QLabel("<br>".join(f"{html.escape(name)} {html.escape(version)}"
                                                  for name, version in component_versions[1:]))
