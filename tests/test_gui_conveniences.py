@@ -398,3 +398,19 @@ def test_the_process_dialog_output_opens_where_tracks_went_last(qtbot, tmp_path,
         dialog._browse_output()
         assert dialog.output.text() == str(folder / "rally.csv")
     assert asked == [str(Path.home()), str(folder)]
+
+
+def test_the_refined_rig_is_saved_where_rigs_went_last(qtbot, tmp_path, monkeypatch):
+    from badminton_gui.gui.refine_dialog import RefineCalibrationDialog
+    first_folder, chosen = tmp_path / "calibration", tmp_path / "club-rigs" / "refined.yaml"
+    chosen.parent.mkdir()
+    dialog = RefineCalibrationDialog(lambda: None, lambda: first_folder)
+    qtbot.addWidget(dialog)
+    dialog.refined = make_rig("binocular")
+    asked: list[str] = []
+    monkeypatch.setattr(QFileDialog, "getSaveFileName",
+                        staticmethod(lambda parent, caption, where, filter_: (asked.append(where) or str(chosen), "")))
+    assert dialog.save_as() == chosen.resolve()
+    assert dialog.save_as() == chosen.resolve()
+    assert [Path(a).parent for a in asked] == [first_folder, chosen.parent]
+    assert all(Path(a).name.startswith("rig_refined_") for a in asked)

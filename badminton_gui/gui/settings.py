@@ -95,15 +95,16 @@ def _default_folder(kind: str) -> str:
     return str(Path.home())
 
 
-def dialog_folder(settings: QSettings, kind: str) -> str:
+def dialog_folder(settings: QSettings, kind: str, first_time: str | None = None) -> str:
     """The folder a file dialog for ``kind`` (one of FILE_KINDS) opens in: the one last used for
-    that kind, while it exists; else the rigs' folder for rigs and the home folder otherwise."""
+    that kind, while it exists; else ``first_time`` if given, else the rigs' folder for rigs and
+    the home folder otherwise."""
     if kind not in FILE_KINDS:
         raise ValueError(f"unknown kind of file {kind!r}")
     folder = str(settings.value(f"folders/{kind}", "") or "")
     if folder and os.path.isdir(folder):
         return folder
-    return _default_folder(kind)
+    return first_time if first_time is not None else _default_folder(kind)
 
 
 def remember_dialog_folder(settings: QSettings, kind: str, chosen: str) -> None:
