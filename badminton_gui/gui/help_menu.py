@@ -24,9 +24,16 @@ from .settings import open_settings
 PROGRAM_NAME = "Badminton shuttle tracker"
 LICENCE = "MIT"
 ICON_FILE = "badminton-gui.png"
-# Shortcuts that live in other windows than the main one, listed with the main window's.
-OTHER_SHORTCUTS = (("Tuning dialog", "Undo a parameter change", "Ctrl+Z"),
-                   ("Tuning dialog", "Redo", "Ctrl+Shift+Z, Ctrl+Y"))
+
+
+def _other_shortcuts() -> list[tuple[str, str, str]]:
+    """Shortcuts of other windows than the main one, listed with the main window's."""
+    from .tuning_dialog import REDO_KEYS, UNDO_KEYS
+
+    def native(keys: tuple[str, ...]) -> str:
+        return ", ".join(QKeySequence(k).toString(QKeySequence.SequenceFormat.NativeText) for k in keys)
+    return [("Tuning dialog", "Undo a parameter change", native(UNDO_KEYS)),
+            ("Tuning dialog", "Redo", native(REDO_KEYS))]
 
 
 def icon_path() -> Path:
@@ -165,7 +172,7 @@ def shortcut_rows(menu_bar: QMenuBar) -> list[tuple[str, str, str]]:
                     rows.append((path, action.text().replace("&", ""), keys))
 
     walk(menu_bar, "")
-    return rows + list(OTHER_SHORTCUTS)
+    return rows + _other_shortcuts()
 
 
 class ShortcutsDialog(QDialog):

@@ -35,6 +35,8 @@ from .worker import DisplayPacket
 SEND_INTERVAL_MS = 50          # at most ~20 snapshots per second while a slider moves
 MAX_SLIDER_POSITIONS = 2000    # a slider finer than this is useless; the spin box keeps the step
 UNDO_LIMIT = 200               # snapshots kept for undo (each is a few kB)
+UNDO_KEYS = ("Ctrl+Z",)
+REDO_KEYS = ("Ctrl+Shift+Z", "Ctrl+Y")
 
 
 class ParamsHistory:
@@ -175,10 +177,10 @@ class TuningDialog(QDialog):
         self.redo_button.setToolTip("Redo the change undone last (Ctrl+Shift+Z)")
         self.redo_button.clicked.connect(self.redo)
         self.undo_action = QAction("Undo", self)
-        self.undo_action.setShortcuts(QKeySequence.keyBindings(QKeySequence.StandardKey.Undo))
+        self.undo_action.setShortcuts([QKeySequence(k) for k in UNDO_KEYS])
         self.undo_action.triggered.connect(self.undo)
         self.redo_action = QAction("Redo", self)
-        self.redo_action.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
+        self.redo_action.setShortcuts([QKeySequence(k) for k in REDO_KEYS])
         self.redo_action.triggered.connect(self.redo)
         for action in (self.undo_action, self.redo_action):
             action.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
