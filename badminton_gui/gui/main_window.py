@@ -1225,7 +1225,8 @@ class MainWindow(QMainWindow):
                 self.banner.show_message(rig_advice, kind="advice", action=("Refine…", self.open_refine))
 
     def use_preset(self, name: str) -> None:
-        """Track with a shipped preset from now on (as choosing it in the Tuning dialog does)."""
+        """Track with a shipped preset, or a preset .json file (dropped on the window), from now
+        on (as choosing it in the Tuning dialog does)."""
         try:
             params = load_preset(name)
         except (OSError, ValueError) as exc:

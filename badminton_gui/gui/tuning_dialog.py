@@ -75,6 +75,11 @@ class ParamsHistory:
         return bool(self._redo)
 
 
+def _load_preset_or_file(name_or_path: str) -> TrackerParams:
+    """A shipped preset by name, or a parameter file the user chose (whatever its extension)."""
+    return TrackerParams.load(name_or_path) if Path(name_or_path).suffix else load_preset(name_or_path)
+
+
 def _decimals(step: float) -> int:
     return max(0, -Decimal(str(step)).normalize().as_tuple().exponent)
 
@@ -353,7 +358,7 @@ class TuningDialog(QDialog):
     def reset_to_preset(self) -> None:
         """Reset: the values of the preset in use (read again: a preset file may have changed)."""
         try:
-            params = load_preset(self.preset)
+            params = _load_preset_or_file(self.preset)
         except (ParamError, OSError) as exc:
             QMessageBox.warning(self, "Reset", f"The preset {self.preset} cannot be loaded: {exc}")
             return
@@ -402,7 +407,7 @@ class TuningDialog(QDialog):
             return
         st.remember_dialog_folder(settings, "presets", path)
         try:
-            self.apply_preset(path, load_preset(path))
+            self.apply_preset(path, _load_preset_or_file(path))
         except (ParamError, OSError) as exc:
             QMessageBox.warning(self, "Load preset", str(exc))
 
