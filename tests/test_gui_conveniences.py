@@ -414,3 +414,16 @@ def test_the_refined_rig_is_saved_where_rigs_went_last(qtbot, tmp_path, monkeypa
     assert dialog.save_as() == chosen.resolve()
     assert [Path(a).parent for a in asked] == [first_folder, chosen.parent]
     assert all(Path(a).name.startswith("rig_refined_") for a in asked)
+
+
+def test_a_preset_named_from_outside_the_dialog_becomes_its_reset(main_window):
+    """As `badminton-gui --preset coarse` would say it: the window is told which preset its
+    parameters came from, and the open dialog's Reset follows."""
+    window = main_window(params=load_preset("coarse"))
+    window.open_tuning()
+    window.remember_preset("coarse")
+    tuning = window._tuning
+    assert tuning.reset_button.text() == "Reset to preset 'coarse'"
+    tuning.editors["binarize.threshold"].spin.setValue(load_preset("coarse").binarize.threshold - 5)
+    tuning.reset_to_preset()
+    assert window.params == load_preset("coarse")

@@ -881,7 +881,7 @@ class MainWindow(QMainWindow):
         if self._tuning is None:
             self._tuning = TuningDialog(self.params, self, preset=self.preset)
             self._tuning.paramsChanged.connect(self.set_params)
-            self._tuning.presetChosen.connect(self._remember_preset)
+            self._tuning.presetChosen.connect(self.remember_preset)
         self._tuning.show()
         self._tuning.raise_()
 
@@ -1236,14 +1236,16 @@ class MainWindow(QMainWindow):
             self._tuning.apply_preset(name, params)      # shows it, and sends it here
         else:
             self.set_params(params)
-            self._remember_preset(name)
+            self.remember_preset(name)
         self.statusBar().showMessage(f"Tracking with the {Path(name).stem} preset", 8000)
 
-    def _remember_preset(self, name_or_path: str) -> None:
-        """The parameters now come from this preset (a name, or a .json file): the next
-        session's tuning resets to it too."""
+    def remember_preset(self, name_or_path: str) -> None:
+        """The parameters now come from this preset (a name, or a .json file): the tuning
+        dialog's Reset goes back to it, in this session and the next."""
         self.preset = name_or_path
         st.save_preset_in_use(self.settings, name_or_path)
+        if self._tuning is not None and self._tuning.preset != name_or_path:
+            self._tuning.set_preset(name_or_path)
 
     @property
     def display_rate(self) -> float:

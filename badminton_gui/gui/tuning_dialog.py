@@ -350,10 +350,14 @@ class TuningDialog(QDialog):
     def apply_preset(self, name_or_path: str, params: TrackerParams) -> None:
         """Track with a preset's values (``params``, loaded from ``name_or_path``): shown, sent,
         and what Reset goes back to from now on."""
-        self.preset = name_or_path
-        self._show_preset_name()
+        self.set_preset(name_or_path)
         self.set_params(params)
         self.presetChosen.emit(name_or_path)
+
+    def set_preset(self, name_or_path: str) -> None:
+        """What Reset goes back to from now on (the parameters shown stay as they are)."""
+        self.preset = name_or_path
+        self._show_preset_name()
 
     def reset_to_preset(self) -> None:
         """Reset: the values of the preset in use (read again: a preset file may have changed)."""
