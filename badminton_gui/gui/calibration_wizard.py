@@ -49,6 +49,7 @@ from ..core.court import court_lines
 from ..core.rig import RigError, StereoRig
 from ..io.app_dirs import rig_dir
 from ..io.sources import FrameSource, SourceError
+from . import settings as st
 
 # The checkout's calibration/ folder, or a per-user folder when the package is installed.
 DEFAULT_SAVE_DIR = rig_dir()
@@ -872,12 +873,16 @@ class CalibrationWizard(QDialog):
         self._params = []
 
     def _choose_folders(self) -> None:
-        left = QFileDialog.getExistingDirectory(self, "Folder of LEFT camera images")
+        settings = st.open_settings()
+        left = QFileDialog.getExistingDirectory(self, "Folder of LEFT camera images",
+                                                st.dialog_folder(settings, "images"))
         if not left:
             return
-        right = QFileDialog.getExistingDirectory(self, "Folder of RIGHT camera images")
+        # The right camera's folder is usually the left one's sibling.
+        right = QFileDialog.getExistingDirectory(self, "Folder of RIGHT camera images", str(Path(left).parent))
         if not right:
             return
+        st.remember_dialog_folder(settings, "images", str(Path(left).parent))
         self.calibrate_from_folders(Path(left), Path(right))
 
     def calibrate_from_folders(self, left_dir: Path, right_dir: Path) -> None:
@@ -1188,9 +1193,12 @@ class CalibrationWizard(QDialog):
         self._grabber = None
 
     def _load_court_image(self) -> None:
-        name, _ = QFileDialog.getOpenFileName(self, "Left camera image of the court", "",
+        settings = st.open_settings()
+        name, _ = QFileDialog.getOpenFileName(self, "Left camera image of the court",
+                                              st.dialog_folder(settings, "images"),
                                               "Images (*.png *.jpg *.jpeg *.bmp *.tif)")
         if name:
+            st.remember_dialog_folder(settings, "images", name)
             image = cv2.imread(name)
             if image is None:
                 self.court_status.setText(f"cannot read {name}")

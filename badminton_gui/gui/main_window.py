@@ -13,6 +13,10 @@ Calibration ▸ Refine from tracked shuttle… (gui/refine_dialog.py) collects t
 pairs through the worker's result tap, on the worker's thread; an applied refit reaches the
 running tracker through ``TrackingWorker.set_rig``, and a saved one becomes the source's rig
 file for the next start, as the calibration wizard's rig does.
+
+Around that, what users of a desktop program expect: a Help menu (gui/help_menu.py), the whole
+window (docks, toolbars, splitters) as it was left, and files dropped on the window opened
+through the same dialogs and checks as the menus.
 """
 
 from __future__ import annotations
@@ -22,15 +26,15 @@ import time
 from pathlib import Path
 from typing import Callable
 
-from PySide6.QtCore import QPoint, QStandardPaths, Qt, QThread, QTimer, Signal
+from PySide6.QtCore import QByteArray, QMimeData, QPoint, QStandardPaths, Qt, QThread, QTimer, Signal
 from PySide6.QtGui import QAction, QFont, QFontMetrics, QKeySequence, QPainter, QPixmap
-from PySide6.QtWidgets import (QDockWidget, QFileDialog, QFrame, QGridLayout, QHBoxLayout,
-                               QLabel, QMainWindow, QMessageBox, QPushButton, QSizePolicy,
+from PySide6.QtWidgets import (QApplication, QDockWidget, QFileDialog, QFrame, QGridLayout,
+                               QHBoxLayout, QLabel, QMainWindow, QMessageBox, QPushButton, QSizePolicy,
                                QSplitter, QVBoxLayout, QWidget)
 
 from ..core.evaluation import Outcomes
 from ..core.params import TrackerParams
-from ..core.rig import StereoRig
+from ..core.rig import RigError, StereoRig
 from ..io.sources import SourceError
 from ..io.presets import load_preset
 from ..io.track_file import FILE_LOOKAHEAD
@@ -38,6 +42,7 @@ from ..io.track_log import RecordingError, TrackRecorder
 from . import settings as st
 from .court_views import CourtGLView, CourtPlanView, SideView, gl_unavailable_reason
 from .feed_view import FeedView
+from .help_menu import AboutDialog, ShortcutsDialog, app_icon, log_link_html, open_log_folder
 from .keep_up import FAST_PRESET, DisplayYield, KeepUpWatch
 from .rig_check import RigCheck, readout_text as rig_readout_text
 from .robot_panel import RobotLinkPanel
@@ -57,6 +62,13 @@ LATE_POLL_MS = 4
 # costs the GUI thread (and, through the GIL, the tracker) more than a feed, and a flight drawn
 # 15 times a second, or a number changing 15 times a second, looks no different to the operator.
 SLOW_VIEW_INTERVAL_S = 1.0 / 15.0
+# The layout of docks, toolbars and splitters the saved window state describes: raise it when
+# they change, and a state saved by an older layout is ignored instead of misplacing things.
+WINDOW_STATE_VERSION = 1
+# What a dropped file is, by its extension (anything else is refused with a status message).
+VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".mpg", ".mpeg", ".webm")
+RIG_SUFFIXES = (".yaml", ".yml", ".xml")
+PRESET_SUFFIXES = (".json",)
 
 
 def rig_save_dir() -> Path:
@@ -94,6 +106,12 @@ class Banner(QFrame):
         self.label = QLabel("", self)
         self.label.setWordWrap(True)
         self.label.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        # Under an error: where the log is, as a link that opens the folder.
+        self.log_label = QLabel(log_link_html(), self)
+        self.log_label.setTextInteractionFlags(Qt.TextInteractionFlag.TextBrowserInteraction)
+        self.log_label.linkActivated.connect(lambda _url: open_log_folder())
+        self.log_label.setObjectName("log")
+        self.log_label.hide()
         self.action_button = QPushButton("", self)
         self.action_button.hide()
         self.action_button.clicked.connect(self._run_action)
@@ -105,7 +123,11 @@ class Banner(QFrame):
         close.clicked.connect(self.hide)
         lay = QHBoxLayout(self)
         lay.setContentsMargins(10, 4, 4, 4)
-        lay.addWidget(self.label, 1)
+        text = QVBoxLayout()
+        text.setSpacing(0)
+        text.addWidget(self.label)
+        text.addWidget(self.log_label)
+        lay.addLayout(text, 1)
         lay.addWidget(self.action_button)
         lay.addWidget(close)
         self._set_kind("error")
@@ -113,7 +135,8 @@ class Banner(QFrame):
 
     def _set_kind(self, kind: str) -> None:
         self.kind = kind
-        self.setStyleSheet(self.STYLES[kind] + "#banner QLabel { color: white; font-weight: bold; }")
+        self.setStyleSheet(self.STYLES[kind] + "#banner QLabel { color: white; font-weight: bold; }"
+                           "#banner QLabel#log { font-weight: normal; }")
 
     def show_message(self, text: str, kind: str = "error",
                      action: tuple[str, Callable[[], None]] | None = None) -> None:
@@ -121,6 +144,8 @@ class Banner(QFrame):
         closes the line."""
         self._set_kind(kind)
         self.label.setText(text)
+        self.log_label.setText(log_link_html())     # the log folder may have been moved since
+        self.log_label.setVisible(kind == "error")
         self._action = action[1] if action else None
         self.action_button.setText(action[0] if action else "")
         self.action_button.setVisible(action is not None)
@@ -286,6 +311,8 @@ class MainWindow(QMainWindow):
         self.settings = st.open_settings()
         self.params = params or st.load_params(self.settings) or TrackerParams()
         self.spec = spec or st.load_source_spec(self.settings)
+        # The preset the parameters were set from (tuning's Reset goes back to it).
+        self.preset = st.load_preset_in_use(self.settings)
         self.rig: StereoRig | None = None
         self._source_name = "the source"     # as the worker named it when it opened
         self.worker: TrackingWorker | None = None
@@ -312,6 +339,10 @@ class MainWindow(QMainWindow):
         self._display_yield = DisplayYield(SLOW_VIEW_INTERVAL_S)
         self._build_ui()
         self._build_actions()
+        self._build_help_menu()
+        self._about: AboutDialog | None = None
+        self._set_icon()
+        self.setAcceptDrops(True)           # videos, rigs and presets dropped on the window
         self._timer = QTimer(self)
         self._timer.setTimerType(Qt.TimerType.PreciseTimer)
         self._timer.timeout.connect(self._refresh_display)
@@ -322,11 +353,7 @@ class MainWindow(QMainWindow):
         self._late_timer.timeout.connect(self._late_poll)
         self._record_timer = QTimer(self)     # the recording's row count and health, 2 Hz
         self._record_timer.timeout.connect(self._update_recording)
-        geometry = self.settings.value("window/geometry")
-        if geometry is not None:
-            self.restoreGeometry(geometry)
-        else:
-            self.resize(1280, 720)
+        self._restore_window_state()
         if start:
             self.start_spec(self.spec)
 
@@ -338,6 +365,7 @@ class MainWindow(QMainWindow):
         feeds = QSplitter(Qt.Orientation.Horizontal)
         feeds.addWidget(self.left_feed)
         feeds.addWidget(self.right_feed)
+        self.feeds_splitter = feeds
 
         self.gl_reason = gl_unavailable_reason()
         self.gl_view: CourtGLView | None = None
@@ -353,6 +381,7 @@ class MainWindow(QMainWindow):
         plots = QSplitter(Qt.Orientation.Vertical if self.gl_view is not None else Qt.Orientation.Horizontal)
         plots.addWidget(self.plan.widget)
         plots.addWidget(self.side.widget)
+        self.plots_splitter = plots
         self.readouts = Readouts()
         self.readouts.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Preferred)
 
@@ -365,6 +394,7 @@ class MainWindow(QMainWindow):
             bottom.setSizes([500, 360, 280])
         else:
             bottom.setSizes([800, 280])
+        self.bottom_splitter = bottom
 
         main = QSplitter(Qt.Orientation.Vertical)
         main.addWidget(feeds)
@@ -609,7 +639,7 @@ class MainWindow(QMainWindow):
         user cancelled or the file cannot be made (the banner says why)."""
         self.stop_recording()
         if path is None:
-            folder = str(self.settings.value("record/folder", "") or Path.home())
+            folder = st.dialog_folder(self.settings, "tracks")
             name = f"track-{time.strftime('%Y%m%d-%H%M%S')}.csv"
             path, _ = QFileDialog.getSaveFileName(self, "Record the track to", str(Path(folder) / name),
                                                   "CSV (*.csv);;All files (*)")
@@ -623,7 +653,7 @@ class MainWindow(QMainWindow):
             message = str(exc)
             self.banner.show_message(message[:1].upper() + message[1:])
             return False
-        self.settings.setValue("record/folder", str(recorder.path.parent))
+        st.remember_dialog_folder(self.settings, "tracks", str(recorder.path))
         self._recorder = recorder
         self.record_action.setChecked(True)
         if self.worker is not None:
@@ -770,13 +800,15 @@ class MainWindow(QMainWindow):
         if dialog.exec():
             self.start_spec(dialog.spec(self.realtime_action.isChecked()))
 
-    def choose_videos(self) -> None:
-        dialog = VideoPairDialog(self.spec, self)
+    def choose_videos(self, spec: st.SourceSpec | None = None) -> None:
+        """Source ▸ Stereo video pair…; ``spec`` fills the dialog in (two videos dropped)."""
+        dialog = VideoPairDialog(spec or self.spec, self)
         if dialog.exec():
             self.start_spec(dialog.spec(self.realtime_action.isChecked()))
 
-    def choose_single_video(self) -> None:
-        dialog = SingleVideoDialog(self.spec, self)
+    def choose_single_video(self, spec: st.SourceSpec | None = None) -> None:
+        """Source ▸ One video…; ``spec`` fills the dialog in (one video dropped)."""
+        dialog = SingleVideoDialog(spec or self.spec, self)
         if dialog.exec():
             if dialog.broadcast.isChecked():
                 self.use_preset("broadcast")
@@ -847,8 +879,9 @@ class MainWindow(QMainWindow):
     def open_tuning(self) -> None:
         from .tuning_dialog import TuningDialog
         if self._tuning is None:
-            self._tuning = TuningDialog(self.params, self)
+            self._tuning = TuningDialog(self.params, self, preset=self.preset)
             self._tuning.paramsChanged.connect(self.set_params)
+            self._tuning.presetChosen.connect(self.remember_preset)
         self._tuning.show()
         self._tuning.raise_()
 
@@ -935,6 +968,152 @@ class MainWindow(QMainWindow):
         """The source's rig file from now on (a restart, the next session), as after the wizard."""
         self.spec = dataclasses.replace(self.spec, calib=str(path))
         st.save_source_spec(self.settings, self.spec)
+
+    # ---- help menu, icon, window state --------------------------------------------------------
+    def _build_help_menu(self) -> None:
+        help_menu = self.menuBar().addMenu("&Help")
+        self.shortcuts_action = self._action(help_menu, "&Keyboard shortcuts", self.show_shortcuts,
+                                             QKeySequence.StandardKey.HelpContents)
+        self.log_folder_action = self._action(help_menu, "Open &log folder", self.open_log_folder)
+        help_menu.addSeparator()
+        self.about_action = self._action(help_menu, "&About", self.show_about)
+        self.help_menu = help_menu
+
+    def show_about(self) -> AboutDialog:
+        """Help ▸ About: version, licence, the rigs', settings' and logs' folders, versions."""
+        if self._about is None:
+            self._about = AboutDialog(self)
+        self._about.show()
+        self._about.raise_()
+        return self._about
+
+    def show_shortcuts(self) -> ShortcutsDialog:
+        """Help ▸ Keyboard shortcuts: every shortcut of the menus, listed from the menus."""
+        dialog = ShortcutsDialog(self.menuBar(), self)
+        dialog.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
+        dialog.show()
+        return dialog
+
+    def open_log_folder(self) -> None:
+        """Help ▸ Open log folder (created if nothing was logged yet)."""
+        from ..io.app_dirs import log_dir
+        if not open_log_folder():
+            self.statusBar().showMessage(f"No file manager could open the log folder {log_dir()}", 15000)
+
+    def _set_icon(self) -> None:
+        icon = app_icon()
+        self.setWindowIcon(icon)
+        QApplication.setWindowIcon(icon)     # the dialogs' and the task bar's too
+
+    def _layout_key(self) -> str:
+        # The 2D fallback's bottom row has one pane fewer than the 3D layout's: each keeps its own sizes.
+        return "window/3d" if self.gl_view is not None else "window/2d"
+
+    def _splitters(self) -> dict[str, QSplitter]:
+        return {"main": self.main_splitter, "feeds": self.feeds_splitter,
+                "bottom": self.bottom_splitter, "plots": self.plots_splitter}
+
+    def _save_window_state(self) -> None:
+        """Geometry, docks, toolbars and splitters, for the next window."""
+        key = self._layout_key()
+        self.settings.setValue("window/geometry", self.saveGeometry())
+        self.settings.setValue("window/state_version", WINDOW_STATE_VERSION)
+        self.settings.setValue(f"{key}/state", self.saveState(WINDOW_STATE_VERSION))
+        for name, splitter in self._splitters().items():
+            self.settings.setValue(f"{key}/splitter_{name}", splitter.saveState())
+
+    def _restore_window_state(self) -> None:
+        """The last window's geometry; its docks, toolbars and splitters only if it had this layout."""
+        geometry = self.settings.value("window/geometry")
+        if isinstance(geometry, QByteArray):
+            self.restoreGeometry(geometry)
+        else:
+            self.resize(1280, 720)
+        try:
+            version = int(self.settings.value("window/state_version", 0) or 0)
+        except (TypeError, ValueError):
+            version = 0
+        if version != WINDOW_STATE_VERSION:
+            return
+        key = self._layout_key()
+        state = self.settings.value(f"{key}/state")
+        if isinstance(state, QByteArray):
+            self.restoreState(state, WINDOW_STATE_VERSION)
+        for name, splitter in self._splitters().items():
+            saved = self.settings.value(f"{key}/splitter_{name}")
+            if isinstance(saved, QByteArray):
+                splitter.restoreState(saved)
+
+    # ---- files dropped on the window ---------------------------------------------------------
+    @staticmethod
+    def _dropped_paths(mime: QMimeData) -> list[str]:
+        return [url.toLocalFile() for url in mime.urls() if url.isLocalFile()] if mime.hasUrls() else []
+
+    def dragEnterEvent(self, event) -> None:  # noqa: N802 - Qt naming
+        if self._dropped_paths(event.mimeData()):
+            event.acceptProposedAction()
+        else:
+            event.ignore()
+
+    def dragMoveEvent(self, event) -> None:  # noqa: N802 - Qt naming
+        self.dragEnterEvent(event)
+
+    def dropEvent(self, event) -> None:  # noqa: N802 - Qt naming
+        paths = self._dropped_paths(event.mimeData())
+        if not paths:
+            event.ignore()
+            return
+        event.acceptProposedAction()
+        # Opened after the drop has returned: a dialog run inside it would hold the file
+        # manager's drag until it closed.
+        QTimer.singleShot(0, lambda: self.open_dropped_files(paths))
+
+    def open_dropped_files(self, paths: list[str]) -> None:
+        """Open dropped files as the menus would: one video (the one-video dialog), two (the
+        video pair dialog, with a rig dropped with them), a rig (for the source in use), a
+        preset (applied). Anything else is refused in the status line."""
+        files = [Path(p) for p in paths]
+        videos = sorted(str(f) for f in files if f.suffix.lower() in VIDEO_SUFFIXES)
+        rigs = [str(f) for f in files if f.suffix.lower() in RIG_SUFFIXES]
+        presets = [str(f) for f in files if f.suffix.lower() in PRESET_SUFFIXES]
+        unknown = [f.name for f in files
+                   if f.suffix.lower() not in VIDEO_SUFFIXES + RIG_SUFFIXES + PRESET_SUFFIXES]
+        refusal = None
+        if unknown:
+            refusal = (f"Cannot open {', '.join(unknown)}: drop one or two videos "
+                       f"({', '.join(VIDEO_SUFFIXES)}), a rig (.yaml, .yml, .xml) or a preset (.json)")
+        elif len(videos) > 2 or len(rigs) > 1 or len(presets) > 1:
+            refusal = "Drop at most two videos, one rig and one preset at a time"
+        elif len(videos) == 1 and rigs:
+            refusal = "A rig is for two cameras: drop it with two videos, or alone for the source in use"
+        if refusal is not None:
+            self.statusBar().showMessage(refusal, 15000)
+            return
+        if presets:
+            self.use_preset(presets[0])
+        if len(videos) == 2:
+            calib = rigs[0] if rigs else (self.spec.calib if self.spec.kind in ("video", "cameras") else "")
+            self.choose_videos(st.SourceSpec("video", videos[0], videos[1], calib))
+        elif len(videos) == 1:
+            self.choose_single_video(st.SourceSpec("single", videos[0]))
+        elif rigs:
+            self.use_rig_file(rigs[0])
+
+    def use_rig_file(self, path: str) -> None:
+        """Track the source in use with the rig in ``path`` (a rig dropped on the window); a rig
+        that does not load is refused with the message the source dialogs' path gives."""
+        if self.spec.kind == "single":
+            self.statusBar().showMessage("A rig is for two cameras: the source is one camera's video. "
+                                         "Drop the rig with two videos.", 15000)
+            return
+        try:
+            StereoRig.load(path)
+        except (RigError, OSError) as exc:
+            message = str(exc)
+            self.banner.show_message(message[:1].upper() + message[1:])
+            return
+        self.start_spec(dataclasses.replace(self.spec, calib=path))
+        self.statusBar().showMessage(f"{self.spec.describe()} with the rig {path}", 15000)
 
     # ---- display ---------------------------------------------------------------------------
     def _refresh_display(self) -> None:
@@ -1046,17 +1225,27 @@ class MainWindow(QMainWindow):
                 self.banner.show_message(rig_advice, kind="advice", action=("Refine…", self.open_refine))
 
     def use_preset(self, name: str) -> None:
-        """Track with a shipped preset from now on (as choosing it in the Tuning dialog does)."""
+        """Track with a shipped preset, or a preset .json file (dropped on the window), from now
+        on (as choosing it in the Tuning dialog does)."""
         try:
             params = load_preset(name)
         except (OSError, ValueError) as exc:
             self.banner.show_message(f"The {name} preset could not be loaded: {exc}")
             return
         if self._tuning is not None:
-            self._tuning.set_params(params)      # shows it, and sends it here
+            self._tuning.apply_preset(name, params)      # shows it, and sends it here
         else:
             self.set_params(params)
-        self.statusBar().showMessage(f"Tracking with the {name} preset", 8000)
+            self.remember_preset(name)
+        self.statusBar().showMessage(f"Tracking with the {Path(name).stem} preset", 8000)
+
+    def remember_preset(self, name_or_path: str) -> None:
+        """The parameters now come from this preset (a name, or a .json file): the tuning
+        dialog's Reset goes back to it, in this session and the next."""
+        self.preset = name_or_path
+        st.save_preset_in_use(self.settings, name_or_path)
+        if self._tuning is not None and self._tuning.preset != name_or_path:
+            self._tuning.set_preset(name_or_path)
 
     @property
     def display_rate(self) -> float:
@@ -1084,7 +1273,7 @@ class MainWindow(QMainWindow):
         self.stop_recording()
         if self.link_panel.link is not None:
             self.link_panel.disconnect_link()
-        self.settings.setValue("window/geometry", self.saveGeometry())
+        self._save_window_state()
         st.save_params(self.settings, self.params)
         self.settings.sync()
         super().closeEvent(event)

@@ -35,7 +35,7 @@ from ..io.labels import CsvFormatError, read_point_labels
 from ..io.presets import list_presets, load_preset
 from ..io.sources import OpeningCancelled, SourceError
 from ..io.track_file import FILE_LOOKAHEAD, TrackFileSummary, track_to_csv
-from .settings import SourceSpec
+from .settings import SourceSpec, dialog_folder, open_settings, remember_dialog_folder
 from .sources import SingleVideoDialog, VideoPairDialog, open_spec
 from .worker import USER_ERRORS, OpeningContext, _one_sentence
 
@@ -311,9 +311,13 @@ class ProcessDialog(QDialog):
             self._show_recording()
 
     def _browse_output(self) -> None:
-        path, _ = QFileDialog.getSaveFileName(self, "Write the track to", self.output.text(),
+        settings = open_settings()
+        # The field's file (beside the recording) when there is one, else where tracks went last.
+        path, _ = QFileDialog.getSaveFileName(self, "Write the track to",
+                                              self.output.text() or dialog_folder(settings, "tracks"),
                                               "CSV (*.csv);;All files (*)")
         if path:
+            remember_dialog_folder(settings, "tracks", path)
             self.output.setText(path)
 
     # ---- the job ---------------------------------------------------------------------------

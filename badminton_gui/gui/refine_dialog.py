@@ -44,6 +44,7 @@ from ..core.rig_refine import (DEFAULT_MIN_PAIRS, DEFAULT_MIN_SPREAD, PairCollec
                                RefineCancelled, RefineReport, image_spread,
                                refine_relative_pose)
 from .calibration_wizard import write_rig
+from .settings import dialog_folder, open_settings, remember_dialog_folder
 
 _log = logging.getLogger(__name__)
 
@@ -542,11 +543,14 @@ class RefineCalibrationDialog(QDialog):
         """Ask where, then write the refined rig there."""
         if self.refined is None:
             return None
-        path, _ = QFileDialog.getSaveFileName(self, "Save the refined rig",
-                                              str(self.default_save_path()),
+        settings = open_settings()
+        default = self.default_save_path()
+        folder = Path(dialog_folder(settings, "rigs", first_time=str(default.parent)))
+        path, _ = QFileDialog.getSaveFileName(self, "Save the refined rig", str(folder / default.name),
                                               "Rig (*.yaml *.yml);;All files (*)")
         if not path:
             return None
+        remember_dialog_folder(settings, "rigs", path)
         return self.save_to(Path(path))
 
     def save_to(self, path: Path) -> Path | None:

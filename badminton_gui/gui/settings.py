@@ -80,3 +80,48 @@ def load_params(settings: QSettings) -> TrackerParams | None:
 
 def save_params(settings: QSettings, params: TrackerParams) -> None:
     settings.setValue("tracker/params", json.dumps(params.to_dict()))
+
+
+# ---- the folder each kind of file dialog opens in ----------------------------------------
+# One key per kind of file, so the rig dialog does not open where the last video was.
+FILE_KINDS = ("videos", "rigs", "presets", "tracks", "labels", "images")
+
+
+def _default_folder(kind: str) -> str:
+    from pathlib import Path
+    if kind == "rigs":
+        from ..io.app_dirs import rig_dir
+        return str(rig_dir())
+    return str(Path.home())
+
+
+def dialog_folder(settings: QSettings, kind: str, first_time: str | None = None) -> str:
+    """The folder a file dialog for ``kind`` (one of FILE_KINDS) opens in: the one last used for
+    that kind, while it exists; else ``first_time`` if given, else the rigs' folder for rigs and
+    the home folder otherwise."""
+    if kind not in FILE_KINDS:
+        raise ValueError(f"unknown kind of file {kind!r}")
+    folder = str(settings.value(f"folders/{kind}", "") or "")
+    if folder and os.path.isdir(folder):
+        return folder
+    return first_time if first_time is not None else _default_folder(kind)
+
+
+def remember_dialog_folder(settings: QSettings, kind: str, chosen: str) -> None:
+    """Remember the folder of ``chosen`` (a file or folder the user picked) for ``kind``."""
+    if kind not in FILE_KINDS:
+        raise ValueError(f"unknown kind of file {kind!r}")
+    if not chosen:
+        return
+    folder = chosen if os.path.isdir(chosen) else os.path.dirname(os.path.abspath(chosen))
+    settings.setValue(f"folders/{kind}", folder)
+
+
+# ---- the preset the parameters come from ------------------------------------------------
+def load_preset_in_use(settings: QSettings) -> str:
+    """The preset (a shipped name, or a .json path) the parameters were last set from."""
+    return str(settings.value("tracker/preset", "") or "default")
+
+
+def save_preset_in_use(settings: QSettings, name_or_path: str) -> None:
+    settings.setValue("tracker/preset", name_or_path)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 import threading
-from pathlib import Path
 
 from PySide6.QtCore import QObject, Signal
 from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDialogButtonBox, QFileDialog,
@@ -18,7 +17,7 @@ from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDialogButtonBox, 
 
 from ..core.rig import RigError, StereoRig
 from ..io.sources import FrameSource, SourceError
-from .settings import SourceSpec
+from .settings import SourceSpec, dialog_folder, open_settings, remember_dialog_folder
 from .worker import OpeningContext
 
 
@@ -120,7 +119,9 @@ def _open_cancel_layout(dialog: QDialog, form: QFormLayout) -> None:
     lay.addWidget(buttons)
 
 
-def _file_row(parent: QWidget, edit: QLineEdit, caption: str, filter_: str) -> QWidget:
+def _file_row(parent: QWidget, edit: QLineEdit, caption: str, filter_: str, kind: str) -> QWidget:
+    """A path field with its Browse… button; the dialog opens at the field's file, else in the
+    folder last used for this kind of file (settings.FILE_KINDS)."""
     row = QWidget(parent)
     lay = QHBoxLayout(row)
     lay.setContentsMargins(0, 0, 0, 0)
@@ -128,8 +129,11 @@ def _file_row(parent: QWidget, edit: QLineEdit, caption: str, filter_: str) -> Q
     button = QPushButton("Browse…", row)
 
     def browse() -> None:
-        path, _ = QFileDialog.getOpenFileName(parent, caption, edit.text() or str(Path.home()), filter_)
+        settings = open_settings()
+        path, _ = QFileDialog.getOpenFileName(parent, caption, edit.text() or dialog_folder(settings, kind),
+                                              filter_)
         if path:
+            remember_dialog_folder(settings, kind, path)
             edit.setText(path)
 
     button.clicked.connect(browse)
@@ -152,19 +156,19 @@ class VideoPairDialog(QDialog):
         self.right_times = QLineEdit(prev.right_times)
         videos = "Videos (*.mp4 *.avi *.mov *.mkv);;All files (*)"
         form = QFormLayout()
-        form.addRow("Left video", _file_row(self, self.left, "Left camera video", videos))
-        form.addRow("Right video", _file_row(self, self.right, "Right camera video", videos))
-        form.addRow("Rig file", _file_row(self, self.calib, "Rig file", "Rig (*.yaml *.yml *.xml);;All files (*)"))
+        form.addRow("Left video", _file_row(self, self.left, "Left camera video", videos, "videos"))
+        form.addRow("Right video", _file_row(self, self.right, "Right camera video", videos, "videos"))
+        form.addRow("Rig file", _file_row(self, self.calib, "Rig file", "Rig (*.yaml *.yml *.xml);;All files (*)", "rigs"))
         csvs = "CSV (*.csv);;All files (*)"
-        form.addRow("Left timestamps (optional)", _file_row(self, self.left_times, "Left timestamps", csvs))
-        form.addRow("Right timestamps (optional)", _file_row(self, self.right_times, "Right timestamps", csvs))
+        form.addRow("Left timestamps (optional)", _file_row(self, self.left_times, "Left timestamps", csvs, "labels"))
+        form.addRow("Right timestamps (optional)", _file_row(self, self.right_times, "Right timestamps", csvs, "labels"))
         self.left_labels = QLineEdit(prev.left_labels)
         self.right_labels = QLineEdit(prev.right_labels)
         for side, edit in (("Left", self.left_labels), ("Right", self.right_labels)):
             edit.setToolTip("Frame,Visibility,X,Y per frame of this camera (TrackNet's format): the "
                             "readouts then score the tracking against them live. Timestamp files "
                             "that carry these columns are used as labels without being named here.")
-            form.addRow(f"{side} labels (optional)", _file_row(self, edit, f"{side} labels", csvs))
+            form.addRow(f"{side} labels (optional)", _file_row(self, edit, f"{side} labels", csvs, "labels"))
         self.video_times = QCheckBox("Without timestamp files, pair by the videos' own frame times")
         self.video_times.setToolTip("For recordings whose cameras dropped frames: frame i of one file was "
                                     "then not taken with frame i of the other. Costs one decoding pass "
@@ -197,8 +201,9 @@ class SingleVideoDialog(QDialog):
                                "clips' *_ball.csv): the readouts then score the tracking live.")
         form = QFormLayout()
         form.addRow("Video", _file_row(self, self.video, "Video",
-                                       "Videos (*.mp4 *.avi *.mov *.mkv);;All files (*)"))
-        form.addRow("Labels (optional)", _file_row(self, self.labels, "Labels", "CSV (*.csv);;All files (*)"))
+                                       "Videos (*.mp4 *.avi *.mov *.mkv);;All files (*)", "videos"))
+        form.addRow("Labels (optional)", _file_row(self, self.labels, "Labels", "CSV (*.csv);;All files (*)",
+                                                   "labels"))
         self.broadcast = QCheckBox("Track with the broadcast preset")
         self.broadcast.setToolTip("Bigger steps between frames at 30 fps, a panning picture, the "
                                   "shuttle leaving through the top edge: the preset made for TV clips")
@@ -248,7 +253,7 @@ class CameraPairDialog(QDialog):
         form = QFormLayout()
         form.addRow("Left camera", self.left)
         form.addRow("Right camera", self.right)
-        form.addRow("Rig file", _file_row(self, self.calib, "Rig file", "Rig (*.yaml *.yml *.xml);;All files (*)"))
+        form.addRow("Rig file", _file_row(self, self.calib, "Rig file", "Rig (*.yaml *.yml *.xml);;All files (*)", "rigs"))
         form.addRow("", self.found)
         _open_cancel_layout(self, form)
         self._scan = _CameraScan(self)

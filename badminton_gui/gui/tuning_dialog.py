@@ -6,7 +6,8 @@ with its range and unit, or a check box, or a choice list) with its help as tool
 per group (GUIDE §3.1). Each edit makes a new frozen ``TrackerParams`` snapshot; snapshots are
 sent at most every 50 ms (≈20 Hz) so dragging a slider never floods the worker (GUIDE §3.2).
 Beside the controls, a live preview shows the foreground mask with the candidates coloured by
-the filter that rejected them.
+the filter that rejected them. Every change can be undone (Ctrl+Z) and redone (Ctrl+Shift+Z), and
+Reset goes back to the preset the parameters came from, not to the built-in values.
 """
 
 from __future__ import annotations
@@ -18,19 +19,65 @@ from pathlib import Path
 import cv2
 import numpy as np
 from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDoubleSpinBox, QFileDialog,
-                               QGridLayout, QHBoxLayout, QLabel, QListWidget, QMessageBox, QPushButton,
-                               QScrollArea, QSlider, QSpinBox, QSplitter, QStackedWidget,
-                               QVBoxLayout, QWidget)
+                               QGridLayout, QHBoxLayout, QLabel, QListWidget, QMenu, QMessageBox,
+                               QPushButton, QScrollArea, QSlider, QSpinBox, QSplitter, QStackedWidget,
+                               QToolButton, QVBoxLayout, QWidget)
 
 from ..core.params import ParamError, TrackerParams, field_info
 from ..io.presets import list_presets, load_preset
+from . import settings as st
 from .feed_view import FeedView
 from .overlays import reject_style
 from .worker import DisplayPacket
 
 SEND_INTERVAL_MS = 50          # at most ~20 snapshots per second while a slider moves
 MAX_SLIDER_POSITIONS = 2000    # a slider finer than this is useless; the spin box keeps the step
+UNDO_LIMIT = 200               # snapshots kept for undo (each is a few kB)
+UNDO_KEYS = ("Ctrl+Z",)
+REDO_KEYS = ("Ctrl+Shift+Z", "Ctrl+Y")
+
+
+class ParamsHistory:
+    """Undo and redo over whole parameter snapshots: they are frozen, so keeping the earlier
+    ones is all an undo needs. Edits of one control while its slider is held make one step."""
+
+    def __init__(self, limit: int = UNDO_LIMIT) -> None:
+        self.limit = limit
+        self._undo: list[TrackerParams] = []
+        self._redo: list[TrackerParams] = []
+
+    def record(self, before: TrackerParams) -> None:
+        """A change was made from ``before``: it can be undone; what was undone cannot be redone."""
+        self._undo.append(before)
+        del self._undo[:-self.limit]
+        self._redo.clear()
+
+    def undo(self, current: TrackerParams) -> TrackerParams | None:
+        if not self._undo:
+            return None
+        self._redo.append(current)
+        return self._undo.pop()
+
+    def redo(self, current: TrackerParams) -> TrackerParams | None:
+        if not self._redo:
+            return None
+        self._undo.append(current)
+        return self._redo.pop()
+
+    @property
+    def can_undo(self) -> bool:
+        return bool(self._undo)
+
+    @property
+    def can_redo(self) -> bool:
+        return bool(self._redo)
+
+
+def _load_preset_or_file(name_or_path: str) -> TrackerParams:
+    """A shipped preset by name, or a parameter file the user chose (whatever its extension)."""
+    return TrackerParams.load(name_or_path) if Path(name_or_path).suffix else load_preset(name_or_path)
 
 
 def _decimals(step: float) -> int:
@@ -100,11 +147,16 @@ class TuningDialog(QDialog):
     """Live tuning of every tracker parameter; emits whole snapshots, throttled."""
 
     paramsChanged = Signal(object)      # TrackerParams
+    presetChosen = Signal(str)          # a preset's name, or the .json file it was loaded from
 
-    def __init__(self, params: TrackerParams, parent: QWidget | None = None) -> None:
+    def __init__(self, params: TrackerParams, parent: QWidget | None = None,
+                 preset: str = "default") -> None:
         super().__init__(parent)
         self.setWindowTitle("Tuning — detection thresholds")
         self.params = params
+        self.preset = preset                      # what Reset goes back to
+        self.history = ParamsHistory()
+        self._held_edit: str | None = None        # the control whose slider drag is one undo step
         self.editors: dict[str, QWidget] = {}     # "group.name" → editor (tests drive these)
         self._send_timer = QTimer(self)
         self._send_timer.setSingleShot(True)
@@ -123,15 +175,40 @@ class TuningDialog(QDialog):
         save_button = QPushButton("Save as…")
         save_button.setToolTip("Save the current parameters as a readable JSON preset file")
         save_button.clicked.connect(self._save_file)
-        reset_button = QPushButton("Reset to defaults")
-        reset_button.clicked.connect(lambda: self.set_params(TrackerParams()))
+        self.undo_button = QPushButton("Undo")
+        self.undo_button.setToolTip("Undo the last parameter change (Ctrl+Z)")
+        self.undo_button.clicked.connect(self.undo)
+        self.redo_button = QPushButton("Redo")
+        self.redo_button.setToolTip("Redo the change undone last (Ctrl+Shift+Z)")
+        self.redo_button.clicked.connect(self.redo)
+        self.undo_action = QAction("Undo", self)
+        self.undo_action.setShortcuts([QKeySequence(k) for k in UNDO_KEYS])
+        self.undo_action.triggered.connect(self.undo)
+        self.redo_action = QAction("Redo", self)
+        self.redo_action.setShortcuts([QKeySequence(k) for k in REDO_KEYS])
+        self.redo_action.triggered.connect(self.redo)
+        for action in (self.undo_action, self.redo_action):
+            action.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
+            self.addAction(action)
+        # Reset: to the preset in use; its menu also offers the built-in values.
+        self.reset_button = QToolButton()
+        self.reset_button.setPopupMode(QToolButton.ToolButtonPopupMode.MenuButtonPopup)
+        self.reset_button.clicked.connect(self.reset_to_preset)
+        reset_menu = QMenu(self.reset_button)
+        self.defaults_action = reset_menu.addAction("Reset to the built-in defaults",
+                                                    lambda: self.set_params(TrackerParams()))
+        self.reset_button.setMenu(reset_menu)
+        self._show_preset_name()
         top = QHBoxLayout()
         top.addWidget(QLabel("Preset"))
         top.addWidget(self.preset_combo, 1)
         top.addWidget(load_button)
         top.addWidget(save_button)
         top.addStretch(1)
-        top.addWidget(reset_button)
+        top.addWidget(self.undo_button)
+        top.addWidget(self.redo_button)
+        top.addWidget(self.reset_button)
+        self._update_history_buttons()
 
         # -- one page per parameter group, generated; a side list picks the group
         self.group_list = QListWidget()
@@ -231,17 +308,76 @@ class TuningDialog(QDialog):
 
     # ---- parameters ------------------------------------------------------------------------
     def _edited(self, path: str, value) -> None:
+        before = self.params
         try:
             self.params = self.params.with_value(path, value)
         except ParamError as exc:
             QMessageBox.warning(self, "Tuning", str(exc))
             return
+        editor = self.editors.get(path)
+        held = isinstance(editor, NumberEditor) and editor.slider.isSliderDown()
+        # A slider dragged is one step, however many values it passed through.
+        if not (held and self._held_edit == path):
+            self.history.record(before)
+        self._held_edit = path if held else None
+        self._update_history_buttons()
         if not self._send_timer.isActive():
             self._send_timer.start(SEND_INTERVAL_MS)
 
     def set_params(self, params: TrackerParams) -> None:
-        """Show a whole snapshot (preset, file, defaults) and send it."""
+        """Show a whole snapshot (preset, file, defaults) and send it; an undo goes back."""
+        if params != self.params:
+            self.history.record(self.params)
+        self._show_params(params)
+
+    def undo(self) -> None:
+        """Ctrl+Z: the snapshot before the last change, shown and sent."""
+        previous = self.history.undo(self.params)
+        if previous is not None:
+            self._show_params(previous)
+
+    def redo(self) -> None:
+        """Ctrl+Shift+Z: the change undone last, made again."""
+        following = self.history.redo(self.params)
+        if following is not None:
+            self._show_params(following)
+
+    def _update_history_buttons(self) -> None:
+        for widget, enabled in ((self.undo_button, self.history.can_undo), (self.undo_action, self.history.can_undo),
+                                (self.redo_button, self.history.can_redo), (self.redo_action, self.history.can_redo)):
+            widget.setEnabled(enabled)
+
+    def apply_preset(self, name_or_path: str, params: TrackerParams) -> None:
+        """Track with a preset's values (``params``, loaded from ``name_or_path``): shown, sent,
+        and what Reset goes back to from now on."""
+        self.set_preset(name_or_path)
+        self.set_params(params)
+        self.presetChosen.emit(name_or_path)
+
+    def set_preset(self, name_or_path: str) -> None:
+        """What Reset goes back to from now on (the parameters shown stay as they are)."""
+        self.preset = name_or_path
+        self._show_preset_name()
+
+    def reset_to_preset(self) -> None:
+        """Reset: the values of the preset in use (read again: a preset file may have changed)."""
+        try:
+            params = _load_preset_or_file(self.preset)
+        except (ParamError, OSError) as exc:
+            QMessageBox.warning(self, "Reset", f"The preset {self.preset} cannot be loaded: {exc}")
+            return
+        self.set_params(params)
+
+    def _show_preset_name(self) -> None:
+        name = Path(self.preset).stem
+        self.reset_button.setText(f"Reset to preset '{name}'")
+        self.reset_button.setToolTip(f"Every parameter back to the value of the preset '{name}' "
+                                     f"({self.preset}); the arrow offers the built-in defaults")
+
+    def _show_params(self, params: TrackerParams) -> None:
         self.params = params
+        self._held_edit = None
+        self._update_history_buttons()
         for path, editor in self.editors.items():
             value = params.get(path)
             if isinstance(editor, NumberEditor):
@@ -262,25 +398,31 @@ class TuningDialog(QDialog):
             return
         name = self.preset_combo.itemText(index)
         try:
-            self.set_params(load_preset(name))
+            self.apply_preset(name, load_preset(name))
         except ParamError as exc:
             QMessageBox.warning(self, "Preset", str(exc))
         self.preset_combo.setCurrentIndex(0)
 
     def _load_file(self) -> None:
-        path, _ = QFileDialog.getOpenFileName(self, "Load preset", str(Path.home()), "Presets (*.json)")
+        settings = st.open_settings()
+        path, _ = QFileDialog.getOpenFileName(self, "Load preset", st.dialog_folder(settings, "presets"),
+                                              "Presets (*.json)")
         if not path:
             return
+        st.remember_dialog_folder(settings, "presets", path)
         try:
-            self.set_params(TrackerParams.load(path))
+            self.apply_preset(path, _load_preset_or_file(path))
         except (ParamError, OSError) as exc:
             QMessageBox.warning(self, "Load preset", str(exc))
 
     def _save_file(self) -> None:
-        path, _ = QFileDialog.getSaveFileName(self, "Save preset", str(Path.home() / "preset.json"),
+        settings = st.open_settings()
+        path, _ = QFileDialog.getSaveFileName(self, "Save preset",
+                                              str(Path(st.dialog_folder(settings, "presets")) / "preset.json"),
                                               "Presets (*.json)")
         if not path:
             return
+        st.remember_dialog_folder(settings, "presets", path)
         if not path.endswith(".json"):
             path += ".json"
         try:
