@@ -16,6 +16,7 @@ feed's width (:func:`ui_scale`) so that a 2048-pixel clip is as readable as a 12
 from __future__ import annotations
 
 import collections
+import functools
 import math
 from dataclasses import dataclass
 
@@ -184,12 +185,12 @@ def draw_caption(image: np.ndarray, text: str) -> None:
 def draw_feed(image: np.ndarray, scale: float, shuttle: tuple[float, float] | None,
               trail: np.ndarray, caption: str) -> None:
     """One camera's output frame, in place: the trail, the red circle on ``shuttle`` and the
-    caption. ``image`` is already at output size; ``shuttle`` and ``trail`` are in
+    caption (under the others). ``image`` is already at output size; ``shuttle`` and ``trail`` are in
     full-resolution pixels, ``scale`` = output / full resolution."""
+    draw_caption(image, caption)     # first: a shuttle near the top left stays circled over it
     draw_trail(image, trail, scale)
     if shuttle is not None:
         draw_detection(image, shuttle[0] * scale, shuttle[1] * scale)
-    draw_caption(image, caption)
 
 
 def feed_caption(camera_name: str, step: ShuttleStep, frame_index: int, shuttle_found: bool) -> str:
@@ -216,10 +217,9 @@ def _fixed_pts(px: np.ndarray) -> np.ndarray:
     return np.round(np.asarray(px) * _ONE).astype(np.int32)
 
 
-def draw_plan(height: int, step: ShuttleStep, flight: np.ndarray, doubles: bool = True) -> np.ndarray:
-    """The court seen from above (Y along the court to the right): the last second of the 3D
-    flight, the shuttle now, the straight top view of its predicted path to the landing point,
-    and the in/out call there. Court-frame metres in, a BGR image ``height`` pixels tall out."""
+@functools.lru_cache(maxsize=4)
+def _empty_court(height: int) -> np.ndarray:
+    """The plan's lines and net, drawn once per size (every frame of a clip has the same)."""
     width, height = plan_size(height)
     img = np.full((height, width, 3), PLAN_BACKGROUND, np.uint8)
     ui = max(1.0, height / 200.0)
@@ -230,6 +230,17 @@ def draw_plan(height: int, step: ShuttleStep, flight: np.ndarray, doubles: bool 
     a, b = _plan_px(width, height, [-wn, wn], [0.0, 0.0])
     cv2.line(img, tuple(_fixed_pts(a)), tuple(_fixed_pts(b)), NET_COLOUR, max(2, int(round(3 * ui))),
              cv2.LINE_AA, _SHIFT)
+    img.setflags(write=False)
+    return img
+
+
+def draw_plan(height: int, step: ShuttleStep, flight: np.ndarray, doubles: bool = True) -> np.ndarray:
+    """The court seen from above (Y along the court to the right): the last second of the 3D
+    flight, the shuttle now, the straight top view of its predicted path to the landing point,
+    and the in/out call there. Court-frame metres in, a BGR image ``height`` pixels tall out."""
+    img = _empty_court(height).copy()
+    width, height = plan_size(height)
+    ui = max(1.0, height / 200.0)
     if len(flight) >= 2:
         px = _plan_px(width, height, flight[:, 1], flight[:, 2])
         near = np.diff(flight[:, 0]) < FLIGHT_GAP_SECONDS
@@ -256,8 +267,6 @@ def draw_plan(height: int, step: ShuttleStep, flight: np.ndarray, doubles: bool 
         r = int(round(5.5 * ui * _ONE))
         cv2.circle(img, c, r, POSITION_COLOUR, -1, cv2.LINE_AA, _SHIFT)
         cv2.circle(img, c, r, TEXT_COLOUR, 1, cv2.LINE_AA, _SHIFT)
-    cv2.putText(img, "Court plan (top view)", (int(4 * ui), int(11 * ui)), _FONT, 0.35 * ui,
-                LABEL_TEXT_COLOUR, 1, cv2.LINE_AA)
     return img
 
 
