@@ -258,10 +258,12 @@ def draw_plan(height: int, step: ShuttleStep, flight: np.ndarray, doubles: bool 
                    cv2.LINE_AA, _SHIFT)
         cv2.circle(img, tuple(_fixed_pts(land)), int(round(2 * ui * _ONE)), colour, -1, cv2.LINE_AA, _SHIFT)
         text = landing_call(lx, ly, doubles).upper()
-        fs = 0.5 * ui
-        (tw, th), _ = cv2.getTextSize(text, _FONT, fs, max(1, int(round(1.3 * ui))))
+        fs, thick = 0.5 * ui, max(1, int(round(1.3 * ui)))
+        (tw, th), _ = cv2.getTextSize(text, _FONT, fs, thick)
         org = (int(np.clip(land[0] - tw / 2, 0, width - tw)), int(np.clip(land[1] - 10 * ui, th, height)))
-        cv2.putText(img, text, org, _FONT, fs, colour, max(1, int(round(1.3 * ui))), cv2.LINE_AA)
+        # On a dark outline: the call often sits on a court line (a landing near the back line).
+        cv2.putText(img, text, org, _FONT, fs, PLAN_BACKGROUND, thick + 2, cv2.LINE_AA)
+        cv2.putText(img, text, org, _FONT, fs, colour, thick, cv2.LINE_AA)
     if step.point is not None:
         c = tuple(_fixed_pts(_plan_px(width, height, step.point[0], step.point[1])))
         r = int(round(5.5 * ui * _ONE))
