@@ -102,8 +102,8 @@ def test_render_on_the_fly_gives_the_clip_of_the_csv(demo, tmp_path):
     assert leftovers(tmp_path) == []
 
 
-def test_render_one_camera_scaled(demo, tmp_path):
-    out = tmp_path / "left.mp4"
+def test_render_one_camera_scaled_into_a_new_folder(demo, tmp_path):
+    out = tmp_path / "clips" / "left.mp4"
     assert main(["render", "--left", str(demo / "left.mp4"), "--csv", str(demo / "track.csv"),
                  "--width", "320", "-o", str(out), "--quiet"]) == 0
     frames = decode(out)

@@ -33,7 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--csv", help="track from `badminton-track track` or `detect`; without it the "
                                  "videos are tracked now")
     p.add_argument("--calib", help="rig file: needed to track a pair now; with --csv it says whether "
-                                   "the 3D is in court coordinates (court plan)")
+                                   "the 3D is in court coordinates, for the court plan (without it: "
+                                   "when the CSV predicts a landing, which only court coordinates do)")
     p.add_argument("--left-times", help="tracking now: CSV with Frame,Timestamp for the left video")
     p.add_argument("--right-times", help="tracking now: CSV with Frame,Timestamp for the right video")
     p.add_argument("--video-times", action="store_true",

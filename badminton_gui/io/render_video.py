@@ -180,8 +180,8 @@ class _temporary_csv:
 # ---- checking the inputs ------------------------------------------------------------------------
 
 def check_output_path(output: str | Path, inputs: Sequence[str | Path | None]) -> Path:
-    """The output as a Path, or a RenderError: it must be an .mp4 that is none of the inputs, in
-    a folder that exists."""
+    """The output as a Path, or a RenderError: it must be an .mp4 that is none of the inputs (its
+    folder is made when the clip is written, as `track` makes its CSV's)."""
     out = Path(output)
     if out.suffix.lower() != ".mp4":
         raise RenderError(f"the output {out} must end in .mp4 (the clip is an MP4 file)")
@@ -191,8 +191,6 @@ def check_output_path(output: str | Path, inputs: Sequence[str | Path | None]) -
     for given in inputs:
         if given and Path(given).resolve() == resolved:
             raise RenderError(f"the output {out} is one of the inputs: choose another file name")
-    if not out.parent.resolve().is_dir():
-        raise RenderError(f"the output's folder {out.parent} does not exist")
     return out
 
 
@@ -285,6 +283,10 @@ class AtomicVideoWriter:
 
     def __init__(self, output: Path, fps: float, size: tuple[int, int]) -> None:
         self.output = output
+        try:
+            output.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise RenderError(f"cannot write the clip: {describe_os_error(exc, output)}") from None
         # Named here, created by the encoder: a file made by mkstemp would keep mode 0600.
         self.temporary = output.with_name(f".{output.stem}.{secrets.token_hex(4)}.partial.mp4")
         self._writer = cv2.VideoWriter(str(self.temporary), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
