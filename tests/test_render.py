@@ -185,6 +185,12 @@ def _bad_csv(demo, tmp_path, change):
     return path
 
 
+def _not_a_video(tmp_path):
+    path = tmp_path / "notes.mp4"
+    path.write_text("not a video")
+    return path
+
+
 def _longer(rows):
     extra = [dict(rows[-1], Frame=str(N + k), FrameR=str(N + k)) for k in range(100)]
     return rows + extra
@@ -196,6 +202,7 @@ def _wider(rows):
 
 @pytest.mark.parametrize("case, expected", [
     ("missing video", "video not found"),
+    ("unreadable video", "cannot read"),
     ("longer csv", "another video"),
     ("wider csv", "another video"),
     ("output is an input", "one of the inputs"),
@@ -210,6 +217,7 @@ def test_bad_input_is_one_line_and_exit_2(demo, tmp_path, capsys, case, expected
     csv_path = str(demo / "track.csv")
     args = {
         "missing video": ["--left", str(tmp_path / "nope.mp4"), "--csv", csv_path, "-o", out],
+        "unreadable video": ["--left", str(_not_a_video(tmp_path)), "--csv", csv_path, "-o", out],
         "longer csv": [*pair_args(demo), "--csv", str(_bad_csv(demo, tmp_path, _longer)), "-o", out],
         "wider csv": [*pair_args(demo), "--csv", str(_bad_csv(demo, tmp_path, _wider)), "-o", out],
         "output is an input": [*pair_args(demo), "--csv", csv_path, "-o", str(demo / "left.mp4")],
