@@ -32,6 +32,7 @@ import numpy as np
 from ..core.overlay_draw import (OverlayHistory, ShuttleStep, draw_feed, draw_plan, draw_readouts,
                                  feed_caption, plan_size)
 from .labels import TRACK_COLUMNS, CsvFormatError, _number, _open_rows, read_point_labels
+from .prefetch import PrefetchingReader
 from .sources import SourceError
 from .track_log import describe_os_error
 from .video import VideoFile
@@ -328,25 +329,29 @@ class AtomicVideoWriter:
 
 
 class _FrameCursor:
-    """One video read forward to the frame indices a track asks for (they never go back)."""
+    """One video read forward to the frame indices a track asks for (they never go back),
+    decoded ahead on a reader thread (io/prefetch.py): FFmpeg releases the GIL, so decoding
+    overlaps the drawing and the encoding instead of taking turns with them."""
 
     def __init__(self, video: VideoFile, name: str) -> None:
-        self.video, self.name = video, name
+        self.name, self.file_name = name, video.path.name
+        self.reader = PrefetchingReader(video)
         self.index, self.frame = -1, None
 
     def at(self, index: int) -> np.ndarray:
-        if index != self.index:
-            if index < self.index:
-                raise RenderError(f"the CSV's {self.name} frames go back from {self.index} to {index}: "
-                                  f"it is not one track in time order")
-            if index > self.index + 1:
-                self.video.seek(index)
-            frame = self.video.read()
+        if index < self.index:
+            raise RenderError(f"the CSV's {self.name} frames go back from {self.index} to {index}: "
+                              f"it is not one track in time order")
+        while self.index < index:
+            frame = self.reader.read()
             if frame is None:
-                raise RenderError(f"{self.video.path.name} ended before frame {index}, which the CSV "
+                raise RenderError(f"{self.file_name} ended before frame {index}, which the CSV "
                                   f"shows: the CSV is of another video (or the video is truncated)")
-            self.index, self.frame = index, frame
+            self.index, self.frame = self.index + 1, frame
         return self.frame
+
+    def close(self) -> None:
+        self.reader.close()
 
 
 def shown_steps(track: RenderTrack, cameras: tuple[int, ...]) -> list[int]:
@@ -412,6 +417,16 @@ def render_video(track: RenderTrack, videos: dict[int, str | Path], output: str 
 def _write(track, opened, out, layout, fps, doubles, max_frames, progress, should_stop,
            video_frames) -> RenderSummary:
     cursors = {cam: _FrameCursor(v, CAMERA_NAMES[cam].lower()) for cam, v in opened.items()}
+    try:
+        return _write_frames(track, cursors, out, layout, fps, doubles, max_frames, progress,
+                             should_stop, video_frames)
+    finally:
+        for cursor in cursors.values():
+            cursor.close()
+
+
+def _write_frames(track, cursors, out, layout, fps, doubles, max_frames, progress, should_stop,
+                  video_frames) -> RenderSummary:
     shown = shown_steps(track, layout.cameras)
     if max_frames:
         shown = shown[:max_frames]
