@@ -15,7 +15,7 @@ import sys
 from .common import UserError
 
 # Module names in this package, in the order `--help` lists them.
-COMMAND_MODULES = ("demo", "detect", "track", "eval", "import_calib", "refine_calib", "calibrate", "presets",
+COMMAND_MODULES = ("demo", "detect", "track", "eval", "import_calib", "refine_calib", "calibrate", "presets", "render",
                    "robot_listen")
 
 

@@ -498,6 +498,8 @@ class MainWindow(QMainWindow):
         tools = menu.addMenu("&Tools")
         self._action(tools, "&Tuning…", self.open_tuning, "Ctrl+T")
         self._action(tools, "&Process a recording…", self.open_process, "Ctrl+P")
+        self.export_video_action = self._action(tools, "&Export video…", self.open_export_video)
+        tools.aboutToShow.connect(lambda: self.export_video_action.setEnabled(self.spec.kind in ("video", "single")))
 
         calibration = menu.addMenu("&Calibration")
         self._action(calibration, "&Calibrate with a chessboard…", self.open_calibration, "Ctrl+K")
@@ -626,6 +628,14 @@ class MainWindow(QMainWindow):
             self._process.params = self.params
         self._process.show()
         self._process.raise_()
+
+    def open_export_video(self) -> None:
+        """Tools ▸ Export video…: the recording as an MP4 with the tracking drawn on it, made off
+        the GUI thread (gui/render_dialog.py)."""
+        from .render_dialog import RenderDialog
+        dialog = RenderDialog(self.spec, self.params, self)
+        dialog.finished.connect(dialog.deleteLater)
+        dialog.show()
 
     # ---- recording the session -----------------------------------------------------------
     def toggle_recording(self) -> None:
