@@ -58,7 +58,9 @@ def wheel(tmp_path_factory) -> Path:
 
 def test_wheel_holds_the_shipped_resources_and_licence(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
-    for shipped in (REPO / "resources").rglob("*.json"):
+    shipped_files = [p for p in (REPO / "resources").rglob("*") if p.is_file()]
+    assert any(p.suffix == ".png" for p in shipped_files)   # the window icon
+    for shipped in shipped_files:
         inside = "badminton_gui/resources/" + shipped.relative_to(REPO / "resources").as_posix()
         assert inside in names, f"{inside} is not in the wheel"
     assert any(n.endswith(".dist-info/licenses/LICENSE") or n.endswith(".dist-info/LICENSE")

@@ -18,6 +18,7 @@ from PySide6.QtGui import QDesktopServices, QGuiApplication, QIcon, QKeySequence
 from PySide6.QtWidgets import (QDialog, QDialogButtonBox, QGridLayout, QLabel,
                                QMenuBar, QPushButton, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget)
 
+from ..core.resources import resource_path
 from ..io import app_dirs
 from .settings import open_settings
 
@@ -37,8 +38,8 @@ def _other_shortcuts() -> list[tuple[str, str, str]]:
 
 
 def icon_path() -> Path:
-    """The window icon's file, in the repository's ``resources/icons/``."""
-    return Path(__file__).resolve().parents[2] / "resources" / "icons" / ICON_FILE
+    """The window icon's file, shipped in ``resources/icons/``."""
+    return resource_path("icons", ICON_FILE)
 
 
 def app_icon() -> QIcon:
