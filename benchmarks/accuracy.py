@@ -1,4 +1,4 @@
-"""Accuracy of `badminton-track track` and `detect` on the real clips (GUIDE §5, protocol §6).
+"""Accuracy of `badminton-track track` and `detect` on the real clips.
 
 Why this file exists: every figure about detection quality in the README must be regenerable
 by one command. For each clip it runs the real CLI (`track` with both cameras of a stereo clip,
@@ -347,8 +347,8 @@ def main() -> int:
             rates = [r.rate for r in sel if r.rate == r.rate]
             print(f"  {kind:9s} {mode:6s} {'held-out' if held else 'tuned-on':8s} {tot.summary()}"
                   f"  median speed {np.median(rates) if rates else float('nan'):.1f} {sel[0].unit}")
-            # Rounds 1-8 could not align these clips' labels and quoted totals without them;
-            # the line keeps that figure comparable.
+            # The totals without the clips labelled through seeks too: their score rests on
+            # clips.seek_frame_map, the others' on the labels alone.
             sequential = [r for r in sel if r.clip not in LABELLED_BY_SEEK]
             if 0 < len(sequential) < len(sel):
                 tot = sum((r.outcomes for r in sequential), Outcomes())

@@ -1,4 +1,4 @@
-"""The real evaluation clips (GUIDE §5) and which ones tuning may look at.
+"""The real evaluation clips and which ones tuning may look at.
 
 Why this file exists: the accuracy benchmark and the classifier training must agree on which
 clips are *tuned-on* (parameters and the classifier may be fitted to them) and which are
@@ -29,17 +29,16 @@ HELD_OUT = {"rally_11-48-10", "rally_11-49-21", "rally_11-47-41", "launcher-ster
 # index (OpenCV's CAP_PROP_POS_FRAMES), not on the frames a sequential decode gives. On a video
 # with irregular timestamps the two differ: on launcher-stereo (gaps of up to 90 ms, intervals of
 # 2–7 ms) a seek to index i returns decoded frame i + 0, 5, 10, 12, 15, 16 or 17, in steps along
-# the clip — the same steps as the frame shift at which our detections meet its labels
-# (benchmarks/label_alignment.py prints both). Such a clip is scored by comparing label row i with
-# the prediction for the image that seek shows (``seek_frame_map``), and its two cameras are paired
-# by the videos' own timestamps, since the label files' Timestamp column is only i / fps.
+# the clip — the same steps as the frame shift at which our detections meet its labels. Such a
+# clip is scored by comparing label row i with the prediction for the image that seek shows
+# (``seek_frame_map``), and its two cameras are paired by the videos' own timestamps, since the
+# label files' Timestamp column is only i / fps.
 # The NYCU rallies have regular timestamps: seek and decode agree there.
 LABELLED_BY_SEEK = {"launcher-stereo"}
 
-# Frames of the tuned-on TV clips whose labels contradict each other (thirty-second round,
-# benchmarks/README.md): a shuttle held in the server's hand before the serve is labelled visible
-# in bwf_00001 (frames 2–29) and not visible in bwf_00025 (frames 6–33; 0–5 and 34–35 of the same
-# hold are visible). Whatever a chain does with a held shuttle it loses one clip, and which one
+# Frames of the tuned-on TV clips whose labels contradict each other: a shuttle held in the
+# server's hand before the serve is labelled visible in bwf_00001 (frames 2–29) and not visible in
+# bwf_00025 (frames 6–33; 0–5 and 34–35 of the same hold are visible). Whatever a chain does with a held shuttle it loses one clip, and which one
 # flips with the classifier's random start: most of the leave-one-clip-out spread. A study may
 # leave these frames out of its figure (``train_classifier.py --skip-disputed``) to compare two
 # versions on the frames the labels agree on; the published figures never do.

@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/demo_accuracy.py [--frames 1000] [--seeds 0 1 2] [--size 1280x720] [--rig binocular] [--errors] [--lookahead N]
 
 Prints one line per seed and the totals: the figures of the tracking-engine issue
-(2D accuracy ≥ 99 % per camera at GUIDE §6's tolerance; 3D RMS ≤ 1 cm within 6 m of the rig).
+(2D accuracy ≥ 99 % per camera at the protocol's tolerance, 4 px at 512 px width; 3D RMS ≤ 1 cm within 6 m of the rig).
 ``--errors`` also lists every FP1 / FP2 / FN frame: the truth and the reported point, their
 distance, the shot and how far into it, and the candidates near the truth with the filter that
 rejected each (``-`` for the reported one) — where to look first when tuning.

@@ -231,7 +231,8 @@ def reference_landing_cost(rng: np.random.Generator, n: int = 100) -> float:
 
 
 def triangulate_nycu_rally(folder: Path) -> np.ndarray:
-    """(N, 4) t, x, y, z of the labelled shuttle in court coordinates (GUIDE §5 recipe)."""
+    """(N, 4) t, x, y, z of the labelled shuttle in court coordinates: each camera's
+    labels undistorted with its .cfg intrinsics, then triangulated with the two projection matrices."""
     import configparser
     import json
 

@@ -7,11 +7,11 @@ and 640×480) it prints:
   - pairs/s of ``StereoTracker.process`` on frames already in memory, and the ratio to the
     *plain chain* — MOG2 + threshold + open + findContours + the four filters, per camera, one
     camera after the other, at full resolution (the paper written plainly) — timed on the same
-    frames in the same run (GUIDE §9: absolute times drift ±15–25 % between runs, ratios do not);
+    frames in the same run (absolute times drift ±15–25 % between runs on shared machines, ratios do not);
   - latency from a frame pair to its TrackResult, p50 / p99, and the process's voluntary context
     switches a pair (a thread waiting, mostly for the GIL);
   - peak RSS;
-  - the F1 (GUIDE §6 protocol, both cameras) of the tracker at that resolution on NYCU rallies
+  - the F1 (TrackNet protocol, both cameras) of the tracker at that resolution on NYCU rallies
     (``--f1-rallies``; detections scaled back to the recorded 2048 px, so the tolerance is the
     same 16 px there), decoded once and fed to one tracker per resolution.
 Then the file processing figures (`track` on a NYCU rally, decoding included: pairs/s and the

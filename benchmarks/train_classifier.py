@@ -3,7 +3,7 @@
 Why this file exists: the classifier's weights in ``resources/`` must be reproducible. This
 script runs the detector (classifier disabled, so the candidates do not depend on an earlier
 model) over every frame of the tuned-on clips of one kind of set-up, labels each candidate
-positive when its frame is labelled visible and it lies within the protocol tolerance (GUIDE §6)
+positive when its frame is labelled visible and it lies within the protocol tolerance (4 px at 512 px width)
 of the label, trains small MLPs and writes them as JSON. Held-out clips are never read. Each
 classifier reads the blob's grey patch beside the hand-made features and averages several MLPs in
 logit: nine for the two two-camera kinds, three for TV (broadcast).
@@ -18,7 +18,7 @@ logit: nine for the two two-camera kinds, three for TV (broadcast).
     (adapted to the clip first as `detect` does, core/adaptation.py; --no-adapt: as trained)
 
 A file is reproduced by running this in the tree that wrote it (the candidates depend on the
-whole pipeline): the shipped TV classifier is commit 18c5d33's (sixteenth round). Retrained in
+whole pipeline): the shipped TV classifier is commit 18c5d33's. Retrained in
 that tree (`git archive 18c5d33 | tar -x -C DIR`, BADMINTON_DATA pointing at the data) it gives
 the same tuned-on census at HEAD (87.53 %, every count equal; the JSON's bytes differ: 26,536
 candidates against 26,539); retrained at HEAD it is another classifier (tuned-on 88.67 %).
@@ -51,8 +51,7 @@ CACHE_DIR = Path("/tmp/badminton_classifier_cache")
 # camera differs (``--augment``, benchmarks/augment.py's names). Off: trained with all six
 # changes (mirror, zoom-out-0.8, zoom-in-1.25, darker-0.7, noise-6, blur-1) it held up under
 # them (augment.py: the changes' accuracy 73.5–82.3 % -> 81.9–86.5 %, unchanged clips 87.53 ->
-# 88.05 %) but the held-out clips fell 77.40 -> 74.83 % (twenty-fourth round,
-# benchmarks/README.md).
+# 88.05 %) but the held-out clips fell 77.40 -> 74.83 %.
 BROADCAST_AUGMENT: tuple[str, ...] = ()
 
 
@@ -172,7 +171,7 @@ def main() -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=None, metavar="S",
                     help="broadcast --leave-one-out: one run per seed (the candidates dumped once), then "
                          "each setting's accuracy per seed and its mean — one seed's figure moves by "
-                         "points when a few training rows change (thirty-first round, benchmarks/README.md)")
+                         "points when a few training rows change)")
     ap.add_argument("--demo-seeds", type=int, nargs="*", default=(0, 1, 4, 5),
                     help="demo court seeds among the stereo kind's training videos (the tests use 3; "
                          "with 0 and 1 × 600 frames only the patch classifier scored demo clutter "
@@ -207,20 +206,18 @@ def main() -> int:
                          "1 without patches)")
     args = ap.parse_args()
     # The TV and the default two-camera classifiers read the blob's patch too, as ensembles
-    # (sixteenth round: leave-one-clip-out the shuttle ranked first among its frame's
+    # (leave-one-clip-out the shuttle ranked first among its frame's
     # candidates in 541–553 of 707 TV frames against 488–492, leave-one-rally-out in 9,707 of
     # 10,242 NYCU frames against 9,545). Three members' seeds swung the NYCU rallies' online
     # accuracy over 96.75–97.55 %: the default's ensemble has nine. The coarse preset's
-    # quarter-scale classifier reads the patch too since the eighteenth round, nine members
-    # (coarse tuned-on rallies 96.45 → 96.96 %, held-out 89.77 → 90.27 % before the eighteenth
-    # round's landed-hold change, 97.29 / 90.33 % with it; three members, two
-    # seeds: tuned-on 97.03 / 96.91 %, held-out 89.69 % for the first — benchmarks/README.md).
+    # quarter-scale classifier reads the patch too, nine members (coarse tuned-on rallies
+    # 96.45 → 96.96 %, held-out 89.77 → 90.27 %; three members, two seeds: tuned-on 97.03 /
+    # 96.91 %, held-out 89.69 % for the first).
     patches = True if args.patches is None else args.patches
     # TV: three. Nine were steadier leave-one-clip-out (--leave-one-out, seeds 0 / 1 / 2: three
     # members 74.64 / 75.68 / 77.75 %, nine 76.40 / 77.86 / 77.03 %), but the nine-member file
     # trained on all three clips took the held-out clips 77.40 -> 74.14 % (1_06_06 87.3 -> 75.9):
-    # one classifier's luck on two clips outweighs the member count (twenty-fourth round,
-    # benchmarks/README.md); the shipped file stays.
+    # one classifier's luck on two clips outweighs the member count; the shipped file stays.
     members = args.members or (1 if not patches else 3 if args.kind == "broadcast" else 9)
     names = FEATURE_NAMES + (PATCH_NAMES if patches else ())
     if args.kind in ("stereo", "stereo-coarse"):

@@ -6,7 +6,7 @@ the real MainWindow on the demo court as fast as the tracker goes, times (perf_c
 feed update path of each feed (``FeedView.set_frame`` + the ``paintEvent`` that follows), the
 whole display slot, the 3D view's ``paintGL`` and the 2D plots' paints, and compares the
 worker's results per second with the same worker running with no window at all, in
-alternating phases of the same run (shared machines drift; GUIDE §9). It ends with the issue's
+alternating phases of the same run (shared machines drift by ±15–25 % between runs). It ends with the issue's
 figures: display Hz per feed, frame-to-screen per feed (median / p95), tracking results/s with
 and without the window and their ratio, and the GUI-thread slot times. Run under Xvfb:
 
@@ -196,7 +196,7 @@ def main() -> int:
                          "1 = newest pair only)")
     ap.add_argument("--ab", type=int, default=0, metavar="ROUNDS",
                     help="only: ROUNDS rounds of two window phases, the live buffer at 1 pair with the "
-                         "court views never slowed (the twelfth round's display) against this round's "
+                         "court views never slowed (the older display) against today's "
                          "defaults, in alternating order; totals of pairs tracked and dropped per set-up")
     ap.add_argument("--no-yield", action="store_true",
                     help="keep the court views at their normal rate while tracking is behind "

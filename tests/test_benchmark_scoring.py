@@ -66,28 +66,3 @@ def test_seeks_and_decoding_agree_on_a_regular_video(tmp_path, monkeypatch):
     assert list(tmp_path.glob("badminton-seekmap-*.npy"))       # cached for the next run
     assert np.array_equal(clips.seek_frame_map(video), np.arange(20))
 
-
-def test_rally_census_names_each_wrong_frame(tmp_path):
-    """benchmarks/rally_census.py: a shuttle held still and missed before the first flight, a
-    miss in flight, our track running on after the labels stop, and clutter held still where
-    nothing is labelled each get their own class; right frames get none."""
-    import rally_census
-
-    frames = list(range(60))
-    visible = [f < 30 for f in frames]
-    label_xy = [(100.0, 100.0) if f < 10 else (100.0 + 20 * (f - 9), 100.0) if f < 30 else (0.0, 0.0)
-                for f in frames]
-    labels = tmp_path / "labels.csv"
-    write_point_labels(labels, frames, visible, label_xy)
-    pred = {}
-    for f in range(10, 36):                   # the flight, and 6 frames on past the labels' end
-        if f != 20:                           # one miss in flight
-            pred[f] = (True, 100.0 + 20 * (f - 9), 100.0)
-    for f in range(44, 52):                   # something still where nothing is labelled
-        pred[f] = (True, 900.0, 50.0)
-    outcomes, classes, rows = rally_census.census(pred, labels)
-    # Frames 4-9 have the flight within their ±6 frames: they count as its start, not as still.
-    assert classes == {"still before the first flight": 4, "flight FN": 6 + 1,
-                       "FP2 on a labelled run, moving": 6, "FP2 still": 8}
-    assert outcomes["TP"] == 19 and outcomes["FN"] == 11 and outcomes["FP2"] == 14
-    assert all(kind in rally_census.CLASSES for _, _, kind in rows)

@@ -228,8 +228,8 @@ def test_a_pair_taken_apart_is_triangulated_at_the_left_image_time():
 
 def test_on_the_demo_court_a_right_camera_4_ms_late_triangulates_as_a_synchronous_one():
     """The demo court's exact truth, the right image taken 4 ms before the left
-    (``delayed_right_errors``; ``benchmarks/free_running.py``: synchronous 1.87 / 0.75 cm median
-    measured / reported over 400 frames): paired as seen the points are 29 cm off at the median,
+    (``delayed_right_errors``; synchronous, 1.87 / 0.75 cm median measured / reported over 400
+    frames): paired as seen the points are 29 cm off at the median,
     moved to the left image's time 2.5 cm; the reported points (the flight filter's) ≈ 1 cm."""
     from badminton_gui.io.demo_eval import delayed_right_errors
 
