@@ -13,6 +13,7 @@ live in a small JSON file shipped in ``resources/`` (``core/resources.py``), wri
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +25,15 @@ from .resources import resource_path
 
 class ClassifierError(ValueError):
     """A classifier file that is missing or malformed."""
+
+
+class TrainingStopped(Exception):
+    """Training gave up because its ``should_stop`` said so (the user stopped or closed)."""
+
+
+# How many epochs pass between two looks at ``should_stop``: a look costs nothing beside an
+# epoch, and ten epochs of the adaptation's training take well under a second.
+_STOP_CHECK_EPOCHS = 10
 
 
 @dataclass(frozen=True)
@@ -78,11 +88,14 @@ def load_classifier(name_or_path: str) -> CandidateClassifier:
 def train_mlp(features: np.ndarray, labels: np.ndarray, hidden: int = 16, epochs: int = 300,
               learning_rate: float = 0.05, positive_weight: float | None = None,
               seed: int = 0, name: str = "candidate_classifier",
-              feature_names: tuple[str, ...] = (), dtype=np.float64) -> CandidateClassifier:
+              feature_names: tuple[str, ...] = (), dtype=np.float64,
+              should_stop: Callable[[], bool] | None = None) -> CandidateClassifier:
     """Full-batch Adam on the weighted cross-entropy; small enough for a few 100k samples.
 
     ``dtype``: the arithmetic of training (float32 about halves the time; the shipped files were
-    trained in float64, which reproduces them). The result is float64 either way."""
+    trained in float64, which reproduces them). The result is float64 either way.
+    ``should_stop``: asked every few epochs; when it says so, :class:`TrainingStopped` is raised,
+    so a window closed during a recording's adaptation never waits for the training to end."""
     rng = np.random.default_rng(seed)
     x = np.asarray(features, float)
     y = np.asarray(labels, float)
@@ -102,6 +115,8 @@ def train_mlp(features: np.ndarray, labels: np.ndarray, hidden: int = 16, epochs
     m = [np.zeros_like(p) for p in params]
     v = [np.zeros_like(p) for p in params]
     for step in range(1, epochs + 1):
+        if should_stop is not None and step % _STOP_CHECK_EPOCHS == 1 and should_stop():
+            raise TrainingStopped("training stopped on request")
         w1, b1, w2, b2 = params
         a1 = np.tanh(xs @ w1 + b1)
         z = (a1 @ w2 + b2)[:, 0]
@@ -125,7 +140,8 @@ def train_mlp(features: np.ndarray, labels: np.ndarray, hidden: int = 16, epochs
 
 def train_ensemble(features: np.ndarray, labels: np.ndarray, members: int = 3, hidden: int = 16,
                    epochs: int = 300, seed: int = 0, name: str = "candidate_classifier",
-                   feature_names: tuple[str, ...] = (), dtype=np.float64) -> CandidateClassifier:
+                   feature_names: tuple[str, ...] = (), dtype=np.float64,
+                   should_stop: Callable[[], bool] | None = None) -> CandidateClassifier:
     """``members`` MLPs from different initial weights, averaged in logit, as one wider MLP.
 
     Trained on a few clips, one small MLP's ranking of a clip it has not seen swings with its
@@ -135,7 +151,8 @@ def train_ensemble(features: np.ndarray, labels: np.ndarray, members: int = 3, h
     ``CandidateClassifier`` stay as they are.
     """
     nets = [train_mlp(features, labels, hidden=hidden, epochs=epochs, seed=seed * 1000 + k, dtype=dtype,
-                      name=name, feature_names=feature_names) for k in range(members)]
+                      name=name, feature_names=feature_names, should_stop=should_stop)
+            for k in range(members)]
     first = nets[0]
     return CandidateClassifier(
         name, first.mean, first.scale,

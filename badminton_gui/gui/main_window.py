@@ -26,7 +26,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
-from PySide6.QtCore import QByteArray, QMimeData, QPoint, QStandardPaths, Qt, QThread, QTimer, Signal
+from PySide6.QtCore import QByteArray, QMimeData, QObject, QPoint, QStandardPaths, Qt, QThread, QTimer, Signal
 from PySide6.QtGui import QAction, QFont, QFontMetrics, QKeySequence, QPainter, QPixmap
 from PySide6.QtWidgets import (QApplication, QDockWidget, QFileDialog, QFrame, QGridLayout,
                                QHBoxLayout, QLabel, QMainWindow, QMessageBox, QPushButton, QSizePolicy,
@@ -84,6 +84,27 @@ def rig_save_dir() -> Path:
     except OSError:
         return Path(QStandardPaths.writableLocation(
             QStandardPaths.StandardLocation.AppDataLocation) or Path.home()) / "rigs"
+
+# Tracking threads that did not stop when asked (a camera that hangs, a long step that ends on
+# its own later). Qt aborts the whole program when a running QThread is destroyed, which would
+# happen with its parent window; so such a thread loses its parent and is held here until it ends.
+_UNFINISHED: list[tuple[QObject, QThread]] = []
+
+
+def _keep_until_finished(worker: QObject, thread: QThread) -> None:
+    thread.setParent(None)
+    entry = (worker, thread)
+    _UNFINISHED.append(entry)
+
+    def release() -> None:
+        if entry in _UNFINISHED:
+            _UNFINISHED.remove(entry)
+            worker.deleteLater()
+            thread.deleteLater()
+    thread.finished.connect(release)
+    if thread.isFinished():
+        release()
+
 
 def _on_screen(widget: QWidget) -> bool:
     """Whether any of the widget is visible (shown, not collapsed to nothing by a splitter)."""
@@ -723,7 +744,8 @@ class MainWindow(QMainWindow):
             thread.quit()
             if not thread.wait(5000):
                 self.banner.show_message("The tracking thread did not stop within 5 s (a camera may hang).")
-                self._retiring.remove((worker, thread))   # leave it; never delete a running thread
+                self._retiring.remove((worker, thread))
+                _keep_until_finished(worker, thread)
         self._reap_retired()
 
     def _on_opening(self, step: str) -> None:
