@@ -48,6 +48,11 @@ def test_both_programs_print_their_version(capsys):
         main(["--version"])
     assert stop.value.code == 0
     assert capsys.readouterr().out == f"badminton-track {__version__}\n"
+    from badminton_gui.gui import app
+    with pytest.raises(SystemExit) as stop:
+        app.main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out == f"badminton-gui {__version__}\n"
 
 
 # ---- --json: one object on stdout, the figures of the text summary ------------------------------
@@ -357,3 +362,27 @@ def test_configuring_twice_replaces_the_handlers(tmp_path):
     assert "two[" in (tmp_path / "b.log").read_text()
     logging_setup.reset_logging()
     assert list(root.handlers) == before and sys.excepthook is hook
+
+
+# ---- the GUI's start-up ---------------------------------------------------------------------------
+
+def test_gui_logs_its_start_and_a_bad_command_line_to_the_file(capsys, isolated_state_dir):
+    from badminton_gui.gui import app
+    assert app.main(["--source", "video", "-v"]) == 2      # returns before Qt is loaded
+    assert "needs --left and --right" in capsys.readouterr().err
+    text = log_text(isolated_state_dir)
+    assert "badminton-gui 0.1.0 started" in text.replace(__version__, "0.1.0")
+    assert "ERROR badminton_gui.gui.app: --source video needs --left and --right" in text
+    assert " DEBUG " in text
+
+
+def test_gui_routes_qt_messages_into_the_log(capsys, isolated_state_dir):
+    from PySide6.QtCore import QtMsgType
+
+    from badminton_gui.gui import app
+    configure_logging("badminton-gui")
+    app._qt_message_to_log(QtMsgType.QtWarningMsg, None, "QOpenGLWidget: failed to create a context")
+    app._qt_message_to_log(QtMsgType.QtDebugMsg, None, "qt chatter")
+    text = log_text(isolated_state_dir)
+    assert "WARNING qt: QOpenGLWidget: failed to create a context" in text and "qt chatter" not in text
+    assert "failed to create a context" in capsys.readouterr().err
