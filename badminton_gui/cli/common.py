@@ -113,8 +113,14 @@ def add_logging_arguments(parser: argparse.ArgumentParser, top_level: bool = Fal
                                 "(detect and track then print no summary either)")
     if "--log-file" not in taken:
         parser.add_argument("--log-file", metavar="PATH", default=default(None),
-                            help="log to this file (default: badminton-gui.log in the program's "
-                                 "log folder, shared with the GUI)")
+                            help=f"log to this file (default: {log_file_for_help()}, shared with "
+                                 f"the GUI)")
+
+
+def log_file_for_help() -> str:
+    """The default log file's path, escaped for an argparse help string."""
+    from ..io.logging_setup import default_log_file
+    return str(default_log_file()).replace("%", "%%")
 
 
 def add_json_argument(parser: argparse.ArgumentParser, keys: str) -> None:

@@ -20,7 +20,7 @@ import sys
 
 from .. import __version__
 from ..core.params import ParamError
-from ..io.logging_setup import configure_logging, describe_environment, make_console_safe
+from ..io.logging_setup import configure_logging, default_log_file, describe_environment, make_console_safe
 
 PROG = "badminton-gui"
 _log = logging.getLogger(__name__)
@@ -58,7 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
                                 "debugging detail too")
     verbosity.add_argument("-q", "--quiet", action="store_true", help="only errors on stderr")
     p.add_argument("--log-file", metavar="PATH",
-                   help="log to this file (default: badminton-gui.log in the program's log folder)")
+                   help="log to this file (default: %s)" % str(default_log_file()).replace("%", "%%"))
     return p
 
 
