@@ -58,7 +58,8 @@ def build_parser() -> argparse.ArgumentParser:
                                 "debugging detail too")
     verbosity.add_argument("-q", "--quiet", action="store_true", help="only errors on stderr")
     p.add_argument("--log-file", metavar="PATH",
-                   help="log to this file (default: %s)" % str(default_log_file()).replace("%", "%%"))
+                   help="log to this file (default: %s)"
+                        % str(default_log_file()).replace("%", "%%"))
     return p
 
 
