@@ -8,6 +8,7 @@ is closed (worker stopped, thread joined) after the test.
 from __future__ import annotations
 
 import os
+import sys
 
 import pytest
 
@@ -17,6 +18,18 @@ def isolated_gui_settings(tmp_path, monkeypatch):
     """Point the GUI's QSettings at a file in the test's temporary folder."""
     monkeypatch.setenv("BADMINTON_GUI_SETTINGS", str(tmp_path / "gui-settings.ini"))
     yield tmp_path / "gui-settings.ini"
+
+
+@pytest.fixture(autouse=True)
+def isolated_state_dir(tmp_path, monkeypatch):
+    """Logs (and rigs saved outside a checkout) go to the test's temporary folder, never the
+    user's home; logging set up by a test is taken down after it."""
+    state = tmp_path / "state"
+    monkeypatch.setenv("BADMINTON_GUI_STATE_DIR", str(state))
+    yield state
+    setup = sys.modules.get("badminton_gui.io.logging_setup")
+    if setup is not None:
+        setup.reset_logging()
 
 
 def has_display() -> bool:

@@ -10,13 +10,16 @@ rig file is written with ``StereoRig.save`` (GUIDE §8).
 from __future__ import annotations
 
 import argparse
+import logging
 from pathlib import Path
 
 from ..core.calib_board import BoardError, BoardSpec
 from ..core.calib_folders import pair_image_files, views_from_pairs
 from ..core.calibration import CalibrationError, SolveOptions, solve_stereo
 from ..core.rig import RigError
-from .common import Progress, UserError
+from .common import Progress, UserError, add_json_argument, print_json
+
+_log = logging.getLogger(__name__)
 
 
 def register(sub) -> None:
@@ -49,6 +52,11 @@ def register(sub) -> None:
                    help="cornerSubPix half-window in px (default: a third of a square, at most "
                         "11; OpenCV's stereo sample uses 11)")
     p.add_argument("-o", "--output", type=Path, required=True, help="rig file to write (.yaml)")
+    add_json_argument(p, "pairs, views_used, image_size [w, h], rms_left_px, rms_right_px, "
+                         "rms_stereo_px, epipolar_px, epipolar_grade, baseline_m, baseline_std_m, "
+                         "T_m [x, y, z], left and right {fx, fy, cx, cy} in px, intrinsics_mode, "
+                         "views [{view, left_px, right_px, epipolar_px}], warnings and rejected "
+                         "[{view, reason}], output (lengths in the unit of --square)")
     p.set_defaults(func=run)
 
 
@@ -71,24 +79,47 @@ def run(args: argparse.Namespace) -> int:
     except CalibrationError as exc:
         raise UserError(str(exc)) from None
 
-    print(f"{len(pairs)} image pairs, board found in both images of {len(found.views)}")
-    for line in result.summary_lines():
-        print(line)
-    print("per-view reprojection error (px) and epipolar error (px):")
-    for v in result.view_errors:
-        print(f"  {v.view_id:<24} left {v.left_px:6.3f}  right {v.right_px:6.3f}  "
-              f"epipolar {v.epipolar_px:6.3f}")
     for w in found.warnings:
-        print(f"warning, {w.view_id} (kept; judged by its error): {w.reason}")
-    if found.skipped or result.rejected:
-        print("rejected views:")
-        for r in found.skipped + result.rejected:
-            print(f"  {r.view_id}: {r.reason}")
-    else:
-        print("rejected views: none")
+        _log.warning("%s (kept; judged by its error): %s", w.view_id, w.reason)
+    rejected = found.skipped + result.rejected
+    if not args.json:
+        print(f"{len(pairs)} image pairs, board found in both images of {len(found.views)}")
+        for line in result.summary_lines():
+            print(line)
+        print("per-view reprojection error (px) and epipolar error (px):")
+        for v in result.view_errors:
+            print(f"  {v.view_id:<24} left {v.left_px:6.3f}  right {v.right_px:6.3f}  "
+                  f"epipolar {v.epipolar_px:6.3f}")
+        if rejected:
+            print("rejected views:")
+            for r in rejected:
+                print(f"  {r.view_id}: {r.reason}")
+        else:
+            print("rejected views: none")
     try:
         result.to_rig().save(args.output)
     except (OSError, RigError) as exc:
         raise UserError(f"cannot write {args.output}: {exc}") from None
-    print(f"rig written to {args.output.resolve()}")
+    if args.json:
+        print_json(_summary_json(len(pairs), result, found.warnings, rejected, args.output.resolve()))
+    else:
+        print(f"rig written to {args.output.resolve()}")
     return 0
+
+
+def _summary_json(pairs: int, result, warnings, rejected, output: Path) -> dict:
+    def intrinsics(m) -> dict:
+        return {"fx": m[0, 0], "fy": m[1, 1], "cx": m[0, 2], "cy": m[1, 2]}
+
+    return {"pairs": pairs, "views_used": len(result.view_errors),
+            "image_size": list(result.image_size), "rms_left_px": result.rms_left,
+            "rms_right_px": result.rms_right, "rms_stereo_px": result.rms_stereo,
+            "epipolar_px": result.epipolar_px, "epipolar_grade": result.epipolar_grade,
+            "baseline_m": result.baseline, "baseline_std_m": result.baseline_std,
+            "T_m": [float(v) for v in result.T.ravel()], "left": intrinsics(result.M1),
+            "right": intrinsics(result.M2), "intrinsics_mode": result.intrinsics_mode,
+            "views": [{"view": v.view_id, "left_px": v.left_px, "right_px": v.right_px,
+                       "epipolar_px": v.epipolar_px} for v in result.view_errors],
+            "warnings": [{"view": w.view_id, "reason": w.reason} for w in warnings],
+            "rejected": [{"view": r.view_id, "reason": r.reason} for r in rejected],
+            "output": str(output)}

@@ -1,8 +1,12 @@
-"""Helpers shared by the CLI commands: user errors, progress bar, argument parsing."""
+"""Helpers shared by the CLI commands: user errors, progress bar, argument parsing, output."""
 
 from __future__ import annotations
 
+import argparse
+import json
+import math
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -72,6 +76,85 @@ class Progress:
             self._draw(time.perf_counter())
             sys.stderr.write("\n")
             sys.stderr.flush()
+
+
+class CliHelpFormatter(argparse.HelpFormatter):
+    """argparse's help, except that a paragraph of the description or epilog whose lines are
+    indented (a table of CSV columns or JSON keys) is printed as written, not re-wrapped."""
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        out = []
+        for para in textwrap.dedent(text).strip("\n").split("\n\n"):
+            if any(line.startswith(" ") for line in para.splitlines()):
+                out.append("\n".join(indent + line for line in para.splitlines()))
+            else:
+                out.append(textwrap.fill(" ".join(para.split()), width, initial_indent=indent,
+                                         subsequent_indent=indent))
+        return "\n\n".join(out)
+
+
+def add_logging_arguments(parser: argparse.ArgumentParser, top_level: bool = False) -> None:
+    """-v/--verbose, -q/--quiet and --log-file, on the program and on every command (so both
+    `badminton-track -v detect ...` and `badminton-track detect -v ...` work). The command's copy
+    sets nothing unless given, so it does not undo the program's."""
+    def default(value):
+        return value if top_level else argparse.SUPPRESS
+
+    # A command that already defines one of these options keeps its own (no clash at start-up).
+    taken = set(parser._option_string_actions)
+    group = parser.add_mutually_exclusive_group()
+    if not {"-v", "--verbose"} & taken:
+        group.add_argument("-v", "--verbose", action="count", default=default(0),
+                           help="more detail on stderr (-vv: debugging detail); the log file gets "
+                                "debugging detail too")
+    if not {"-q", "--quiet"} & taken:
+        group.add_argument("-q", "--quiet", action="store_true", default=default(False),
+                           help="print nothing but results and errors: no progress bar, no warnings "
+                                "(detect and track then print no summary either)")
+    if "--log-file" not in taken:
+        parser.add_argument("--log-file", metavar="PATH", default=default(None),
+                            help=f"log to this file (default: {log_file_for_help()}, shared with "
+                                 f"the GUI)")
+
+
+def log_file_for_help() -> str:
+    """The default log file's path, escaped for an argparse help string."""
+    from ..io.logging_setup import default_log_file
+    return str(default_log_file()).replace("%", "%%")
+
+
+def add_json_argument(parser: argparse.ArgumentParser, keys: str) -> None:
+    """--json: the summary as one JSON object on stdout instead of text. ``keys`` documents them."""
+    parser.add_argument("--json", action="store_true",
+                        help="print the summary as one JSON object on stdout instead of text: " + keys)
+
+
+def _json_value(value):
+    """JSON has no NaN or infinity: those become null, as do numpy scalars their Python value."""
+    if isinstance(value, dict):
+        return {str(k): _json_value(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_value(v) for v in value]
+    if isinstance(value, Path):
+        return str(value)
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+        value = value.item()      # numpy scalar
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def print_json(summary: dict) -> None:
+    """The one JSON object a command prints with --json (ASCII only: any console prints it)."""
+    print(json.dumps(_json_value(summary), indent=2, allow_nan=False))
+
+
+def outcomes_json(outcomes) -> dict:
+    """A score (core.evaluation.Outcomes) for --json: the five counts and the four figures as
+    fractions (0..1; null when undefined, e.g. precision with nothing detected)."""
+    o = outcomes
+    return {"tp": o.tp, "tn": o.tn, "fp1": o.fp1, "fp2": o.fp2, "fn": o.fn, "accuracy": o.accuracy,
+            "precision": o.precision, "recall": o.recall, "f1": o.f1}
 
 
 def add_preset_argument(parser) -> None:

@@ -17,16 +17,22 @@ from pathlib import Path
 import cv2
 
 from .common import Progress, UserError, parse_size
+from .csv_columns import COURT_FRAME, LABEL_COLUMNS, TRUTH_COLUMNS, columns_epilog
 
 
 def register(sub) -> None:
     p = sub.add_parser(
         "demo", help="write a synthetic stereo rally (videos, rig, ground truth)",
         description="Render the synthetic demo court: two videos, the exact rig file and the "
-                    "ground truth of every frame.")
+                    "ground truth of every frame.",
+        epilog=columns_epilog("Columns of DIR/truth.csv (empty: no shuttle in play):", TRUTH_COLUMNS)
+        + "\n\n" + columns_epilog("Columns of DIR/left_labels.csv and DIR/right_labels.csv:",
+                                    LABEL_COLUMNS) + f"\n\nThe {COURT_FRAME}.")
     p.add_argument("--frames", type=int, required=True, metavar="N", help="number of frame pairs")
-    p.add_argument("--out", type=Path, required=True, metavar="DIR",
-                   help="output folder (created if missing)")
+    output = p.add_mutually_exclusive_group(required=True)
+    output.add_argument("-o", "--output", type=Path, metavar="DIR",
+                        help="output folder (created if missing)")
+    output.add_argument("--out", type=Path, dest="output", help=argparse.SUPPRESS)  # the old spelling
     p.add_argument("--seed", type=int, default=0, help="rally seed (default 0)")
     p.add_argument("--size", type=parse_size, default=(1280, 720), metavar="WxH",
                    help="image size of each camera (default 1280x720)")
@@ -54,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--frames must be at least 1, got {args.frames}")
     if not args.fps > 0:
         raise UserError(f"--fps must be positive, got {args.fps}")
-    out: Path = args.out
+    out: Path = args.output
     if out.exists() and not out.is_dir():
         raise UserError(f"the output path {out} exists and is not a folder")
     try:

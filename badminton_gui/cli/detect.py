@@ -3,15 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import logging
 
 from ..io.detect_file import ADAPTING, DetectFileError, detect_to_csv
-from .common import (INPUT_ERRORS, Progress, UserError, add_lookahead_argument, add_preset_argument,
-                     params_from_args)
+from .common import (INPUT_ERRORS, Progress, UserError, add_json_argument, add_lookahead_argument,
+                     add_preset_argument, params_from_args, print_json)
+from .csv_columns import LABEL_COLUMNS, columns_epilog
+
+_log = logging.getLogger(__name__)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("detect", help="detect the shuttle in one camera's video",
-                       description="Detect the shuttle in one video and write Frame,Visibility,X,Y (pixels).")
+                       description="Detect the shuttle in one video and write Frame,Visibility,X,Y (pixels).",
+                       epilog=columns_epilog("Columns of OUTPUT:", LABEL_COLUMNS))
     p.add_argument("video", help="input video file")
     p.add_argument("-o", "--output", required=True, help="output CSV (TrackNet label format)")
     add_preset_argument(p)
@@ -20,7 +25,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="first adapt the classifier to this recording from its own long runs of "
                         "detections (two passes; default: the preset's classifier.adapt_min_run, on "
                         "for --preset broadcast, and never with --lookahead 0, the live readout)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    add_json_argument(p, "video, output, frames, found, found_percent, frames_per_second, "
+                         "frame_count (announced by the video; 0 unknown), truncated, adapted, "
+                         "adapted_runs, adapted_frames, lead_in_frames, gap_fill_frames")
     p.set_defaults(func=run)
 
 
@@ -46,13 +53,22 @@ def run(args: argparse.Namespace) -> int:
     finally:
         for bar in bars.values():
             bar.close()
-    if not args.quiet:
+    if summary.truncated:
+        _log.warning("%s ended after %d of %d frames (truncated?)", args.video, summary.frames,
+                     summary.frame_count)
+    if args.json:
+        print_json({"video": str(args.video), "output": str(args.output), "frames": summary.frames,
+                    "found": summary.found, "found_percent": round(summary.found_share, 3),
+                    "frames_per_second": round(summary.frames_per_second, 3),
+                    "frame_count": summary.frame_count, "truncated": summary.truncated,
+                    "adapted": summary.adapted, "adapted_runs": summary.adapted_runs,
+                    "adapted_frames": summary.adapted_frames, "lead_in_frames": summary.lead_in,
+                    "gap_fill_frames": summary.gap_fill})
+    elif not args.quiet:
         for line in (summary.adaptation_text,
                      f"{summary.frames} frames, shuttle found in {summary.found} ({summary.found_share:.1f} %), "
-                     f"{summary.frames_per_second:.1f} frames/s → {args.output}",
+                     f"{summary.frames_per_second:.1f} frames/s -> {args.output}",
                      summary.lead_in_text):
             if line:
                 print(line)
-    if summary.truncated:
-        print(f"warning: {args.video} ended after {summary.frames} of {summary.frame_count} frames (truncated?)")
     return 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import math
 
 import numpy as np
@@ -10,7 +11,9 @@ import numpy as np
 from ..core.evaluation import DEFAULT_TOLERANCE, evaluate, tolerance_px
 from ..io.labels import CsvFormatError, read_point_labels
 from ..io.video import VideoFile
-from .common import INPUT_ERRORS, UserError
+from .common import INPUT_ERRORS, UserError, add_json_argument, outcomes_json, print_json
+
+_log = logging.getLogger(__name__)
 
 STANDARD_WIDTHS = (512, 640, 1280, 1920, 2048, 2560, 3840)
 
@@ -27,6 +30,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--video", default=None, help="read the image width from this video")
     p.add_argument("--camera", choices=("left", "right"), default=None,
                    help="for `track` output: which camera's columns to score")
+    add_json_argument(p, "frames, tolerance_px, width, width_assumed (true: guessed from the "
+                         "labels), tp, tn, fp1, fp2, fn, and accuracy, precision, recall, f1 as "
+                         "fractions (null when undefined)")
     p.set_defaults(func=run)
 
 
@@ -58,15 +64,20 @@ def run(args: argparse.Namespace) -> int:
             width = VideoFile(args.video).width
     except INPUT_ERRORS as exc:
         raise UserError(str(exc)) from None
-    if width is None:
+    width_assumed = width is None
+    if width_assumed:
         largest = np.nanmax(labels.xy[:, 0]) if labels.visible.any() else 0.0
         width = next((w for w in STANDARD_WIDTHS if w > largest), STANDARD_WIDTHS[-1])
-        print(f"note: image width assumed {width} px (largest label X is {largest:.0f}); "
-              f"pass --width or --video to set it")
+        _log.warning("image width assumed %d px (largest label X is %.0f); pass --width or --video "
+                     "to set it", width, largest)
     tol = tolerance_px(width, args.tolerance)
     result = evaluate(pred, labels.as_dict(), tol)
-    print(f"frames {result.total}  tolerance {tol:.1f} px at width {width}")
-    print(result.summary())
+    if args.json:
+        print_json({"frames": result.total, "tolerance_px": tol, "width": int(width),
+                    "width_assumed": width_assumed, **outcomes_json(result)})
+    else:
+        print(f"frames {result.total}  tolerance {tol:.1f} px at width {width}")
+        print(result.summary())
     if math.isnan(result.accuracy):
         raise UserError("no labelled frames to score")
     return 0

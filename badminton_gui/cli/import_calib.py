@@ -29,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise UserError(f"cannot write {args.output}: {exc.strerror or exc}") from None
     centres = rig.camera_centres()
-    print(f"rig {rig.image_size[0]}×{rig.image_size[1]}, baseline {rig.baseline:.3f} m, "
+    print(f"rig {rig.image_size[0]}x{rig.image_size[1]}, baseline {rig.baseline:.3f} m, "
           f"cameras at {np.round(centres[0], 2).tolist()} and {np.round(centres[1], 2).tolist()} "
-          f"(court frame) → {args.output}")
+          f"(court frame) -> {args.output}")
     return 0

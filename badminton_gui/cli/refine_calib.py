@@ -14,8 +14,8 @@ import argparse
 
 from ..core.rig_refine import PairCollector, refine_relative_pose
 from ..core.tracker import StereoTracker, configure_opencv_threads
-from .common import (INPUT_ERRORS, Progress, UserError, add_preset_argument,
-                     add_video_pair_arguments, open_stereo_videos, params_from_args)
+from .common import (INPUT_ERRORS, Progress, UserError, add_json_argument, add_preset_argument,
+                     add_video_pair_arguments, open_stereo_videos, params_from_args, print_json)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,8 +26,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_video_pair_arguments(p, "rig file to start from (.yaml)")
     p.add_argument("-o", "--output", required=True, help="refined rig file to write (.yaml)")
     p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_preset_argument(p)
+    add_json_argument(p, "frames, pairs, inliers, before_median_px, after_median_px, "
+                         "before_p90_px, after_p90_px, held_back_before_px, held_back_after_px, "
+                         "rotation_change_deg, baseline_turn_deg, accepted, reason, output (null "
+                         "when not refined; the exit status is then 2)")
     p.set_defaults(func=run)
 
 
@@ -56,7 +59,10 @@ def run(args: argparse.Namespace) -> int:
     if n == 0:
         raise UserError("the videos hold no frames")
     refined, report = refine_relative_pose(rig, *collector.points())
-    print(f"{n} frame pairs: {report.summary()}")
+    if args.json:
+        print_json(_summary_json(n, report, args.output if report.accepted else None))
+    else:
+        print(f"{n} frame pairs: {report.summary()}")
     if not report.accepted:
         raise UserError(f"not refined: {report.reason}; {args.output} not written")
     try:
@@ -65,5 +71,17 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     except OSError as exc:
         raise UserError(f"cannot write {args.output}: {exc.strerror or exc}") from None
-    print(f"refined rig → {args.output}")
+    if not args.json:
+        print(f"refined rig -> {args.output}")
     return 0
+
+
+def _summary_json(frames: int, report, output) -> dict:
+    r = report
+    return {"frames": frames, "pairs": r.pairs, "inliers": r.inliers,
+            "before_median_px": r.before_median_px, "after_median_px": r.after_median_px,
+            "before_p90_px": r.before_p90_px, "after_p90_px": r.after_p90_px,
+            "held_back_before_px": r.held_back_before_px, "held_back_after_px": r.held_back_after_px,
+            "rotation_change_deg": r.rotation_change_deg, "baseline_turn_deg": r.baseline_turn_deg,
+            "accepted": r.accepted, "reason": r.reason,
+            "output": str(output) if output is not None else None}

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import sys
+import logging
 
 from ..core.tracker import configure_opencv_threads
 from ..io.track_file import TrackFileError, track_to_csv
-from .common import (Progress, UserError, add_lookahead_argument, add_preset_argument,
-                     add_video_pair_arguments, open_stereo_videos, params_from_args)
+from .common import (Progress, UserError, add_json_argument, add_lookahead_argument, add_preset_argument,
+                     add_video_pair_arguments, open_stereo_videos, outcomes_json, params_from_args,
+                     print_json)
+from .csv_columns import COURT_FRAME, LEFT_CAMERA_FRAME, TRACK_COLUMNS, columns_epilog
+
+_log = logging.getLogger(__name__)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -16,7 +20,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Track the shuttle in two synchronised videos; one CSV row per "
                                    "left frame with both 2D detections, the 3D point (court frame "
                                    "when the rig has a court pose, else left-camera frame), "
-                                   "distance, speed and the predicted landing point.")
+                                   "distance, speed and the predicted landing point.",
+                       epilog=columns_epilog("Columns of OUTPUT (an empty cell: no value):", TRACK_COLUMNS)
+                       + f"\n\nThe {COURT_FRAME}. The {LEFT_CAMERA_FRAME}.")
     add_video_pair_arguments(p, "rig file (OpenCV FileStorage YAML)")
     p.add_argument("-o", "--output", required=True, help="output CSV")
     add_preset_argument(p)
@@ -25,7 +31,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "serial port / Bluetooth port / pyserial URL")
     p.add_argument("--baud", type=int, default=115200, help="robot link baud rate")
     p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
-    p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    add_json_argument(p, "output, pairs, points_3d, points_3d_percent, pairs_per_second, frame "
+                         "('court' or 'left-camera'), rig_epipolar_px (null: not measured), rig_note "
+                         "('' when the rig held), score (null without labels, else left/right with "
+                         "tp, tn, fp1, fp2, fn and accuracy, precision, recall, f1 as fractions)")
     p.set_defaults(func=run)
 
 
@@ -53,15 +62,24 @@ def run(args: argparse.Namespace) -> int:
     n, hits3d = summary.pairs, summary.points_3d
     if n == 0:
         raise UserError("the videos hold no frames")
-    if not args.quiet:
-        frame_name = "court" if rig.has_court_pose else "left-camera"
+    frame_name = "court" if rig.has_court_pose else "left-camera"
+    if summary.rig_note:
+        note = summary.rig_note
+        _log.warning("%s%s", note[:1].lower(), note[1:])
+    if args.json:
+        score = None
+        if summary.score_left is not None and summary.score_right is not None:
+            score = {"left": outcomes_json(summary.score_left), "right": outcomes_json(summary.score_right)}
+        print_json({"output": str(args.output), "pairs": n, "points_3d": hits3d,
+                    "points_3d_percent": round(100 * hits3d / n, 3),
+                    "pairs_per_second": round(summary.pairs_per_second, 3), "frame": frame_name,
+                    "rig_epipolar_px": summary.rig_epipolar_px, "rig_note": summary.rig_note,
+                    "score": score})
+    elif not args.quiet:
         print(f"{n} frame pairs, 3D point in {hits3d} ({100 * hits3d / n:.1f} %), "
-              f"{summary.pairs_per_second:.1f} pairs/s (decoding included), {frame_name} frame → {args.output}")
+              f"{summary.pairs_per_second:.1f} pairs/s (decoding included), {frame_name} frame -> {args.output}")
         if summary.score_text:
             print(summary.score_text + " (the timestamp files' labels)")
-        if summary.rig_note:
-            note = summary.rig_note
-            print(f"note: {note[:1].lower()}{note[1:]}", file=sys.stderr)
     return 0
 
 

@@ -4,16 +4,26 @@ Why this file exists: the entry point declared in pyproject. Without arguments i
 last source (the demo court the first time). ``--source demo|video|cameras`` overrides it, and
 ``--screenshot PATH --quit-after SECONDS`` tracks for that long, saves the window and exits 0
 (used under Xvfb to check the product end to end).
+
+Everything the program says goes to the log file of io/logging_setup.py as well as to stderr,
+Qt's own messages included: started from a desktop launcher it has no terminal, and the file is
+what an operator can send.
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import signal
 import sys
 
+from .. import __version__
 from ..core.params import ParamError
+from ..io.logging_setup import configure_logging, default_log_file, describe_environment, make_console_safe
+
+PROG = "badminton-gui"
+_log = logging.getLogger(__name__)
 
 
 # The tracker's Python parts hold the GIL; a 1 ms switch interval (default 5 ms) lets the
@@ -22,7 +32,8 @@ GIL_SWITCH_INTERVAL = 0.001
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="badminton-gui", description="Courtside stereo shuttlecock tracker.")
+    p = argparse.ArgumentParser(prog=PROG, description="Courtside stereo shuttlecock tracker.")
+    p.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     p.add_argument("--source", choices=("demo", "video", "single", "cameras"),
                    help="what to track (default: the last source, else the demo court); 'single': one "
                         "camera's video given as --left (a TV clip: add --preset broadcast)")
@@ -41,11 +52,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--fast", action="store_true", help="process files as fast as possible (no real-time pacing)")
     p.add_argument("--screenshot", metavar="PATH", help="save a screenshot of the window before quitting")
     p.add_argument("--quit-after", type=float, metavar="SECONDS", help="quit after this many seconds")
+    verbosity = p.add_mutually_exclusive_group()
+    verbosity.add_argument("-v", "--verbose", action="count", default=0,
+                           help="more detail on stderr (-vv: debugging detail); the log file gets "
+                                "debugging detail too")
+    verbosity.add_argument("-q", "--quiet", action="store_true", help="only errors on stderr")
+    p.add_argument("--log-file", metavar="PATH",
+                   help="log to this file (default: %s)"
+                        % str(default_log_file()).replace("%", "%%"))
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
+    make_console_safe()
     args = build_parser().parse_args(argv)
+    configure_logging(PROG, verbose=args.verbose, quiet=args.quiet, log_file=args.log_file)
+    _log.info("%s %s started (%s)", PROG, __version__, describe_environment())
+    _log.debug("arguments: %s", sys.argv[1:] if argv is None else argv)
     # Ctrl+C while Qt and the tracker are still loading (seconds on a busy machine) is
     # remembered and honoured once the window exists, rather than ending in a traceback.
     early_interrupt: list[bool] = []
@@ -56,15 +79,16 @@ def main(argv: list[str] | None = None) -> int:
     # Scanning for cameras makes OpenCV warn once per absent device; the dialog says it better.
     os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
     if args.source in ("video", "cameras") and not (args.left and args.right):
-        print(f"badminton-gui: --source {args.source} needs --left and --right", file=sys.stderr)
+        _log.error("--source %s needs --left and --right", args.source)
         return 2
 
-    from PySide6.QtCore import QCoreApplication, Qt
+    from PySide6.QtCore import QCoreApplication, Qt, qInstallMessageHandler
     from PySide6.QtWidgets import QApplication
 
     from . import settings as st
     from .main_window import MainWindow
 
+    qInstallMessageHandler(_qt_message_to_log)
     # Shared GL contexts: pyqtgraph's shaders stay valid if a GL view is ever re-created.
     QCoreApplication.setAttribute(Qt.ApplicationAttribute.AA_ShareOpenGLContexts)
     app = QApplication.instance() or QApplication(sys.argv[:1])
@@ -76,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             params = load_preset(args.preset)
         except ParamError as exc:
-            print(f"badminton-gui: {exc}", file=sys.stderr)
+            _log.error("%s", exc)
             return 2
     spec = None
     if args.source:
@@ -106,12 +130,12 @@ def main(argv: list[str] | None = None) -> int:
             if window.results_seen == 0:
                 # Unattended runs must fail loudly when nothing was tracked.
                 reason = window.banner.text or "no result arrived in time"
-                print(f"badminton-gui: nothing tracked: {reason}", file=sys.stderr)
+                _log.error("nothing tracked: %s", reason)
                 status["code"] = 1
             if args.screenshot:
                 path = os.path.abspath(args.screenshot)
                 if not window.grab_window().save(path):
-                    print(f"badminton-gui: cannot write the screenshot {path}", file=sys.stderr)
+                    _log.error("cannot write the screenshot %s", path)
                     status["code"] = 1
                 else:
                     print(f"screenshot: {path}; results shown {window.results_seen}, "
@@ -122,7 +146,18 @@ def main(argv: list[str] | None = None) -> int:
 
         QTimer.singleShot(int(args.quit_after * 1000), finish)
     app.exec()
+    _log.info("exit status %d", status["code"])
     return status["code"]
+
+
+def _qt_message_to_log(kind, context, message: str) -> None:
+    """Qt's warnings (a missing platform plugin, a GL context that failed) into the log file,
+    at the matching level, instead of only to a terminal the operator may not have."""
+    from PySide6.QtCore import QtMsgType
+    level = {QtMsgType.QtDebugMsg: logging.DEBUG, QtMsgType.QtInfoMsg: logging.INFO,
+             QtMsgType.QtWarningMsg: logging.WARNING, QtMsgType.QtCriticalMsg: logging.ERROR,
+             QtMsgType.QtFatalMsg: logging.CRITICAL}.get(kind, logging.WARNING)
+    logging.getLogger("qt").log(level, "%s", message)
 
 
 def _processing_fps(window) -> float:

@@ -1,0 +1,251 @@
+"""One logging set-up for ``badminton-track`` and ``badminton-gui``: a log an operator can hand over.
+
+Why this file exists: a window started from a desktop launcher has no terminal, so whatever the
+program says (its warnings, a traceback, a crash inside Qt or OpenCV) is lost unless it lands in
+a file. Both programs call :func:`configure_logging` first thing; it sends
+
+- every record of INFO and above (DEBUG too with ``-v``) to a rotating file,
+  ``badminton-gui.log`` in :func:`badminton_gui.io.app_dirs.log_dir` (or ``--log-file``),
+- records at the console's level (WARNING; INFO/DEBUG with ``-v``/``-vv``; ERROR with ``-q``)
+  to stderr, one plain line each,
+- uncaught exceptions, in the main thread and in any other thread, to the file with their
+  traceback before Python's usual report on stderr,
+- a hard crash (segmentation fault in a C extension) to the same file, through ``faulthandler``.
+
+When the log file cannot be opened (read-only home, a full disk) the program runs on with the
+console only and says so once. Stdlib only: the CLI and the GUI both use it.
+"""
+
+from __future__ import annotations
+
+import faulthandler
+import logging
+import logging.handlers
+import platform
+import sys
+import threading
+from pathlib import Path
+
+from .app_dirs import log_dir
+
+LOG_FILE_NAME = "badminton-gui.log"
+# Five old files of 2 MB: weeks of normal use, and small enough to attach to a message.
+MAX_LOG_BYTES = 2 * 1024 * 1024
+LOG_BACKUPS = 5
+
+# A record carrying ``extra=FILE_ONLY`` goes to the log file but not to the console: for what
+# the console already shows in its own words (a traceback printed by Python, a one-line error).
+FILE_ONLY = {"file_only": True}
+
+_log = logging.getLogger("badminton_gui")
+
+
+class _State:
+    """What :func:`configure_logging` installed, so a second call (tests, the GUI after a CLI
+    call in one process) replaces it instead of stacking handlers and hooks."""
+
+    handlers: list[logging.Handler] = []
+    log_file: Path | None = None
+    program = ""
+    hooks_installed = False
+    previous_excepthook = None
+    previous_threading_excepthook = None
+    faulthandler_was_enabled = False
+    previous_root_level: int | None = None
+
+
+def current_log_file() -> Path | None:
+    """The file this process logs to, or None (logging not configured, or the file could not
+    be opened). The GUI's About box and error banners name it."""
+    return _State.log_file
+
+
+def default_log_file() -> Path:
+    """Where the log goes without ``--log-file``."""
+    return log_dir() / LOG_FILE_NAME
+
+
+class _RotatingLog(logging.handlers.RotatingFileHandler):
+    """A rotating file that keeps ``faulthandler`` pointed at the file it writes now.
+
+    faulthandler holds a file descriptor; rotation closes that descriptor and opens a new file,
+    so it is re-pointed around every rollover (a stale descriptor could be reused by an
+    unrelated file, which a crash report would then overwrite)."""
+
+    def doRollover(self) -> None:  # noqa: N802 - the stdlib's name
+        _point_faulthandler(None)
+        try:
+            super().doRollover()
+        finally:
+            _point_faulthandler(self.stream)
+
+
+def _point_faulthandler(stream) -> None:
+    """Crash reports into ``stream``; None: back to stderr (or off when there is none)."""
+    target = stream if stream is not None else sys.__stderr__
+    try:
+        if target is None:
+            faulthandler.disable()
+        else:
+            faulthandler.enable(file=target, all_threads=True)
+    except (ValueError, OSError, AttributeError):
+        faulthandler.disable()   # a stream without a file descriptor (pythonw, a test double)
+
+
+class _ConsoleFilter(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not getattr(record, "file_only", False)
+
+
+def console_level(verbose: int = 0, quiet: bool = False) -> int:
+    """WARNING by default, INFO with ``-v``, DEBUG with ``-vv``, ERROR with ``-q`` (which wins)."""
+    if quiet:
+        return logging.ERROR
+    if verbose >= 2:
+        return logging.DEBUG
+    return logging.INFO if verbose == 1 else logging.WARNING
+
+
+def configure_logging(program: str, *, verbose: int = 0, quiet: bool = False,
+                      log_file: str | Path | None = None) -> Path | None:
+    """Set up the log file, the console, the exception hooks and faulthandler; return the log
+    file's path (None when it could not be opened: the console alone is used, with a warning).
+
+    ``program`` names the process in the file's lines and in the console's (``badminton-track``,
+    ``badminton-gui``); the two programs share the file. Calling it again replaces the set-up.
+    """
+    reset_logging()
+    _State.program = program
+    root = logging.getLogger()
+    file_level = logging.DEBUG if verbose >= 1 else logging.INFO
+    level_console = console_level(verbose, quiet)
+
+    path = Path(log_file).expanduser() if log_file else default_log_file()
+    file_handler: _RotatingLog | None = None
+    failure = ""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        # Not delayed: faulthandler needs an open stream from the start.
+        file_handler = _RotatingLog(path, maxBytes=MAX_LOG_BYTES, backupCount=LOG_BACKUPS,
+                                    encoding="utf-8")
+    except OSError as exc:
+        failure = f"cannot write the log file {path} ({exc.strerror or exc}); logging to the console only"
+    if file_handler is not None:
+        file_handler.setLevel(file_level)
+        file_handler.setFormatter(logging.Formatter(
+            f"%(asctime)s {program}[%(process)d] %(threadName)s %(levelname)s %(name)s: %(message)s"))
+        root.addHandler(file_handler)
+        _State.handlers.append(file_handler)
+        _State.log_file = path.resolve()
+
+    stderr = sys.stderr
+    if stderr is not None:       # pythonw on Windows has no console at all
+        console = logging.StreamHandler(stderr)
+        console.setLevel(level_console)
+        console.setFormatter(logging.Formatter(f"{program}: %(levelname_lower)s: %(message)s"))
+        console.addFilter(_ConsoleFilter())
+        console.addFilter(_lower_level_name)
+        root.addHandler(console)
+        _State.handlers.append(console)
+
+    _State.previous_root_level = root.level
+    root.setLevel(min(file_level if file_handler is not None else level_console, level_console))
+    _install_hooks()
+    _point_faulthandler(file_handler.stream if file_handler is not None else None)
+    if failure:
+        _log.warning(failure)
+    return _State.log_file
+
+
+def _lower_level_name(record: logging.LogRecord) -> bool:
+    record.levelname_lower = record.levelname.lower()
+    return True
+
+
+def reset_logging() -> None:
+    """Remove what :func:`configure_logging` installed: handlers closed, hooks and faulthandler
+    as they were before. Tests call it so one test's log file is not written by the next."""
+    root = logging.getLogger()
+    # faulthandler first: it must not keep the descriptor of a file about to be closed.
+    if _State.hooks_installed:
+        if _State.faulthandler_was_enabled:
+            _point_faulthandler(None)
+        else:
+            faulthandler.disable()
+    for handler in _State.handlers:
+        root.removeHandler(handler)
+        handler.close()
+    _State.handlers = []
+    _State.log_file = None
+    if _State.previous_root_level is not None:
+        root.setLevel(_State.previous_root_level)
+        _State.previous_root_level = None
+    if _State.hooks_installed:
+        sys.excepthook = _State.previous_excepthook
+        threading.excepthook = _State.previous_threading_excepthook
+        _State.hooks_installed = False
+
+
+def _install_hooks() -> None:
+    _State.previous_excepthook = sys.excepthook
+    _State.previous_threading_excepthook = threading.excepthook
+    _State.faulthandler_was_enabled = faulthandler.is_enabled()
+    sys.excepthook = _excepthook
+    threading.excepthook = _threading_excepthook
+    _State.hooks_installed = True
+
+
+def log_uncaught(exc_type, exc, tb, where: str = "") -> None:
+    """Write an exception that nobody handled, with its traceback, to the log file (once: the
+    exception is marked, so a hook further up does not write it again)."""
+    if exc is not None and getattr(exc, "_badminton_logged", False):
+        return
+    if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
+        _log.info("interrupted%s", f" ({where})" if where else "", extra=FILE_ONLY)
+    else:
+        _log.critical("uncaught exception%s", f" in {where}" if where else "",
+                      exc_info=(exc_type, exc, tb), extra=FILE_ONLY)
+    if exc is not None:
+        try:
+            exc._badminton_logged = True
+        except AttributeError:
+            pass
+
+
+def _excepthook(exc_type, exc, tb) -> None:
+    log_uncaught(exc_type, exc, tb)
+    previous = _State.previous_excepthook or sys.__excepthook__
+    previous(exc_type, exc, tb)
+
+
+def _threading_excepthook(args) -> None:
+    if args.exc_type is not SystemExit:
+        name = args.thread.name if args.thread is not None else "a thread"
+        log_uncaught(args.exc_type, args.exc_value, args.exc_traceback, where=f"thread {name}")
+    previous = _State.previous_threading_excepthook or threading.__excepthook__
+    previous(args)
+
+
+def describe_environment() -> str:
+    """Python, the system and the versions of the big native libraries already loaded: the
+    first question about any crash report."""
+    parts = [f"Python {platform.python_version()}", platform.platform(terse=True)]
+    for module, name in (("cv2", "OpenCV"), ("numpy", "numpy"), ("PySide6", "PySide6")):
+        version = getattr(sys.modules.get(module), "__version__", None)
+        if version:
+            parts.append(f"{name} {version}")
+    return ", ".join(parts)
+
+
+def make_console_safe() -> None:
+    """Let stdout and stderr print any character on any console: one the console's encoding
+    lacks (an arrow on a Windows cp1252 console, a redirected stream) is written escaped instead
+    of ending the program with UnicodeEncodeError after its work is done."""
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is None:
+            continue
+        try:
+            reconfigure(errors="backslashreplace")
+        except (ValueError, OSError, TypeError):
+            pass   # a stream that cannot change (already closed, a test double): leave it
