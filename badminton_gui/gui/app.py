@@ -111,6 +111,8 @@ def main(argv: list[str] | None = None) -> int:
     elif args.fast:
         spec = st.SourceSpec(realtime=False)
     window = MainWindow(params=params, spec=spec)
+    if args.preset:
+        window.remember_preset(args.preset)   # the tuning dialog's Reset returns to it
     if args.fast:
         window.realtime_action.setChecked(False)
         window._realtime_changed()
