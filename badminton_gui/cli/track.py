@@ -53,6 +53,8 @@ def run(args: argparse.Namespace) -> int:
     n, hits3d = summary.pairs, summary.points_3d
     if n == 0:
         raise UserError("the videos hold no frames")
+    if summary.warning:
+        print(f"badminton-track track: warning: {summary.warning}", file=sys.stderr)
     if not args.quiet:
         frame_name = "court" if rig.has_court_pose else "left-camera"
         print(f"{n} frame pairs, 3D point in {hits3d} ({100 * hits3d / n:.1f} %), "

@@ -61,8 +61,10 @@ def _open_rows(path: str | Path, required: tuple[str, ...]) -> tuple[list[tuple[
         names = [n.strip() for n in header]
         missing = [c for c in required if c not in names]
         if missing:
+            shown = " ".join(",".join(names).split())
+            shown = shown if len(shown) <= 80 else shown[:77] + "..."
             raise CsvFormatError(f"{path} lacks the column(s) {', '.join(missing)} "
-                                 f"(header is: {','.join(names)})")
+                                 f"(header is: {shown})")
         rows = []
         for cells in reader:
             if not any(c.strip() for c in cells):
@@ -158,9 +160,9 @@ def read_timestamps(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     if len(back):
         k = back[0] + 1
         raise CsvFormatError(f"{path} line {lines[k]}: timestamps go backwards "
-                             f"({times[k - 1]!r} then {times[k]!r} s)")
+                             f"({float(times[k - 1])!r} then {float(times[k])!r} s)")
     if len(times) > 1 and times[0] == times[-1]:
-        raise CsvFormatError(f"{path}: all {len(times)} timestamps are {times[0]!r} s: the file does "
+        raise CsvFormatError(f"{path}: all {len(times)} timestamps are {float(times[0])!r} s: the file does "
                              f"not time its frames")
     return frames, times
 
@@ -177,24 +179,30 @@ def write_point_labels(path: str | Path, frames, visible, xy) -> None:
                 w.writerow([int(f), 0, "0.00", "0.00"])
 
 
+# ``withheld_reason`` is last so readers of the earlier columns keep working: why the row's 3D
+# cells are empty although both cameras may have a detection ('' when nothing was withheld).
 TRACK_COLUMNS = ("Frame", "FrameR", "Timestamp", "VisL", "XL", "YL", "VisR", "XR", "YR",
-                 "Vis3D", "X", "Y", "Z", "Distance", "Speed", "LandX", "LandY", "LandT")
+                 "Vis3D", "X", "Y", "Z", "Distance", "Speed", "LandX", "LandY", "LandT",
+                 "withheld_reason")
 
 
-def track_row(result) -> list[str]:
-    """One row of `track` output for a TrackResult (empty cells where there is no value)."""
+def track_row(result, withheld: str = "") -> list[str]:
+    """One row of `track` output for a TrackResult (empty cells where there is no value).
+    ``withheld``: the reason its 3D point, distance, speed and landing are not to be trusted
+    (a stalled clock, a pair with no partner frame): those cells stay empty."""
     def fmt(v, nd=4):
         return "" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{nd}f}"
 
     dl, dr = result.left.detection, result.right.detection
-    p = result.point
-    pred = result.flight.prediction if result.flight is not None else None
+    p = None if withheld else result.point
+    pred = result.flight.prediction if result.flight is not None and not withheld else None
     return [
         str(result.index), str(result.index_right), f"{result.timestamp:.6f}",
         "1" if dl else "0", fmt(dl.x if dl else None, 2), fmt(dl.y if dl else None, 2),
         "1" if dr else "0", fmt(dr.x if dr else None, 2), fmt(dr.y if dr else None, 2),
         "1" if p else "0", fmt(p[0] if p else None), fmt(p[1] if p else None),
-        fmt(p[2] if p else None), fmt(result.distance), fmt(result.speed, 3),
+        fmt(p[2] if p else None), fmt(None if withheld else result.distance),
+        fmt(None if withheld else result.speed, 3),
         fmt(pred.x if pred else None), fmt(pred.y if pred else None),
-        fmt(pred.t if pred else None),
+        fmt(pred.t if pred else None), withheld,
     ]

@@ -48,6 +48,20 @@ class TrackFileSummary:
     # The written rows scored against the pair's labels (``truth``), per camera; None without.
     score_left: Outcomes | None = None
     score_right: Outcomes | None = None
+    # Rows whose 3D cells were withheld, by reason (the CSV's ``withheld_reason``), and the
+    # source's sentences on what the output lacks (a file cut short, a stalled clock).
+    withheld: tuple[tuple[str, int], ...] = ()
+    source_notes: tuple[str, ...] = ()
+
+    @property
+    def warning(self) -> str:
+        """One sentence on what in the output may be wrong or missing; '' when nothing is."""
+        parts = list(self.source_notes)
+        if self.withheld:
+            counts = ", ".join(f"{n} {reason}" for reason, n in self.withheld)
+            parts.append(f"3D withheld in {sum(n for _, n in self.withheld)} rows ({counts}; "
+                         f"column withheld_reason)")
+        return "; ".join(parts)
 
     @property
     def score_text(self) -> str:
@@ -116,6 +130,17 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     lookahead = StereoLookahead(rig, params, tracker.epipolar_tolerance)
     n = hits3d = 0
     cancelled = False
+    doubt = getattr(source, "doubt", None)     # VideoPair's: a step whose 3D would be made up
+    withheld: dict[str, int] = {}
+
+    def row(decided) -> list[str]:
+        nonlocal hits3d
+        reason = doubt(decided.index, decided.index_right) if doubt is not None else ""
+        if reason:
+            withheld[reason] = withheld.get(reason, 0) + 1
+        hits3d += decided.point is not None and not reason
+        return track_row(decided, reason)
+
     start = time.perf_counter()
     try:
         out_path.parent.mkdir(parents=True, exist_ok=True)
@@ -131,16 +156,14 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                     break
                 result = tracker.process_frame(frame, keep_masks=False)
                 for decided in map(scored, lookahead.push(result)):
-                    writer.writerow(track_row(decided))
-                    hits3d += decided.point is not None
+                    writer.writerow(row(decided))
                 if link is not None:
                     link.send_result(result)
                 n += 1
                 if progress is not None:
                     progress(n)
             for decided in map(scored, lookahead.flush()):
-                writer.writerow(track_row(decided))
-                hits3d += decided.point is not None
+                writer.writerow(row(decided))
     except OSError as exc:
         raise TrackFileError(f"cannot write the track: {describe_os_error(exc, out_path)}") from None
     finally:
@@ -148,4 +171,5 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     return TrackFileSummary(n, hits3d, time.perf_counter() - start, out_path, cancelled,
                             tracker.rig_epipolar_px, rig.image_size[0],
                             None if score is None else score.outcomes(0),
-                            None if score is None else score.outcomes(1))
+                            None if score is None else score.outcomes(1),
+                            tuple(sorted(withheld.items())), tuple(getattr(source, "notes", ())))
