@@ -71,6 +71,36 @@ def _arr(a, shape=None, key: str = "") -> np.ndarray:
     return out
 
 
+# Element types of a one-channel !!opencv-matrix ("dt"), and the largest side a rig's matrix has.
+_MATRIX_TYPES = ("d", "f", "i", "s", "w", "u", "c")
+_MATRIX_MAX_SIDE = 16
+
+
+def _read_matrix(node) -> np.ndarray | None:
+    """An !!opencv-matrix node's values, read field by field; None when the node is not one.
+
+    ``FileNode.mat()`` trusts the node's rows and cols: a file saying ``cols: -2.5`` makes it
+    write outside its buffer and the process dies later in malloc. Reading the fields here,
+    after checking that they agree, never hands OpenCV a shape it has not been shown to hold."""
+    if not node.isMap():
+        return None
+    rows, cols, dt, data = (node.getNode(k) for k in ("rows", "cols", "dt", "data"))
+    if not (rows.isInt() and cols.isInt() and dt.isString() and data.isSeq()):
+        return None
+    n_rows, n_cols = int(rows.real()), int(cols.real())
+    if not (1 <= n_rows <= _MATRIX_MAX_SIDE and 1 <= n_cols <= _MATRIX_MAX_SIDE):
+        return None
+    if dt.string() not in _MATRIX_TYPES or data.size() != n_rows * n_cols:
+        return None
+    values = []
+    for i in range(n_rows * n_cols):
+        item = data.at(i)
+        if not (item.isInt() or item.isReal()):
+            return None
+        values.append(item.real())
+    return np.asarray(values, dtype=np.float64).reshape(n_rows, n_cols)
+
+
 def _describe(value) -> str:
     text = repr(value)
     return text if len(text) <= 40 else text[:37] + "..."
@@ -192,10 +222,10 @@ class StereoRig:
                     if required:
                         raise RigError(f"rig file {path} lacks the key {key!r}")
                     return None
-                m = node.mat() if node.isMap() else None
+                m = _read_matrix(node)
                 if m is None:
                     raise RigError(f"rig file {path}: key {key!r} is not a matrix "
-                                   f"(an !!opencv-matrix with rows, cols, dt and data)")
+                                   f"(an !!opencv-matrix with rows, cols, dt and data that agree)")
                 return m
 
             def num(key: str):
