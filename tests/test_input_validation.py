@@ -84,7 +84,8 @@ def test_the_api_refuses_the_same_rigs_with_the_one_input_error():
         StereoRig(k, np.zeros(5), k, np.zeros(5), 2 * np.eye(3), [-0.3, 0, 0], (160, 120))
     with pytest.raises(TrackerInputError, match="M2 holds a value that is not finite"):
         StereoRig(k, np.zeros(5), np.full((3, 3), np.nan), np.zeros(5), np.eye(3), [-0.3, 0, 0], (160, 120))
-    assert StereoRig(k, np.zeros(4), k, np.zeros(14), np.eye(3), [-0.3, 0, 0], (160, 120)).baseline == 0.3
+    rig = StereoRig(k, np.zeros(4), k, np.zeros(14), np.eye(3), [-0.3, 0, 0], (160, 120))
+    assert rig.baseline == 0.3
 
 
 # ---- NYCU .cfg import --------------------------------------------------------------------------
@@ -254,6 +255,7 @@ def test_a_truncated_video_is_said_with_its_announced_length(dot_pair):
     try:
         while pair.read() is not None:
             pass
+        assert pair.read() is None                  # asked again past the end: said once
         assert len(pair.notes) == 1
         assert f"of the {N_FRAMES} its header announces (a truncated file?)" in pair.notes[0]
     finally:

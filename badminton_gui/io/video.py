@@ -348,6 +348,8 @@ class VideoPair:
         return None
 
     def _note_end(self, ended: VideoFile, decoded: int, other: VideoFile | None) -> None:
+        if any(note.startswith(f"{ended.path.name} ended after ") for note in self.notes):
+            return                          # a reader that asks again past the end
         announced = ended.frame_count
         cut = f" of the {announced} its header announces (a truncated file?)" if announced > decoded + 1 else ""
         if self._schedule is not None:
