@@ -16,8 +16,9 @@ The rules:
 - A timestamp is a finite real number of seconds, at most ``MAX_TIMESTAMP`` in magnitude
   (Unix time fits), and each camera's clock never goes back within a run (``reset`` starts a
   new run). A timestamp equal to that camera's previous one is accepted — a clock may tick
-  more coarsely than the frames — but :attr:`InputChecks.stalled` says so: speeds and 3D
-  points of such a step rest on a time that did not move, and the file commands withhold them.
+  more coarsely than the frames, and one stalled frame is no reason to stop a live run — but
+  the speeds and 3D points of such a step rest on a time that did not move: where the clock is
+  known in advance (timestamp files, ``VideoPair.doubt``) the file commands withhold them.
 """
 
 from __future__ import annotations
@@ -47,8 +48,6 @@ class InputChecks:
     def reset(self) -> None:
         """A new run: the clocks may start again from any time."""
         self._last_time: list[float | None] = [None, None]
-        # Per camera: the last checked timestamp equalled that camera's previous one.
-        self.stalled: tuple[bool, bool] = (False, False)
 
     def check_pair(self, left, right, timestamp, t_right=None) -> tuple[np.ndarray, np.ndarray]:
         """The pair as the tracker wants it (grey turned into BGR), or TrackerInputError.
@@ -58,7 +57,6 @@ class InputChecks:
         images = (self.image(0, left), self.image(1, right))
         t_left = self.timestamp(0, timestamp)
         t_r = t_left if t_right is None else self.timestamp(1, t_right)
-        stalled = []
         for cam, t in enumerate((t_left, t_r)):
             last = self._last_time[cam]
             if last is not None and t < last:
@@ -66,9 +64,7 @@ class InputChecks:
                     f"the {_CAMERAS[cam]} timestamp {t!r} s is earlier than that camera's previous "
                     f"one ({last!r} s): time must not go back within a run (call reset() when a "
                     f"new recording starts)")
-            stalled.append(last is not None and t == last)
         self._last_time = [t_left, t_r]
-        self.stalled = (stalled[0], stalled[1])
         return images
 
     def image(self, cam: int, img) -> np.ndarray:
