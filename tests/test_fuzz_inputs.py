@@ -337,11 +337,11 @@ def test_the_tracker_refuses_hostile_arrays_and_times_with_its_one_error_type():
             left, right = (_hostile_image(rng, k) for k in kinds)
             roll = rng.random()
             if roll < 0.7:
-                t, time_ok = last_t + float(rng.choice([0.0, 1 / 120, 0.5])), True
+                t, time_ok = last_t + float(rng.choice([1 / 120, 0.5])), True
             else:
                 t = _pick(rng, [float("nan"), float("inf"), -float("inf"), -1e300, 1e300, last_t - 1.0,
-                                "0.5", None, True, complex(1, 1), np.float32(last_t + 1)])
-                time_ok = isinstance(t, np.float32)
+                                last_t, "0.5", None, True, complex(1, 1), np.float32(last_t + 1)])
+                time_ok = isinstance(t, np.float32) and float(t) > last_t
             images_ok = kinds[0] in ACCEPTED_IMAGES and kinds[1] in ACCEPTED_IMAGES
             try:
                 result = tracker.process(left, right, t)
@@ -372,7 +372,11 @@ def test_a_refused_pair_leaves_the_run_as_it_was_and_reset_starts_a_new_clock():
             tracker.process(frame, frame, float("nan"))
         with pytest.raises(TrackerInputError, match="calibrated for 96×64"):
             tracker.process(frame[:32], frame[:32], 2.0)
-        assert tracker.process(frame, frame, 1.0).timestamp == 1.0     # an equal time is allowed
+        with pytest.raises(TrackerInputError, match="repeats that camera's previous one: its clock stalled"):
+            tracker.process(frame, frame, 1.0)
+        with pytest.raises(TrackerInputError, match="right timestamp 1.0 s repeats"):
+            tracker.process(frame, frame, 1.5, t_right=1.0)
+        assert tracker.process(frame, frame, 1.5, t_right=1.25).timestamp == 1.5   # the run goes on
         tracker.reset()
         assert tracker.process(frame, frame, 0.0).timestamp == 0.0     # a new run's clock
     finally:

@@ -290,3 +290,30 @@ def test_eval_notes_the_labelled_frames_without_prediction(tmp_path, capsys):
     assert main(["eval", str(pred), str(labels), "--width", "640"]) == 0
     assert (f"note: 6 of the 8 labelled frames have no prediction in {pred}; they are scored as not "
             f"detected") in capsys.readouterr().err
+
+
+class _FramesWithAStalledPair:
+    """Pairs of the dot video whose fifth pair repeats the fourth's time (no ``doubt`` to say so)."""
+
+    def __init__(self, n: int) -> None:
+        from badminton_gui.core.types import StereoFrame
+        frames_l, _ = moving_dot_frames(n)
+        frames_r, _ = moving_dot_frames(n, offset=-12.0)
+        times = [i / 30.0 for i in range(n)]
+        times[4] = times[3]
+        self.frames = [StereoFrame(l, r, t, t, i, i) for i, (l, r, t) in enumerate(zip(frames_l, frames_r, times))]
+
+    def read(self):
+        return self.frames.pop(0) if self.frames else None
+
+
+def test_a_pair_the_tracker_refuses_keeps_its_row_empty_and_marked(tmp_path):
+    out = tmp_path / "track.csv"
+    summary = track_to_csv(_FramesWithAStalledPair(12), make_rig_for(), TrackerParams(), out)
+    with out.open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["Frame"] for r in rows] == [str(i) for i in range(12)]
+    assert [r["withheld_reason"] for r in rows if r["withheld_reason"]] == ["input_refused"]
+    refused = rows[4]
+    assert refused["withheld_reason"] == "input_refused" and refused["VisL"] == refused["VisR"] == "0"
+    assert summary.pairs == 12 and "3D withheld in 1 row (1 input_refused" in summary.warning

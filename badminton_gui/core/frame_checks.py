@@ -14,11 +14,14 @@ The rules:
   and channel counts are refused, because no conversion is right for every source (is a
   float image 0–1 or 0–255?).
 - A timestamp is a finite real number of seconds, at most ``MAX_TIMESTAMP`` in magnitude
-  (Unix time fits), and each camera's clock never goes back within a run (``reset`` starts a
-  new run). A timestamp equal to that camera's previous one is accepted — a clock may tick
-  more coarsely than the frames, and one stalled frame is no reason to stop a live run — but
-  the speeds and 3D points of such a step rest on a time that did not move: where the clock is
-  known in advance (timestamp files, ``VideoPair.doubt``) the file commands withhold them.
+  (Unix time fits), and each camera's clock moves forward from pair to pair within a run
+  (``reset`` starts a new run). A pair whose time equals that camera's previous one is refused
+  too, alone: the clock stalled, and the trajectory would place the shuttle's new position at
+  a time that did not move, metres off where it is. The caller
+  skips that pair and goes on (the GUI says so in its banner); the next pair with a later
+  time is tracked. Where the clock is known in advance (timestamp files) the file commands
+  mark the frames it times instead (``VideoPair.doubt``), and their pairing never hands this
+  method a stalled pair.
 """
 
 from __future__ import annotations
@@ -64,6 +67,11 @@ class InputChecks:
                     f"the {_CAMERAS[cam]} timestamp {t!r} s is earlier than that camera's previous "
                     f"one ({last!r} s): time must not go back within a run (call reset() when a "
                     f"new recording starts)")
+            if last is not None and t == last:
+                raise TrackerInputError(
+                    f"the {_CAMERAS[cam]} timestamp {t!r} s repeats that camera's previous one: its "
+                    f"clock stalled, and this pair's speeds and 3D point would rest on a time that "
+                    f"did not move (skip the pair; the next one with a later time is tracked)")
         self._last_time = [t_left, t_r]
         return images
 

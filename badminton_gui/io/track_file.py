@@ -20,7 +20,9 @@ from ..core.evaluation import LiveScore, Outcomes
 from ..core.lookahead import StereoLookahead
 from ..core.params import TrackerParams
 from ..core.rig import StereoRig, refine_threshold
+from ..core.errors import TrackerInputError
 from ..core.tracker import StereoTracker
+from ..core.types import CameraResult, TrackResult
 from .labels import TRACK_COLUMNS, track_row
 from .track_log import describe_os_error
 
@@ -30,6 +32,11 @@ from .track_log import describe_os_error
 # the tuned-on clips (benchmarks/lookahead_study.py): 4 frames beat 8 and 15, whose earlier
 # back-fills and later handovers take more wrong candidates than right ones.
 FILE_LOOKAHEAD = 4
+
+
+# The withheld_reason of a row whose pair the tracker refused for a reason the source did not
+# foresee (``TrackerInputError``): the row is empty.
+WITHHELD_REFUSED = "input_refused"
 
 
 class TrackFileError(OSError):
@@ -59,7 +66,8 @@ class TrackFileSummary:
         parts = list(self.source_notes)
         if self.withheld:
             counts = ", ".join(f"{n} {reason}" for reason, n in self.withheld)
-            parts.append(f"3D withheld in {sum(n for _, n in self.withheld)} rows ({counts}; "
+            total = sum(n for _, n in self.withheld)
+            parts.append(f"3D withheld in {total} row{'s' if total != 1 else ''} ({counts}; "
                          f"column withheld_reason)")
         return "; ".join(parts)
 
@@ -132,10 +140,13 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     cancelled = False
     doubt = getattr(source, "doubt", None)     # VideoPair's: a step whose 3D would be made up
     withheld: dict[str, int] = {}
+    refused: set[tuple[int, int]] = set()     # (index, index_right) of the pairs the tracker refused
 
     def row(decided) -> list[str]:
         nonlocal hits3d
         reason = doubt(decided.index, decided.index_right) if doubt is not None else ""
+        if not reason and (decided.index, decided.index_right) in refused:
+            reason = WITHHELD_REFUSED
         if reason:
             withheld[reason] = withheld.get(reason, 0) + 1
         hits3d += decided.point is not None and not reason
@@ -154,11 +165,19 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                 frame = source.read()
                 if frame is None:
                     break
-                result = tracker.process_frame(frame, keep_masks=False)
+                try:
+                    result = tracker.process_frame(frame, keep_masks=False)
+                except TrackerInputError:
+                    # A pair the tracker refuses (a camera whose clock stalled): its row keeps
+                    # its place in the file, empty and marked, and the run goes on.
+                    result = TrackResult(frame.index, frame.timestamp, CameraResult(None),
+                                         CameraResult(None), index_right=frame.index_right)
+                    refused.add((frame.index, frame.index_right))
+                else:
+                    if link is not None:
+                        link.send_result(result)
                 for decided in map(scored, lookahead.push(result)):
                     writer.writerow(row(decided))
-                if link is not None:
-                    link.send_result(result)
                 n += 1
                 if progress is not None:
                     progress(n)
