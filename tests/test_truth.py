@@ -34,7 +34,7 @@ def test_each_camera_is_looked_up_by_its_own_frame_index(tmp_path):
 
 
 def test_timestamp_files_that_carry_labels_are_recognised(tmp_path):
-    assert has_label_columns(_write(tmp_path / "nycu.csv", ["0,1,5,6,0.0"],
+    assert has_label_columns(_write(tmp_path / "nycu.csv", ["0,1,5,6,0.0,0,0.0"],
                                     header="Frame,Visibility,X,Y,Z,Event,Timestamp"))
     assert not has_label_columns(_write(tmp_path / "times.csv", ["0,0.0"], header="Frame,Timestamp"))
     assert not has_label_columns(tmp_path / "missing.csv")

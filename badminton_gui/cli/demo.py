@@ -12,12 +12,67 @@ Writes into DIR: ``left.mp4``, ``right.mp4`` (mp4v), ``rig.yaml`` (StereoRig.sav
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import cv2
 
-from .common import Progress, UserError, parse_size
+from .common import Progress, UserError
 from .csv_columns import COURT_FRAME, LABEL_COLUMNS, TRUTH_COLUMNS, columns_epilog
+
+# The ranges the demo's arguments are checked against when parsed: what the renderer and the
+# mp4v writer handle (a 0×0 frame cannot be drawn; beyond 4096 px a side or 1000 fps the writer
+# fails or, at an infinite rate, never returns).
+MIN_SIDE, MAX_SIDE = 64, 4096
+MIN_FPS, MAX_FPS = 1.0, 1000.0
+MAX_SEED = 2**32 - 1
+MAX_FRAMES = 1_000_000
+
+
+def demo_size(text: str) -> tuple[int, int]:
+    """--size WxH, each side MIN_SIDE … MAX_SIDE px."""
+    try:
+        w, h = text.strip().lower().split("x")
+        size = (int(w), int(h))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not WIDTHxHEIGHT, e.g. 1280x720") from None
+    if not all(MIN_SIDE <= side <= MAX_SIDE for side in size):
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: each side must be {MIN_SIDE} to {MAX_SIDE} px")
+    return size
+
+
+def demo_fps(text: str) -> float:
+    """--fps: a finite frame rate, MIN_FPS … MAX_FPS."""
+    try:
+        fps = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of frames per second") from None
+    if not (math.isfinite(fps) and MIN_FPS <= fps <= MAX_FPS):
+        raise argparse.ArgumentTypeError(f"{text!r}: the frame rate must be {MIN_FPS:g} to {MAX_FPS:g} fps")
+    return fps
+
+
+def demo_seed(text: str) -> int:
+    """--seed: a whole number, 0 … MAX_SEED."""
+    try:
+        seed = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if not 0 <= seed <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"{text!r}: the seed must be 0 to {MAX_SEED}")
+    return seed
+
+
+def demo_frames(text: str) -> int:
+    """--frames: a whole number, 1 … MAX_FRAMES."""
+    try:
+        frames = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of frame pairs") from None
+    if not 1 <= frames <= MAX_FRAMES:
+        raise argparse.ArgumentTypeError(f"{text!r}: the number of frame pairs must be 1 to {MAX_FRAMES}")
+    return frames
 
 
 def register(sub) -> None:
@@ -28,18 +83,18 @@ def register(sub) -> None:
         epilog=columns_epilog("Columns of DIR/truth.csv (empty: no shuttle in play):", TRUTH_COLUMNS)
         + "\n\n" + columns_epilog("Columns of DIR/left_labels.csv and DIR/right_labels.csv:",
                                     LABEL_COLUMNS) + f"\n\nThe {COURT_FRAME}.")
-    p.add_argument("--frames", type=int, required=True, metavar="N", help="number of frame pairs")
+    p.add_argument("--frames", type=demo_frames, required=True, metavar="N", help="number of frame pairs")
     output = p.add_mutually_exclusive_group(required=True)
     output.add_argument("-o", "--output", type=Path, metavar="DIR",
                         help="output folder (created if missing)")
     output.add_argument("--out", type=Path, dest="output", help=argparse.SUPPRESS)  # the old spelling
-    p.add_argument("--seed", type=int, default=0, help="rally seed (default 0)")
-    p.add_argument("--size", type=parse_size, default=(1280, 720), metavar="WxH",
+    p.add_argument("--seed", type=demo_seed, default=0, help="rally seed (default 0)")
+    p.add_argument("--size", type=demo_size, default=(1280, 720), metavar="WxH",
                    help="image size of each camera (default 1280x720)")
     p.add_argument("--rig", choices=("binocular", "ends"), default="binocular",
                    help="binocular: two cameras 0.6 m apart at the court side (default); "
                         "ends: one camera behind each baseline")
-    p.add_argument("--fps", type=float, default=120.0, help="frame rate (default 120)")
+    p.add_argument("--fps", type=demo_fps, default=120.0, help="frame rate (default 120)")
     p.add_argument("--no-noise", action="store_true", help="no sensor noise")
     p.add_argument("--no-flicker", action="store_true", help="no lighting flicker")
     p.set_defaults(func=run)

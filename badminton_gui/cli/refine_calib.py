@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..core.errors import TrackerInputError
 from ..core.rig_refine import PairCollector, refine_relative_pose
 from ..core.tracker import StereoTracker, configure_opencv_threads
 from .common import (INPUT_ERRORS, Progress, UserError, add_json_argument, add_preset_argument,
@@ -47,7 +48,10 @@ def run(args: argparse.Namespace) -> int:
             frame = source.read()
             if frame is None:
                 break
-            collector.add(tracker.process_frame(frame, keep_masks=False))
+            try:
+                collector.add(tracker.process_frame(frame, keep_masks=False))
+            except TrackerInputError:
+                pass                # a pair the tracker refuses (a stalled clock) gives no sample
             n += 1
             if not args.quiet:
                 progress.update(n)

@@ -66,6 +66,8 @@ def run(args: argparse.Namespace) -> int:
     if summary.rig_note:
         note = summary.rig_note
         _log.warning("%s%s", note[:1].lower(), note[1:])
+    if summary.warning:
+        _log.warning("%s", summary.warning)
     if args.json:
         score = None
         if summary.score_left is not None and summary.score_right is not None:
@@ -74,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
                     "points_3d_percent": round(100 * hits3d / n, 3),
                     "pairs_per_second": round(summary.pairs_per_second, 3), "frame": frame_name,
                     "rig_epipolar_px": summary.rig_epipolar_px, "rig_note": summary.rig_note,
-                    "score": score})
+                    "warning": summary.warning, "score": score})
     elif not args.quiet:
         print(f"{n} frame pairs, 3D point in {hits3d} ({100 * hits3d / n:.1f} %), "
               f"{summary.pairs_per_second:.1f} pairs/s (decoding included), {frame_name} frame -> {args.output}")

@@ -14,12 +14,15 @@ only the special case of a rectified parallel rig.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import cv2
 import numpy as np
+
+from .errors import TrackerInputError
 
 
 _UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-12)
@@ -37,15 +40,117 @@ def refine_threshold(image_width: int) -> float:
     return REFINE_FROM_PX * image_width / 1280.0
 
 
-class RigError(ValueError):
-    """A rig file that cannot be read, or one that does not fit the frames it is used on."""
+class RigError(TrackerInputError):
+    """A rig file that cannot be read, a rig that cannot be right, or one that does not fit the
+    frames it is used on."""
 
 
-def _arr(a, shape=None) -> np.ndarray:
-    out = np.asarray(a, dtype=np.float64)
+# Largest deviation of Rᵀ·R from the identity (each element) still taken for a rotation: a rig
+# file written with six decimals is off by ~1e-6; a matrix off by more is not a rotation at all.
+ROTATION_TOLERANCE = 1e-3
+# Lengths of a distortion vector OpenCV understands (k1 k2 p1 p2 [k3 [k4 k5 k6 [s1..s4 [τx τy]]]]).
+DISTORTION_LENGTHS = (4, 5, 8, 12, 14)
+# px: the largest image side a rig may state (a larger one is a typo or a corrupt file).
+MAX_IMAGE_SIDE = 100_000
+
+
+def _arr(a, shape=None, key: str = "") -> np.ndarray:
+    """``a`` as float64 (reshaped to ``shape``), or a RigError that names ``key``."""
+    try:
+        out = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise RigError(f"{key} is {_describe(a)}, not a matrix of numbers") from None
     if shape is not None:
+        if out.size != int(np.prod(shape)):
+            want = "×".join(str(abs(n)) for n in shape)
+            raise RigError(f"{key} must be {want} ({int(np.prod(shape))} numbers) but has "
+                           f"{'×'.join(map(str, out.shape)) or 'one number'} ({out.size})")
         out = out.reshape(shape)
+    if not np.all(np.isfinite(out)):
+        raise RigError(f"{key} holds a value that is not finite (NaN or infinity)")
     return out
+
+
+# Element types of a one-channel !!opencv-matrix ("dt"), and the largest side a rig's matrix has.
+_MATRIX_TYPES = ("d", "f", "i", "s", "w", "u", "c")
+_MATRIX_MAX_SIDE = 16
+
+
+def _read_matrix(node) -> np.ndarray | None:
+    """An !!opencv-matrix node's values, read field by field; None when the node is not one.
+
+    ``FileNode.mat()`` trusts the node's rows and cols: a file saying ``cols: -2.5`` makes it
+    write outside its buffer and the process dies later in malloc. Reading the fields here,
+    after checking that they agree, never hands OpenCV a shape it has not been shown to hold."""
+    if not node.isMap():
+        return None
+    rows, cols, dt, data = (node.getNode(k) for k in ("rows", "cols", "dt", "data"))
+    if not (rows.isInt() and cols.isInt() and dt.isString() and data.isSeq()):
+        return None
+    n_rows, n_cols = int(rows.real()), int(cols.real())
+    if not (1 <= n_rows <= _MATRIX_MAX_SIDE and 1 <= n_cols <= _MATRIX_MAX_SIDE):
+        return None
+    if dt.string() not in _MATRIX_TYPES or data.size() != n_rows * n_cols:
+        return None
+    values = []
+    for i in range(n_rows * n_cols):
+        item = data.at(i)
+        if not (item.isInt() or item.isReal()):
+            return None
+        values.append(item.real())
+    return np.asarray(values, dtype=np.float64).reshape(n_rows, n_cols)
+
+
+def _describe(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _camera_matrix(m, key: str) -> np.ndarray:
+    m = _arr(m, (3, 3), key)
+    if not (m[0, 0] > 0 and m[1, 1] > 0):
+        raise RigError(f"{key} has focal lengths fx = {m[0, 0]:g}, fy = {m[1, 1]:g}: both must be "
+                       f"positive (pixels)")
+    if not np.allclose(m[2], (0.0, 0.0, 1.0), atol=1e-6):
+        raise RigError(f"{key}'s last row is {m[2].tolist()}, not [0, 0, 1]: not a camera matrix")
+    return m
+
+
+def _distortion(d, key: str) -> np.ndarray:
+    d = _arr(d, None, key).ravel()
+    if len(d) not in DISTORTION_LENGTHS:
+        raise RigError(f"{key} has {len(d)} coefficients; OpenCV takes "
+                       f"{', '.join(map(str, DISTORTION_LENGTHS[:-1]))} or {DISTORTION_LENGTHS[-1]}")
+    return d
+
+
+def _rotation(r, key: str) -> np.ndarray:
+    r = _arr(r, (3, 3), key)
+    off = float(np.max(np.abs(r.T @ r - np.eye(3))))
+    if off > ROTATION_TOLERANCE or np.linalg.det(r) <= 0:
+        raise RigError(f"{key} is not a rotation matrix (RᵀR differs from the identity by {off:.3g}, "
+                       f"det {np.linalg.det(r):.3g}; a rotation has 0 and 1)")
+    return r
+
+
+def _translation(t, key: str, nonzero: bool) -> np.ndarray:
+    t = _arr(t, (3,), key)
+    if nonzero and not np.linalg.norm(t) > 0:
+        raise RigError(f"{key} is zero: the two cameras would be at the same place, and nothing "
+                       f"can be triangulated")
+    return t
+
+
+def _image_size(size) -> tuple[int, int]:
+    try:
+        w, h = size
+        fw, fh = float(w), float(h)
+    except (TypeError, ValueError):
+        raise RigError(f"image size {_describe(size)} is not (width, height)") from None
+    for name, v in (("image_width", fw), ("image_height", fh)):
+        if not (math.isfinite(v) and v == int(v) and 1 <= v <= MAX_IMAGE_SIDE):
+            raise RigError(f"{name} is {v:g}: it must be a whole number of pixels, 1 to {MAX_IMAGE_SIDE}")
+    return int(fw), int(fh)
 
 
 @dataclass(frozen=True)
@@ -69,16 +174,24 @@ class StereoRig:
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "M1", _arr(self.M1, (3, 3)))
-        object.__setattr__(self, "M2", _arr(self.M2, (3, 3)))
-        object.__setattr__(self, "D1", _arr(self.D1).ravel())
-        object.__setattr__(self, "D2", _arr(self.D2).ravel())
-        object.__setattr__(self, "R", _arr(self.R, (3, 3)))
-        object.__setattr__(self, "T", _arr(self.T).reshape(3))
-        object.__setattr__(self, "image_size", (int(self.image_size[0]), int(self.image_size[1])))
+        # Every rig is checked once, here, so that a rig that cannot be right (a zero focal
+        # length, an R that is no rotation, NaN) is refused with its key named instead of
+        # giving no 3D point, or a cv2.error, in the middle of a run.
+        object.__setattr__(self, "M1", _camera_matrix(self.M1, "M1"))
+        object.__setattr__(self, "M2", _camera_matrix(self.M2, "M2"))
+        object.__setattr__(self, "D1", _distortion(self.D1, "D1"))
+        object.__setattr__(self, "D2", _distortion(self.D2, "D2"))
+        object.__setattr__(self, "R", _rotation(self.R, "R"))
+        object.__setattr__(self, "T", _translation(self.T, "T", nonzero=True))
+        object.__setattr__(self, "image_size", _image_size(self.image_size))
+        if (self.R_court is None) != (self.T_court is None):
+            raise RigError("the court pose needs both R_court and T_court")
         if self.R_court is not None:
-            object.__setattr__(self, "R_court", _arr(self.R_court, (3, 3)))
-            object.__setattr__(self, "T_court", _arr(self.T_court).reshape(3))
+            object.__setattr__(self, "R_court", _rotation(self.R_court, "R_court"))
+            object.__setattr__(self, "T_court", _translation(self.T_court, "T_court", nonzero=False))
+        for key in ("R1", "R2", "P1", "P2", "Q"):
+            if getattr(self, key) is not None:
+                object.__setattr__(self, key, _arr(getattr(self, key), None, key))
 
     # ---- file I/O --------------------------------------------------------------------------
     @classmethod
@@ -109,26 +222,33 @@ class StereoRig:
                     if required:
                         raise RigError(f"rig file {path} lacks the key {key!r}")
                     return None
-                m = node.mat()
+                m = _read_matrix(node)
                 if m is None:
-                    raise RigError(f"rig file {path}: key {key!r} is not a matrix")
+                    raise RigError(f"rig file {path}: key {key!r} is not a matrix "
+                                   f"(an !!opencv-matrix with rows, cols, dt and data that agree)")
                 return m
 
             def num(key: str):
                 node = fs.getNode(key)
                 if node.empty() or node.isNone():
                     raise RigError(f"rig file {path} lacks the key {key!r}")
-                return int(node.real())
+                if not (node.isInt() or node.isReal()):
+                    raise RigError(f"rig file {path}: {key} is not a number")
+                return node.real()
 
             size = (num("image_width"), num("image_height"))
             r_court = mat("R_court", required=False)
             t_court = mat("T_court", required=False)
             if (r_court is None) != (t_court is None):
                 raise RigError(f"rig file {path} has only one of R_court / T_court")
-            return cls(M1=mat("M1"), D1=mat("D1"), M2=mat("M2"), D2=mat("D2"), R=mat("R"),
-                       T=mat("T"), image_size=size, R1=mat("R1", False), R2=mat("R2", False),
-                       P1=mat("P1", False), P2=mat("P2", False), Q=mat("Q", False),
-                       R_court=r_court, T_court=t_court)
+            values = dict(M1=mat("M1"), D1=mat("D1"), M2=mat("M2"), D2=mat("D2"), R=mat("R"),
+                          T=mat("T"), image_size=size, R1=mat("R1", False), R2=mat("R2", False),
+                          P1=mat("P1", False), P2=mat("P2", False), Q=mat("Q", False),
+                          R_court=r_court, T_court=t_court)
+            try:
+                return cls(**values)
+            except RigError as exc:
+                raise RigError(f"rig file {path}: {exc}") from None
         finally:
             fs.release()
 
@@ -169,8 +289,7 @@ class StereoRig:
         return float(np.linalg.norm(self.T))
 
     def with_court_pose(self, R_court, T_court) -> "StereoRig":
-        return replace(self, R_court=_arr(R_court, (3, 3)), T_court=_arr(T_court).reshape(3),
-                       _cache={})
+        return replace(self, R_court=R_court, T_court=T_court, _cache={})
 
     def camera_centres(self) -> np.ndarray:
         """(2, 3) optical centres of the left and right camera, in the output frame."""

@@ -51,6 +51,7 @@ import numpy.ma  # noqa: F401  np.median imports it on its first call: 17 ms in 
 
 from .court import NET_HEIGHT_POSTS
 from .detector import CameraDetector
+from .frame_checks import InputChecks
 from .guided import bright_near, find_spot, white_near
 from .params import TrackerParams
 from .rig import StereoRig
@@ -160,6 +161,7 @@ class StereoTracker:
         # OpenCV releases the GIL: the two cameras run side by side on two cores (GUIDE §4).
         self._pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="camera") if parallel else None
         self._trajectory = Trajectory(self.params.trajectory, rig.has_court_pose)
+        self._input_checks = InputChecks(rig.image_size)
         self._checked_size = False
         self._previous: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
         # Per camera, its last reported measured detections: [(t, x, y, image velocity or None)]
@@ -212,6 +214,7 @@ class StereoTracker:
         self._trajectory.set_params(params.trajectory)
 
     def reset(self) -> None:
+        self._input_checks.reset()
         self.left.reset()
         self.right.reset()
         self._trajectory.reset()
@@ -336,7 +339,8 @@ class StereoTracker:
                 t_right: float | None = None) -> TrackResult:
         """Track one pair of images; ``timestamp`` is the pair's (the left image's) time, and
         ``t_right`` the right image's when it differs (the right detector follows its own clock;
-        None: the same)."""
+        None: the same). Raises ``TrackerInputError`` for images or times it cannot use."""
+        left_bgr, right_bgr = self._input_checks.check_pair(left_bgr, right_bgr, timestamp, t_right)
         start = time.perf_counter()
         t_r = timestamp if t_right is None else t_right
         self._right_lag = (timestamp - t_r if self.params.stereo.align_pairs

@@ -53,10 +53,11 @@ import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from ..core.adaptation import adapt_to_recording
+from ..core.errors import TrackerInputError
 from ..core.evaluation import Label, LiveScore, Outcomes
 from ..core.lookahead import DelayedReadout
 from ..core.params import ParamError, TrackerParams
-from ..core.rig import RigError, StereoRig
+from ..core.rig import StereoRig
 from ..core.mono import MonoTracker
 from ..core.tracker import StereoTracker
 from ..core.types import TrackResult
@@ -66,7 +67,8 @@ from ..io.sources import FrameSource, SourceError
 _log = logging.getLogger(__name__)
 
 # Failures that are the user's situation, not a bug: shown as one sentence in the banner.
-USER_ERRORS: tuple[type[BaseException], ...] = (SourceError, RigError, ParamError, OSError, cv2.error)
+USER_ERRORS: tuple[type[BaseException], ...] = (SourceError, TrackerInputError, ParamError, OSError,
+                                                  cv2.error)
 try:  # a missing / malformed classifier model file is the user's situation too
     from ..core.classifier import ClassifierError
     USER_ERRORS += (ClassifierError,)
@@ -492,6 +494,7 @@ class TrackingWorker(QObject):
         pace_wall = pace_src = None      # wall-clock and source-clock anchors of real-time pacing
         speed_meter: collections.deque[tuple[float, float]] = collections.deque(maxlen=60)
         frames = 0
+        skipped_text = ""       # the banner's sentence on the last pair the tracker refused
         unshown = None          # the newest result that was not made a packet (shown at the end)
         truth = getattr(source, "frame_truth", None)
         score = LiveScore(source.image_size[0]) if truth is not None else None
@@ -649,7 +652,18 @@ class TrackingWorker(QObject):
                         self._sleep_until(due)
                         t_available = time.perf_counter()
 
-            result = tracker.process_frame(frame)
+            try:
+                result = tracker.process_frame(frame)
+            except TrackerInputError as exc:
+                # A pair the tracker cannot use (a camera's NaN time, a frame of another size) is
+                # skipped with a sentence in the banner, said once until it changes; the run
+                # goes on with the next pair.
+                text = "Frame skipped: " + _one_sentence(exc)
+                if text != skipped_text:
+                    self.warning.emit(text)
+                    skipped_text = text
+                continue
+            skipped_text = ""
             t_done = time.perf_counter()
             frames += 1
             # The robot and the taps get the live result at once, whatever the view waits for.

@@ -20,7 +20,9 @@ from ..core.evaluation import LiveScore, Outcomes
 from ..core.lookahead import StereoLookahead
 from ..core.params import TrackerParams
 from ..core.rig import StereoRig, refine_threshold
+from ..core.errors import TrackerInputError
 from ..core.tracker import StereoTracker
+from ..core.types import CameraResult, TrackResult
 from .labels import TRACK_COLUMNS, track_row
 from .track_log import describe_os_error
 
@@ -30,6 +32,11 @@ from .track_log import describe_os_error
 # the tuned-on clips (benchmarks/lookahead_study.py): 4 frames beat 8 and 15, whose earlier
 # back-fills and later handovers take more wrong candidates than right ones.
 FILE_LOOKAHEAD = 4
+
+
+# The withheld_reason of a row whose pair the tracker refused for a reason the source did not
+# foresee (``TrackerInputError``): the row is empty.
+WITHHELD_REFUSED = "input_refused"
 
 
 class TrackFileError(OSError):
@@ -48,6 +55,21 @@ class TrackFileSummary:
     # The written rows scored against the pair's labels (``truth``), per camera; None without.
     score_left: Outcomes | None = None
     score_right: Outcomes | None = None
+    # Rows whose 3D cells were withheld, by reason (the CSV's ``withheld_reason``), and the
+    # source's sentences on what the output lacks (a file cut short, a stalled clock).
+    withheld: tuple[tuple[str, int], ...] = ()
+    source_notes: tuple[str, ...] = ()
+
+    @property
+    def warning(self) -> str:
+        """One sentence on what in the output may be wrong or missing; '' when nothing is."""
+        parts = list(self.source_notes)
+        if self.withheld:
+            counts = ", ".join(f"{n} {reason}" for reason, n in self.withheld)
+            total = sum(n for _, n in self.withheld)
+            parts.append(f"3D withheld in {total} row{'s' if total != 1 else ''} ({counts}; "
+                         f"column withheld_reason)")
+        return "; ".join(parts)
 
     @property
     def score_text(self) -> str:
@@ -116,6 +138,20 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     lookahead = StereoLookahead(rig, params, tracker.epipolar_tolerance)
     n = hits3d = 0
     cancelled = False
+    doubt = getattr(source, "doubt", None)     # VideoPair's: a step whose 3D would be made up
+    withheld: dict[str, int] = {}
+    refused: set[tuple[int, int]] = set()     # (index, index_right) of the pairs the tracker refused
+
+    def row(decided) -> list[str]:
+        nonlocal hits3d
+        reason = doubt(decided.index, decided.index_right) if doubt is not None else ""
+        if not reason and (decided.index, decided.index_right) in refused:
+            reason = WITHHELD_REFUSED
+        if reason:
+            withheld[reason] = withheld.get(reason, 0) + 1
+        hits3d += decided.point is not None and not reason
+        return track_row(decided, reason)
+
     start = time.perf_counter()
     try:
         out_path.parent.mkdir(parents=True, exist_ok=True)
@@ -129,18 +165,24 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                 frame = source.read()
                 if frame is None:
                     break
-                result = tracker.process_frame(frame, keep_masks=False)
+                try:
+                    result = tracker.process_frame(frame, keep_masks=False)
+                except TrackerInputError:
+                    # A pair the tracker refuses (a camera whose clock stalled): its row keeps
+                    # its place in the file, empty and marked, and the run goes on.
+                    result = TrackResult(frame.index, frame.timestamp, CameraResult(None),
+                                         CameraResult(None), index_right=frame.index_right)
+                    refused.add((frame.index, frame.index_right))
+                else:
+                    if link is not None:
+                        link.send_result(result)
                 for decided in map(scored, lookahead.push(result)):
-                    writer.writerow(track_row(decided))
-                    hits3d += decided.point is not None
-                if link is not None:
-                    link.send_result(result)
+                    writer.writerow(row(decided))
                 n += 1
                 if progress is not None:
                     progress(n)
             for decided in map(scored, lookahead.flush()):
-                writer.writerow(track_row(decided))
-                hits3d += decided.point is not None
+                writer.writerow(row(decided))
     except OSError as exc:
         raise TrackFileError(f"cannot write the track: {describe_os_error(exc, out_path)}") from None
     finally:
@@ -148,4 +190,5 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     return TrackFileSummary(n, hits3d, time.perf_counter() - start, out_path, cancelled,
                             tracker.rig_epipolar_px, rig.image_size[0],
                             None if score is None else score.outcomes(0),
-                            None if score is None else score.outcomes(1))
+                            None if score is None else score.outcomes(1),
+                            tuple(sorted(withheld.items())), tuple(getattr(source, "notes", ())))

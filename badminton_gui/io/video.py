@@ -16,6 +16,10 @@ import numpy as np
 from ..core.types import StereoFrame
 from .sources import OpeningCancelled, SourceError
 
+# Why a step's 3D point is withheld (``VideoPair.doubt``; the `track` CSV's last column).
+WITHHELD_CLOCK_STALLED = "clock_stalled"
+WITHHELD_NO_PARTNER = "no_partner_frame"
+
 # How often (frames) ``frame_times`` reports progress and looks whether it should stop: about
 # every 0.1 s of decoding at 2048×1536.
 _SCAN_REPORT_EVERY = 32
@@ -182,6 +186,17 @@ class VideoPair:
             raise SourceError("give timestamps for both cameras or for neither")
         self.left_times = None if left_times is None else np.asarray(left_times, dtype=float)
         self.right_times = None if right_times is None else np.asarray(right_times, dtype=float)
+        # Sentences on what the output may lack (a file cut short, a clock that stalled), for the
+        # end of a run: said once, not per frame.
+        self.notes: list[str] = []
+        self._stalled: tuple[np.ndarray, np.ndarray] | None = None
+        self._range: tuple[tuple[float, float], tuple[float, float]] | None = None
+        if self.left_times is not None:
+            try:
+                self._check_clocks()
+            except SourceError:
+                self.close()
+                raise
         self.loop = loop
         self.name = f"Videos {self.left_file.path.name} + {self.right_file.path.name}"
         self._index = 0
@@ -189,6 +204,70 @@ class VideoPair:
         self._schedule = (None if self.left_times is None
                           else pairing_schedule(self.left_times, self.right_times))
         self._last_left: np.ndarray | None = None
+
+    def _check_clocks(self) -> None:
+        """Refuse two clocks that cannot pair the cameras; note what pairing by them will lack."""
+        times = (self.left_times, self.right_times)
+        for name, t, file in zip(("left", "right"), times, (self.left_file, self.right_file)):
+            if len(t) == 0 or not np.all(np.isfinite(t)):
+                raise SourceError(f"the {name} timestamps are empty or not all finite")
+            if np.any(np.diff(t) < 0):
+                raise SourceError(f"the {name} timestamps go backwards, so they cannot pair the cameras")
+            if file.frame_count > 0 and len(t) < file.frame_count:
+                self.notes.append(f"the {name} timestamps time {len(t)} of the {file.frame_count} frames "
+                                  f"of {file.path.name}: the {file.frame_count - len(t)} after are not tracked")
+        steps = [np.diff(t)[np.diff(t) > 0] for t in times]
+        if all(len(d) for d in steps):
+            step_l, step_r = (float(np.median(d)) for d in steps)
+            ratio = max(step_l, step_r) / min(step_l, step_r)
+            if ratio >= 100:
+                raise SourceError(
+                    f"the left clock's frames are {1000 * step_l:.4g} ms apart and the right clock's "
+                    f"{1000 * step_r:.4g} ms (median): {ratio:.0f}× apart, as if one file were in "
+                    f"milliseconds; both timestamp files must be in seconds")
+        else:
+            step_l = step_r = 0.0
+        (l0, l1), (r0, r1) = (float(self.left_times[0]), float(self.left_times[-1])), \
+                             (float(self.right_times[0]), float(self.right_times[-1]))
+        if l1 < r0 or r1 < l0:
+            raise SourceError(f"the left clock runs from {l0:g} to {l1:g} s and the right one from "
+                              f"{r0:g} to {r1:g} s: they never overlap, so no frames can be paired "
+                              f"(do the timestamp files belong to this recording?)")
+        # A frame is "beside" the other camera's recording while its time lies within that
+        # clock's first and last frame, give or take one and a half of its frame intervals.
+        self._range = ((l0 - 1.5 * step_l, l1 + 1.5 * step_l), (r0 - 1.5 * step_r, r1 + 1.5 * step_r))
+        # A stalled clock gives several frames one time; none of them can be placed in time, the
+        # first of the run included.
+        stalled = []
+        for t in times:
+            same = np.diff(t) == 0
+            flags = np.zeros(len(t), dtype=bool)
+            flags[1:] |= same
+            flags[:-1] |= same
+            stalled.append(flags)
+        self._stalled = (stalled[0], stalled[1])
+        for name, flags in zip(("left", "right"), stalled):
+            if flags.any():
+                self.notes.append(f"the {name} clock stalled: {int(flags.sum())} of its frames share a "
+                                  f"timestamp with a neighbour")
+
+    def doubt(self, index: int, index_right: int) -> str:
+        """Why the 3D point of the step pairing left frame ``index`` with right frame
+        ``index_right`` would be made up ('' when nothing is known against it): ``clock_stalled``
+        (one camera's timestamp does not move), ``no_partner_frame`` (one camera's frame lies
+        beyond the other's recording, which ended or had not begun)."""
+        if self._stalled is None:
+            return ""
+        stalled_l, stalled_r = self._stalled
+        if (0 <= index < len(stalled_l) and stalled_l[index]) or \
+                (0 <= index_right < len(stalled_r) and stalled_r[index_right]):
+            return WITHHELD_CLOCK_STALLED
+        (l_lo, l_hi), (r_lo, r_hi) = self._range
+        if 0 <= index < len(self.left_times) and not r_lo <= self.left_times[index] <= r_hi:
+            return WITHHELD_NO_PARTNER
+        if 0 <= index_right < len(self.right_times) and not l_lo <= self.right_times[index_right] <= l_hi:
+            return WITHHELD_NO_PARTNER
+        return ""
 
     @property
     def image_size(self) -> tuple[int, int]:
@@ -230,10 +309,10 @@ class VideoPair:
         i = self._index
         left = self.left_file.read()
         if left is None:
-            return self._end()
+            return self._end(self.left_file, i, other=self.right_file)
         right = self._right_frame(i)
         if right is None:
-            return self._end()
+            return self._end(self.right_file, i, other=self.left_file)
         self._index += 1
         return StereoFrame(left, right, i / self.left_file.fps, i / self.right_file.fps, i, i)
 
@@ -244,16 +323,21 @@ class VideoPair:
         if fresh_left or self._last_left is None:
             left = self.left_file.read()
             if left is None:
-                return self._end()
+                return self._end(self.left_file, i, other=self.right_file)
             self._last_left = left
         right = self._right_frame(j)
         if right is None:
-            return self._end()
+            return self._end(self.right_file, j, other=self.left_file)
         self._index += 1
         return StereoFrame(self._last_left, right, float(self.left_times[i]), float(self.right_times[j]),
                            i, j, fresh_left, fresh_right)
 
-    def _end(self) -> StereoFrame | None:
+    def _end(self, ended: VideoFile | None = None, decoded: int = 0,
+             other: VideoFile | None = None) -> StereoFrame | None:
+        """The source ran out: ``ended`` (a camera's file) gave no frame ``decoded``, before its
+        schedule or the other file (``other``) was done — said in :attr:`notes`."""
+        if ended is not None and not self.loop:
+            self._note_end(ended, decoded, other)
         if self.loop and self._index > 0:
             self.left_file.seek(0)
             self.right_file.seek(0)
@@ -262,6 +346,23 @@ class VideoPair:
             self._index = 0
             return self.read()
         return None
+
+    def _note_end(self, ended: VideoFile, decoded: int, other: VideoFile | None) -> None:
+        if any(note.startswith(f"{ended.path.name} ended after ") for note in self.notes):
+            return                          # a reader that asks again past the end
+        announced = ended.frame_count
+        cut = f" of the {announced} its header announces (a truncated file?)" if announced > decoded + 1 else ""
+        if self._schedule is not None:
+            timed = len(self.left_times if ended is self.left_file else self.right_times)
+            if decoded < timed:
+                self.notes.append(f"{ended.path.name} ended after {decoded} frames{cut}, before the "
+                                  f"{timed} its timestamps time: the steps after were not tracked")
+            return
+        left_over = (other.frame_count - decoded) if other is not None and other.frame_count else 0
+        if cut or left_over > 0:
+            rest = (f"; {left_over} frames of {other.path.name} after it were not tracked"
+                    if left_over > 0 else "")
+            self.notes.append(f"{ended.path.name} ended after {decoded} frames{cut}{rest}")
 
     def close(self) -> None:
         self.left_file.close()
