@@ -150,11 +150,18 @@ def test_timestamp_files_that_time_nothing_are_refused(tmp_path):
     ("0,1,5,6\n-3,1,7,8\n", "line 3: Frame is '-3', not a frame number"),
     ("0,1,5,6\n1.5,1,7,8\n", "line 3: Frame is '1.5', not a whole number"),
     ("0,1,5,6\n1,1,7\n", "line 3 has 3 fields, the header 4: a torn row"),
-    ("0,1,5,6\n1,1,80.39,4", "line 3, the last, does not end with a line break"),
 ])
 def test_label_files_with_duplicates_absurd_numbers_or_torn_rows_are_refused(tmp_path, rows, expected):
     with pytest.raises(CsvFormatError, match=expected):
         read_point_labels(_write(tmp_path / "labels.csv", "Frame,Visibility,X,Y\n" + rows))
+
+
+def test_a_last_row_without_a_line_break_is_read_with_a_warning(tmp_path, caplog):
+    """It may be complete (a tool that omits the last line break) or cut off in a number: read,
+    and said, so a torn value is never taken silently."""
+    labels = read_point_labels(_write(tmp_path / "labels.csv", "Frame,Visibility,X,Y\n0,1,5,6\n1,1,80.39,4"))
+    assert labels.frames.tolist() == [0, 1]
+    assert "line 3, the last, does not end with a line break" in caplog.text
 
 
 # ---- the video pair and the track file ---------------------------------------------------------
@@ -244,7 +251,7 @@ def test_a_video_that_ends_early_is_said_once_at_the_end(dot_pair, capsys):
                  "--calib", str(dot_pair / "rig.yaml"), "-o", str(dot_pair / "cli.csv"), "--video-times"])
     assert code == 0
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1].startswith("badminton-track track: warning: 3D withheld in ")
+    assert err[-1].startswith("badminton-track: warning: 3D withheld in ")
     assert "no_partner_frame" in err[-1]
 
 
@@ -288,7 +295,7 @@ def test_eval_notes_the_labelled_frames_without_prediction(tmp_path, capsys):
         f"{i},1,{10 + i},{20 + i}\n" for i in range(8)))
     pred = _write(tmp_path / "pred.csv", "Frame,Visibility,X,Y\n0,1,10,20\n1,1,11,21\n")
     assert main(["eval", str(pred), str(labels), "--width", "640"]) == 0
-    assert (f"note: 6 of the 8 labelled frames have no prediction in {pred}; they are scored as not "
+    assert (f"warning: 6 of the 8 labelled frames have no prediction in {pred}; they are scored as not "
             f"detected") in capsys.readouterr().err
 
 

@@ -41,6 +41,9 @@ TRACK_COLUMNS = {
     "LandX": "m, predicted landing point, court frame",
     "LandY": "m, predicted landing point, court frame",
     "LandT": "s, predicted landing time, same clock as Timestamp",
+    "withheld_reason": "text, why this row's 3D was withheld (clock_stalled: the camera's timestamp "
+                       "repeated; no_partner_frame: beyond the other camera's recording; "
+                       "input_refused: the tracker refused the pair); empty otherwise",
 }
 
 # `demo`'s truth.csv (io/demo_scene.py TRUTH_HEADER): the exact state of every frame.

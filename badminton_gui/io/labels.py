@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import io
+import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.frame_checks import MAX_TIMESTAMP
+
+_log = logging.getLogger(__name__)
 
 
 class CsvFormatError(ValueError):
@@ -41,10 +44,11 @@ class PointLabels:
 MAX_FRAME = 10**9
 
 
-def _open_rows(path: str | Path, required: tuple[str, ...]) -> tuple[list[tuple[int, dict[str, str]]], Path]:
+def read_csv_rows(path: str | Path, required: tuple[str, ...]) -> tuple[list[tuple[int, dict[str, str]]], Path]:
     """The rows as (line number, {column: text}), after the checks every CSV here needs: the
-    header has the ``required`` columns, no row has fewer cells than the header, and the file
-    ends with a line break (a row without one may have been cut off in the middle of a number)."""
+    header has the ``required`` columns and no row has fewer cells than the header. A last row
+    without a line break may have been cut off in the middle of a number: it is read, with a
+    warning that says so."""
     path = Path(path)
     if not path.is_file():
         raise CsvFormatError(f"CSV file not found: {path}")
@@ -77,13 +81,12 @@ def _open_rows(path: str | Path, required: tuple[str, ...]) -> tuple[list[tuple[
     except csv.Error as exc:
         raise CsvFormatError(f"{path} line {reader.line_num}: {exc}") from None
     if rows and not text.endswith(("\n", "\r")):
-        raise CsvFormatError(
-            f"{path} line {rows[-1][0]}, the last, does not end with a line break: the file looks "
-            f"cut off in the middle of that row (if the row is complete, end it with a line break)")
+        _log.warning("%s line %d, the last, does not end with a line break: if the file was cut off "
+                     "there, that row's last value may be incomplete", path, rows[-1][0])
     return rows, path
 
 
-def _number(path: Path, line: int, column: str, text: str, kind=float):
+def parse_number(path: Path, line: int, column: str, text: str, kind=float):
     try:
         value = float(text)
     except (TypeError, ValueError):
@@ -98,7 +101,7 @@ def _number(path: Path, line: int, column: str, text: str, kind=float):
 
 
 def _frame_number(path: Path, line: int, column: str, text: str) -> int:
-    frame = _number(path, line, column, text, int)
+    frame = parse_number(path, line, column, text, int)
     if not 0 <= frame <= MAX_FRAME:
         raise CsvFormatError(f"{path} line {line}: {column} is {text!r}, not a frame number "
                              f"(0 to {MAX_FRAME})")
@@ -111,16 +114,16 @@ def read_point_labels(path: str | Path, frame_col: str = "Frame", vis_col: str =
 
     ``unique``: a frame number given twice is refused, with the numbers (which row would be
     meant?); `track` output, whose steps may repeat a camera's frame, is read with False."""
-    rows, path = _open_rows(path, (frame_col, vis_col, x_col, y_col))
+    rows, path = read_csv_rows(path, (frame_col, vis_col, x_col, y_col))
     frames, vis, xy = [], [], []
     for n, row in rows:
         f = _frame_number(path, n, frame_col, row[frame_col])
         v_text = row[vis_col]
-        v = _number(path, n, vis_col, v_text, int) if v_text != "" else 0
+        v = parse_number(path, n, vis_col, v_text, int) if v_text != "" else 0
         if v and (row[x_col] == "" or row[y_col] == ""):
             raise CsvFormatError(f"{path} line {n}: visible but X or Y is empty")
-        x = _number(path, n, x_col, row[x_col]) if row[x_col] != "" else math.nan
-        y = _number(path, n, y_col, row[y_col]) if row[y_col] != "" else math.nan
+        x = parse_number(path, n, x_col, row[x_col]) if row[x_col] != "" else math.nan
+        y = parse_number(path, n, y_col, row[y_col]) if row[y_col] != "" else math.nan
         frames.append(f)
         vis.append(bool(v))
         xy.append((x, y) if v else (math.nan, math.nan))
@@ -142,9 +145,9 @@ def read_timestamps(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     The timestamps are seconds, finite, and never go back. Equal neighbours (a clock that
     stalled) are allowed here; ``VideoPair`` marks the frames they time. A file whose every
     timestamp is the same times nothing and is refused."""
-    rows, path = _open_rows(path, ("Frame", "Timestamp"))
+    rows, path = read_csv_rows(path, ("Frame", "Timestamp"))
     frames = np.array([_frame_number(path, n, "Frame", r["Frame"]) for n, r in rows], dtype=np.int64)
-    times = np.array([_number(path, n, "Timestamp", r["Timestamp"]) for n, r in rows], dtype=float)
+    times = np.array([parse_number(path, n, "Timestamp", r["Timestamp"]) for n, r in rows], dtype=float)
     if len(frames) == 0:
         raise CsvFormatError(f"{path} has no rows")
     big = np.flatnonzero(np.abs(times) > MAX_TIMESTAMP)

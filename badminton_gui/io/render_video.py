@@ -31,7 +31,7 @@ import numpy as np
 
 from ..core.overlay_draw import (OverlayHistory, ShuttleStep, draw_feed, draw_plan, draw_readouts,
                                  feed_caption, plan_size)
-from .labels import TRACK_COLUMNS, CsvFormatError, _number, _open_rows, read_point_labels
+from .labels import TRACK_COLUMNS, CsvFormatError, parse_number, read_csv_rows, read_point_labels
 from .prefetch import PrefetchingReader
 from .sources import SourceError
 from .track_log import describe_os_error
@@ -102,14 +102,15 @@ def read_render_csv(path: str | Path, fps: float) -> RenderTrack:
 
 
 def _read_track_csv(path: Path) -> RenderTrack:
-    rows, path = _open_rows(path, TRACK_COLUMNS)
+    # withheld_reason is optional: tracks written before it existed render as they are.
+    rows, path = read_csv_rows(path, tuple(c for c in TRACK_COLUMNS if c != "withheld_reason"))
 
     def value(line: int, row: dict, column: str, kind=float):
         text = row[column]
-        return None if text == "" else _number(path, line, column, text, kind)
+        return None if text == "" else parse_number(path, line, column, text, kind)
 
     steps = []
-    for line, row in enumerate(rows, start=2):
+    for line, row in rows:
         xy = {}
         for side in ("L", "R"):
             seen = value(line, row, f"Vis{side}", int)
