@@ -119,3 +119,21 @@ def test_the_first_pass_leads_in_only_up_to_a_report(monkeypatch):
     classifier, harvest = adapt_to_recording(params, lambda: iter(()))
     assert classifier is None and harvest.runs == 0          # (an empty recording: nothing to learn)
     assert seen == [(params.lookahead.lead_in_run, False, 0)]
+
+
+def test_training_gives_up_when_asked_so_a_closing_window_never_waits_for_it():
+    """The adaptation's training asks should_stop every few epochs (a window closed during a TV
+    clip's adaptation pass must not wait for the rest of the training)."""
+    from badminton_gui.core.classifier import TrainingStopped, train_ensemble
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(200, 4))
+    y = (x[:, 0] > 0).astype(float)
+    asked = []
+
+    def stop() -> bool:
+        asked.append(True)
+        return len(asked) > 3
+    with pytest.raises(TrainingStopped):
+        train_ensemble(x, y, members=3, epochs=300, should_stop=stop)
+    assert len(asked) == 4        # stopped at the fourth look, long before 3 × 300 epochs
+    assert train_ensemble(x, y, members=1, epochs=20, should_stop=lambda: False).name

@@ -39,7 +39,7 @@ from collections.abc import Callable, Iterable
 
 import numpy as np
 
-from .classifier import CandidateClassifier, train_ensemble
+from .classifier import CandidateClassifier, TrainingStopped, train_ensemble
 from .detector import CameraDetector
 from .lookahead import CameraLookahead
 from .params import TrackerParams
@@ -105,7 +105,8 @@ class RunHarvest:
 
 def adapt_classifier(classifier: CandidateClassifier, features: np.ndarray, labels: np.ndarray, *,
                      rehearsal: int = 20000, max_rows: int = 20000, members: int = 3,
-                     hidden: int = 16, epochs: int = 300, seed: int = 0) -> CandidateClassifier:
+                     hidden: int = 16, epochs: int = 300, seed: int = 0,
+                     should_stop: Callable[[], bool] | None = None) -> CandidateClassifier:
     """A classifier trained on ``features``/``labels`` and on ``rehearsal`` random feature vectors
     drawn from ``classifier``'s standardisation and labelled with its probabilities.
 
@@ -130,7 +131,7 @@ def adapt_classifier(classifier: CandidateClassifier, features: np.ndarray, labe
     y = np.concatenate([labels.astype(float), classifier.probability(rehearsed)])
     return train_ensemble(x, y, members=members, hidden=hidden, epochs=epochs, seed=seed,
                           name=f"{classifier.name} (adapted)", feature_names=classifier.feature_names,
-                          dtype=np.float32)
+                          dtype=np.float32, should_stop=should_stop)
 
 
 def adapt_to_recording(params: TrackerParams, frames: Callable[[], Iterable[tuple[np.ndarray, float]]],
@@ -183,4 +184,7 @@ def adapt_to_recording(params: TrackerParams, frames: Callable[[], Iterable[tupl
     harvest.finish()
     if harvest.runs == 0 or not harvest.labels.any():
         return None, harvest
-    return adapt_classifier(start, harvest.features, harvest.labels), harvest
+    try:
+        return adapt_classifier(start, harvest.features, harvest.labels, should_stop=should_stop), harvest
+    except TrainingStopped:
+        return None, None
