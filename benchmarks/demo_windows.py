@@ -42,7 +42,7 @@ def track(seed: int, start: int, end: int) -> dict[int, dict]:
             result = tracker.process(frame.left, frame.right, frame.t_left, frame.index,
                                      frame.index_right, keep_masks=False)
             truth = scene.truth(frame.index)
-            row = {"held": tuple(tracker._held_now)}
+            row = {"held": (tracker.rules.holding(0), tracker.rules.holding(1))}
             for cam, res, vis, uv in (("L", result.left, truth.visible_left, truth.uv_left),
                                       ("R", result.right, truth.visible_right, truth.uv_right)):
                 d = res.detection
