@@ -26,6 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--baud", type=int, default=115200, help="robot link baud rate")
     p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    p.add_argument("--trace", action="store_true", help="a last CSV column, Trace, naming the tracker's "
+                   "rules that fired on each row's step")
     p.set_defaults(func=run)
 
 
@@ -41,7 +43,8 @@ def run(args: argparse.Namespace) -> int:
     progress = Progress(total, "track")
     try:
         summary = track_to_csv(source, rig, params, args.output, max_frames=args.max_frames, link=link,
-                               progress=None if args.quiet else progress.update, truth=truth)
+                               progress=None if args.quiet else progress.update, truth=truth,
+                               trace=args.trace)
     except TrackFileError as exc:
         raise UserError(str(exc)) from None
     finally:

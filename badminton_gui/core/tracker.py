@@ -486,7 +486,7 @@ class StereoTracker:
                 guide = self._trajectory.guide(step.t)
             predicted_distance = None if guide is None else float(np.linalg.norm(self.rig.to_left([guide[0]])[0]))
         if step.trace is not None:
-            step.trace.append(f"phase:{self.phase.phase.value}")
+            step.trace.append(f"phase:{self.phase.phase.name.lower()}")
         return TrackResult(
             index=index, timestamp=step.t, left=step.results[0], right=step.results[1], point=point,
             in_court_frame=self.rig.has_court_pose, distance=distance, speed=_speed(flight),

@@ -79,7 +79,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                  max_frames: int | None = None, link=None,
                  progress: Callable[[int], None] | None = None,
                  should_stop: Callable[[], bool] | None = None, truth=None,
-                 classifiers: tuple | None = None) -> TrackFileSummary:
+                 classifiers: tuple | None = None, trace: bool = False) -> TrackFileSummary:
     """Track every pair ``source.read()`` gives (a ``FrameSource``: a ``VideoPair``, possibly
     behind a ``PrefetchingReader``) and write one row per step to ``output``: per left frame, and
     per right frame no left frame was paired with (free-running cameras, ``VideoPair``).
@@ -91,7 +91,9 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     ``truth`` (io/truth.py ``LabelTruth``; default: the source's ``frame_truth``, as the GUI's
     sources carry): the written rows are scored against it (GUIDE §6) in the summary.
     ``classifiers``: (left, right) candidate classifiers used instead of the preset's (one
-    adapted to each camera's recording, or a leave-one-rally-out study's).
+    adapted to each camera's recording, or a leave-one-rally-out study's). ``trace``: a last
+    column, ``Trace``, names the tracker's rules that fired on each row's step (space-separated,
+    ``TrackResult.trace``; the look-ahead's re-decisions are not in it).
     """
     if truth is None:
         truth = getattr(source, "frame_truth", None)
@@ -110,6 +112,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
 
     out_path = Path(output)
     tracker = StereoTracker(rig, params)
+    tracker.trace = trace
     if classifiers is not None:
         tracker.left.use_classifier(classifiers[0])
         tracker.right.use_classifier(classifiers[1])
@@ -121,7 +124,11 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
         out_path.parent.mkdir(parents=True, exist_ok=True)
         with out_path.open("w", newline="") as fh:
             writer = csv.writer(fh)
-            writer.writerow(TRACK_COLUMNS)
+            writer.writerow(TRACK_COLUMNS + (("Trace",) if trace else ()))
+
+            def row(decided) -> list[str]:
+                return track_row(decided) + ([" ".join(decided.trace)] if trace else [])
+
             while max_frames is None or n < max_frames:
                 if should_stop is not None and should_stop():
                     cancelled = True
@@ -131,7 +138,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                     break
                 result = tracker.process_frame(frame, keep_masks=False)
                 for decided in map(scored, lookahead.push(result)):
-                    writer.writerow(track_row(decided))
+                    writer.writerow(row(decided))
                     hits3d += decided.point is not None
                 if link is not None:
                     link.send_result(result)
@@ -139,7 +146,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                 if progress is not None:
                     progress(n)
             for decided in map(scored, lookahead.flush()):
-                writer.writerow(track_row(decided))
+                writer.writerow(row(decided))
                 hits3d += decided.point is not None
     except OSError as exc:
         raise TrackFileError(f"cannot write the track: {describe_os_error(exc, out_path)}") from None
