@@ -406,6 +406,9 @@ def test_a_pair_just_off_the_epipolar_gate_is_taken_where_the_flight_puts_the_sh
         assert np.linalg.norm(rig.to_output(found)[0] - point) < 0.1
         assert tracker.pairing.flight_vouched_pair(left, right, far_guide) == (None, None)
         assert tracker.pairing.flight_vouched_pair(left, right, None) == (None, None)
+        tracker.params = tracker.params.with_value("stereo.flight_vouch", False)    # the rule off
+        assert tracker.pairing.flight_vouched_pair(left, right, near_guide) == (None, None)
+        tracker.params = tracker.params.with_value("stereo.flight_vouch", True)
         left, right = _pair_off_its_line(rig, point, 2.0 * tol)
         assert tracker.pairing.flight_vouched_pair(left, right, near_guide) == (None, None)
     finally:
@@ -429,6 +432,9 @@ def test_the_last_pair_of_tracklets_continues_off_the_gate_while_its_miss_change
         tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=7), err - 4.0)  # 4 px less a step ago
         found, got = tracker.pairing.continued_pair(left, right, 1.0)
         assert found is not None and got == pytest.approx(err)
+        tracker.params = tracker.params.with_value("stereo.pair_continuity", False)  # the rule off
+        assert tracker.pairing.continued_pair(left, right, 1.0) == (None, None)
+        tracker.params = tracker.params.with_value("stereo.pair_continuity", True)
         assert np.linalg.norm(rig.to_output(found)[0] - point) < 0.2           # its triangulation
         assert tracker.pairing.continued_pair(left, right, 1.05) == (None, None)         # that pair too old
         tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=8), err - 4.0)  # another right tracklet

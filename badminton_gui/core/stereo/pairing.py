@@ -163,8 +163,10 @@ class StereoPairing:
                             guide: tuple[np.ndarray, np.ndarray] | None
                             ) -> tuple[np.ndarray | None, float | None]:
         """The two cameras' reports as a pair although they miss the epipolar gate by a little,
-        when the followed flight puts the shuttle where they triangulate (else (None, None))."""
-        if guide is None or det_left.predicted or det_right.predicted:
+        when the followed flight puts the shuttle where they triangulate (else (None, None);
+        ``stereo.flight_vouch``)."""
+        if (not self.params.stereo.flight_vouch or guide is None or det_left.predicted
+                or det_right.predicted):
             return None, None
         pl, pr = [[det_left.x, det_left.y]], [list(self.right_xy(det_right))]
         err = float(self.rig.epipolar_errors(pl, pr)[0, 0])
@@ -187,12 +189,14 @@ class StereoPairing:
         """The two cameras' reports as a pair although they miss the epipolar gate, when the
         same two tracklets were the last step's pair and their epipolar error has moved by at
         most PAIR_CONTINUITY_STEP (× image width) since, up to PAIR_CONTINUITY_GATE × the gate
-        (else (None, None)).
+        (else (None, None); ``stereo.pair_continuity``).
 
         A rough rig's epipolar miss varies smoothly over the image: on rally_11-47-02 the
         labelled shuttle's went 6 → 151 → 7 px along one flight (the learnt gate ≈ 113 px), and
         the robot lost 50 frames of 3D points in the middle, with both cameras on the shuttle."""
         last = self._last_pair
+        if not self.params.stereo.pair_continuity:
+            return None, None
         if (last is None or det_left.predicted or det_right.predicted or t - last.t > PAIR_CONTINUITY_AGE
                 or (det_left.tracklet, det_right.tracklet) != (last.left_tracklet, last.right_tracklet)
                 or det_left.tracklet < 0):
