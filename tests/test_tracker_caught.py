@@ -21,7 +21,7 @@ import pytest
 from badminton_gui.core.flight.camera_rules import CameraRules
 from badminton_gui.core.flight.phase import PhaseObservation, PhaseState, transition, withheld
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.core.tracker import CAUGHT_REASON
+from badminton_gui.core.flight.phase import CAUGHT_REASON
 from badminton_gui.core.types import REJECT_STEREO, CameraResult, Candidate
 from badminton_gui.io.demo_scene import make_rig
 from .conftest_data import NYCU_DIR, tracked_rally

@@ -13,11 +13,15 @@ A pair step runs these stages, in this order (``StereoTracker.process``):
    detection's epipolar line; two reports just off the gate pair when the flight or the last
    pair vouches for them; a report is dropped when the shuttle has left that camera's view;
 4. the landed hold (``flight/camera_rules.py``) and each camera's readout at the cork;
-5. the 3D measurement (``stereo/cork.py``): the pair's point moved to the cork, its noise shape;
-6. the 3D flight filter (:class:`Trajectory`), or one camera's line of sight when there is no
-   pair (``flight/sight.py``);
-7. the shuttle's phase (``flight/phase.py``) and its readout rules: a caught shuttle withheld,
-   reports one camera makes alone limited.
+5. the 3D measurement (``stereo/measure.py``, ``stereo/cork.py``): the pair's point moved to the
+   cork, its noise shape;
+6. the 3D flight filter (``flight/follow.py``, :class:`Trajectory`), or one camera's line of
+   sight when there is no pair (``flight/sight.py``), and the 3D point to report;
+7. the shuttle's phase (``flight/phase.py``, a pure transition) and its readout rules
+   (``flight/camera_rules.py``): a caught shuttle withheld, reports one camera makes alone limited.
+
+Each stage hands the next one :class:`~badminton_gui.core.step.Step` (each camera's result and
+report, the pair's point); each keeps its own memory, rebuilt from one place by ``reset``.
 
 The 3D point reported is the trajectory filter's estimate whenever the measured point extended
 a flight (a single triangulation is several times less sure in depth than across); a point the
@@ -42,11 +46,9 @@ Usage::
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -56,47 +58,21 @@ from .detector import CameraDetector
 from .flight.camera_rules import CameraRules
 from .flight.guide import StepGuide
 from .flight.look import FlightLook
-from .flight.phase import PhaseObservation, PhaseState, transition, withheld
-from .flight.sight import PAIRED_SIGHT_NOISE, SightOfCamera
+from .flight.follow import FlightFollower
+from .flight.phase import PhaseObservation, PhaseState, caught_flight, transition, withheld
+from .flight.sight import SightOfCamera
 from .params import TrackerParams
 from .rig import StereoRig
+from .step import Step
 from .stereo.cork import CorkCorrection
 from .stereo.epipolar import EpipolarGate
-from .stereo.look import ImagePaths, stereo_look
+from .stereo.look import ImagePaths, look_on_epipolar_lines
+from .stereo.measure import measure
 from .stereo.pairing import StereoPairing
 from .stereo.vouch import StereoVouch
 from .trajectory import Trajectory
-from .types import CameraResult, Candidate, FlightInfo, StereoFrame, TrackResult
+from .types import CameraResult, FlightInfo, StereoFrame, TrackResult
 
-# What the readout and the robot are told while the shuttle is caught (``FlightInfo.withheld_reason``).
-CAUGHT_REASON = "caught: out of play"
-SIDES = ("left", "right")
-
-
-@dataclass(slots=True)
-class _Step:
-    """One step's work in progress, handed from stage to stage: each camera's result and report,
-    the pair's 3D point (left-camera frame) and epipolar error, and the rules that fired."""
-
-    t: float
-    t_right: float
-    frames: tuple[np.ndarray, np.ndarray]
-    guide: StepGuide
-    results: list[CameraResult] = field(default_factory=list)
-    dets: list[Candidate | None] = field(default_factory=lambda: [None, None])
-    point: np.ndarray | None = None
-    epi: float | None = None
-    trace: list[str] | None = None
-
-    def fired(self, rule: str, cam: int | None = None) -> None:
-        if self.trace is not None:
-            self.trace.append(rule if cam is None else f"{rule}:{SIDES[cam]}")
-
-    def add(self, cam: int, found: Candidate) -> None:
-        """``found`` becomes camera ``cam``'s report and joins its candidates."""
-        self.dets[cam] = found
-        self.results[cam] = dataclasses.replace(self.results[cam],
-                                                candidates=self.results[cam].candidates + (found,))
 
 
 class StereoTracker:
@@ -128,6 +104,8 @@ class StereoTracker:
         self.look = FlightLook(self.rig, self.params, detectors)
         self.cork = CorkCorrection(self.rig, self.params, detectors, self.pairing.right_xy)
         self.sight = SightOfCamera(self.rig, self.params, self._trajectory)
+        self.follower = FlightFollower(self.rig, self.params, self._trajectory, self.sight, self.cork,
+                                       self.pairing.right_xy)
         self.rules = CameraRules(self.rig, self.params)
         self.phase = PhaseState()
         # Each camera's last image (the guided look's motion check) and last readout (what a
@@ -145,7 +123,8 @@ class StereoTracker:
     @params.setter
     def params(self, params: TrackerParams) -> None:
         self._params = params
-        for stage in (self.gate, self.pairing, self.vouch, self.look, self.cork, self.sight, self.rules):
+        for stage in (self.gate, self.pairing, self.vouch, self.look, self.cork, self.sight, self.follower,
+                      self.rules):
             stage.params = params
 
     def set_params(self, params: TrackerParams) -> None:
@@ -204,23 +183,24 @@ class StereoTracker:
         t_r = timestamp if t_right is None else t_right
         self._check_sizes(left_bgr, right_bgr)
         self.pairing.set_times(timestamp, t_r)
-        step = _Step(timestamp, t_r, (left_bgr, right_bgr), StepGuide(self._trajectory, timestamp),
-                     trace=[] if self.trace else None)
+        step = Step(timestamp, t_r, (left_bgr, right_bgr), StepGuide(self._trajectory, timestamp),
+                    trace=[] if self.trace else None)
         self._segment(step, keep_masks)
         self._pair(step)
-        self._guided_look(step)
-        self._stereo_look(step)
-        self._vouched_by_flight(step)
+        self.look.look(step, self._previous, self.pairing.pair_point)
+        look_on_epipolar_lines(step, self.rig, self.params, self.gate, self.paths, self._previous,
+                               self.pairing.pair_point)
+        self.pairing.pair_off_gate(step)
         self._note_paths(step)
-        self._exits(step)
+        self.look.exits(step, self.paths)
         self._hold_and_readout(step)
-        measured, noise_shape, head_var = self._measure(step)
-        flight, sight_cam = self._follow_flight(step, measured, noise_shape, head_var)
-        accepted = measured is not None and not self._trajectory.point_rejected
-        point, flight = self._readout_point(step, measured, flight, sight_cam)
-        point, flight = self._phase_step(step, measured, accepted, point, flight)
+        m = measure(step, self.rig, self.params, self.gate, self.pairing, self.cork)
+        flight, sight_cam = self.follower.follow(step, m)
+        accepted = m.point is not None and not self._trajectory.point_rejected
+        point = self.follower.point_to_report(step, m.point, sight_cam)
+        point, flight = self._phase_step(step, m.point, accepted, point, flight)
         self._last_results = list(step.results)
-        return self._result(step, index, index_right, point, flight, measured, start)
+        return self._result(step, index, index_right, point, flight, m.point, start)
 
     def _check_sizes(self, left_bgr: np.ndarray, right_bgr: np.ndarray) -> None:
         if not self._checked_size:
@@ -231,7 +211,7 @@ class StereoTracker:
             self._checked_size = True
 
     # ---- stage 1: segmentation and candidates, per camera ----------------------------------
-    def _segment(self, step: _Step, keep_masks: bool) -> None:
+    def _segment(self, step: Step, keep_masks: bool) -> None:
         """Each camera's candidates. A windowed frame is mostly Python holding the GIL: when both
         cameras process this frame in a window they run faster in turn on this thread than side
         by side; a pair with a whole frame, mostly image work that releases the GIL, runs side by
@@ -253,7 +233,7 @@ class StereoTracker:
         step.results = [res_left, res_right]
 
     # ---- stage 2: stereo vouch, pairing, each camera's commit ------------------------------
-    def _pair(self, step: _Step) -> None:
+    def _pair(self, step: Step) -> None:
         res = step.results
         if self.params.stereo.stereo_vouch:
             vouched = self.vouch.apply(res[0], res[1])
@@ -271,96 +251,15 @@ class StereoTracker:
         self.right.commit(step.dets[1], step.t_right, res[1].candidates)
 
     # ---- stage 3: the flight's look, and the shuttle leaving a camera's view ---------------
-    def _guided_look(self, step: _Step) -> None:
-        """Look where the flight projects for a camera with no detection, or a weak lone one
-        (the flight's RK4 prediction is skipped when both cameras have a sure one)."""
-        sp = self.params.stereo
-        unseen = [det is None or det.predicted for det in step.dets]
-        weak = [self.look.weak_lone(det, step.point is not None) for det in step.dets]
-        if not (sp.guided_search and (sp.guided_override or any(unseen) or any(weak))):
-            return
-        guide = step.guide.get()
-        if guide is None:
-            return
-        found = [self.look.guided(cam, step.frames[cam], self._previous[cam], step.dets[cam], guide, weak[cam])
-                 for cam in (0, 1)]
-        if found[0] is not None or found[1] is not None:
-            for cam in (0, 1):
-                if found[cam] is not None:
-                    step.add(cam, found[cam])
-                    step.fired("guided_search", cam)
-            step.point, step.epi = self.pairing.pair_point(step.dets[0], step.dets[1])
-        if sp.guided_coast:
-            for cam in (0, 1):
-                before = step.dets[cam]
-                step.results[cam], step.dets[cam] = self.look.coast(cam, step.frames[cam], step.results[cam],
-                                                                    before, guide)
-                if step.dets[cam] is not before:
-                    step.fired("guided_coast", cam)
-
-    def _stereo_look(self, step: _Step) -> None:
-        """Neither the pair nor the flight found the shuttle in one camera: the other's sure
-        detection puts it on an epipolar line, this camera's own image path near a point."""
-        sp = self.params.stereo
-        if not sp.stereo_look or step.point is not None:
-            return
-        for cam in (0, 1):
-            own, other = step.dets[cam], step.dets[1 - cam]
-            if ((own is None or own.predicted) and other is not None
-                    and not other.predicted and other.score >= sp.stereo_look_min_score):
-                found = stereo_look(self.rig, self.params, self.gate, self.paths, cam, step.frames[cam],
-                                    self._previous[cam], other, step.t)
-                if found is not None:
-                    step.add(cam, found)
-                    step.fired("stereo_look", cam)
-                    step.point, step.epi = self.pairing.pair_point(step.dets[0], step.dets[1])
-                    return
-
-    def _vouched_by_flight(self, step: _Step) -> None:
-        """Two reports off the epipolar gate pair when the flight puts the shuttle where they
-        triangulate, or when they continue the last step's pair."""
-        left, right = step.dets
-        if step.point is not None or left is None or right is None:
-            return
-        step.point, step.epi = self.pairing.flight_vouched_pair(left, right, step.guide.get())
-        if step.point is not None:
-            step.fired("flight_vouch")
-            return
-        step.point, step.epi = self.pairing.continued_pair(left, right, step.t)
-        if step.point is not None:
-            step.fired("pair_continuity")
-
-    def _note_paths(self, step: _Step, cameras: tuple[int, ...] = (0, 1)) -> None:
+    def _note_paths(self, step: Step, cameras: tuple[int, ...] = (0, 1)) -> None:
         detectors = (self.left, self.right)
         for cam in cameras:
             det = step.dets[cam]
             if det is not None and not det.predicted:
                 self.paths.note(cam, step.t, det.x, det.y, detectors[cam].tracklet_velocity(det))
 
-    def _exits(self, step: _Step, cameras: tuple[int, ...] = (0, 1)) -> None:
-        """No report where the shuttle has left the camera's view: a detection at the border
-        (its clipped skirt: a pair made with it is biased too), or a weak lone one while the
-        flight is out of this camera's view."""
-        sp = self.params.stereo
-        if not (sp.exit_margin > 0 or (sp.out_of_view_weak and step.point is None)):
-            return
-        for cam in cameras:
-            det, frame = step.dets[cam], step.frames[cam]
-            border = self.look.near_border(det, frame) and (step.point is None or sp.exit_by_path)
-            weak_now = sp.out_of_view_weak and self.look.weak_lone(det, step.point is not None)
-            if not (border or weak_now):
-                continue
-            guide = step.guide.get()
-            if ((border and sp.exit_by_path and self.paths.leaves(cam, frame, step.t))
-                    or (guide is not None
-                        and ((border and self.look.gone_out(cam, det, frame, guide[0]))
-                             or (weak_now and self.look.out_of_view(cam, frame, guide[0]))))):
-                step.dets[cam] = None
-                step.point, step.epi = None, None
-                step.fired("exit", cam)
-
     # ---- stage 4: the landed hold, each camera's readout at the cork -----------------------
-    def _hold_and_readout(self, step: _Step) -> None:
+    def _hold_and_readout(self, step: Step) -> None:
         res, dets = step.results, step.dets
         (res[0], dets[0]), (res[1], dets[1]), step.point, step.epi = self.rules.hold_both(
             (res[0], dets[0]), (res[1], dets[1]), step.point, step.epi, step.t, self.phase)
@@ -369,7 +268,7 @@ class StereoTracker:
                 step.fired("landed_hold", cam)
         self._protect_and_show(step, (0, 1))
 
-    def _protect_and_show(self, step: _Step, cameras: tuple[int, ...]) -> None:
+    def _protect_and_show(self, step: Step, cameras: tuple[int, ...]) -> None:
         """A landed shuttle lying still stays in its camera's mask; the 2D readout is the cork,
         not the trailing bright centroid (the 3D point is still triangulated from the measured
         centroids: each camera's lead is estimated on its own and their disagreement would be a
@@ -385,96 +284,19 @@ class StereoTracker:
             result, shown = detectors[cam].lead_to_head(step.results[cam], step.dets[cam])
             step.results[cam] = CameraDetector.finalise(result, shown)
 
-    # ---- stage 5: the 3D measurement -------------------------------------------------------
-    def _measure(self, step: _Step):
-        """(measured point in the output frame, its noise shape, the cork correction's variance)
-        of the step's pair, or (None, None, 0)."""
-        head_var = 0.0
-        blob = step.point
-        left, right = step.dets
-        if blob is not None and self.params.stereo.head_offset > 0:
-            step.point = self.cork.to_head(left, right, blob)
-            head_var = self.cork.variance(step.t, blob, step.point - blob)
-        self.cork.note_blob(step.t, blob)
-        if step.point is None:
-            return None, None, head_var
-        if step.epi is not None:
-            self.pairing.note_pair(step.t, left, right, step.epi)
-        measured = tuple(float(v) for v in self.rig.to_output(step.point)[0])
-        noise_shape = self.rig.noise_shape([[left.x, left.y]], [list(self.pairing.right_xy(right))])[0]
-        if step.epi is not None:
-            noise_shape = noise_shape * self.gate.inflation(step.epi)
-        return measured, noise_shape, head_var
-
-    # ---- stage 6: the 3D flight filter -----------------------------------------------------
-    def _follow_flight(self, step: _Step, measured, noise_shape, head_var: float):
-        """The flight after this step: the measured point, or, with no pair, the sight of the one
-        camera that sees the shuttle (hidden, merged with a player, lost by the other camera's
-        detector, or that camera's readout on something else): the robot keeps a 3D point."""
-        sight_cam = None
-        if measured is None and self.params.stereo.one_camera_rays and self.rig.has_court_pose:
-            sight_cam = self.sight.camera(step.dets[0], step.dets[1], step.t)
-        if sight_cam is None:
-            return self._trajectory.update(step.t, measured, noise_shape,
-                                           np.eye(3) * head_var if head_var > 0 else None), None
-        # The right image's own time when its clock lags (``align_pairs``), never earlier
-        # than the last step (the trajectory would take that for a replay and reset).
-        last = self._trajectory.last_time
-        t_sight = step.t if sight_cam == 0 or (last is not None and step.t_right <= last) else step.t_right
-        step.fired("one_camera_sight", sight_cam)
-        return self.sight.feed(sight_cam, step.dets[sight_cam], t_sight, PAIRED_SIGHT_NOISE), sight_cam
-
-    def _readout_point(self, step: _Step, measured, flight: FlightInfo, sight_cam: int | None):
-        """The 3D point to report (output frame) and the flight, before the phase's rules."""
-        point = measured
-        filtered = self._trajectory.filtered_position()
-        left, right = step.dets
-        if filtered is not None and step.point is not None and self.params.stereo.one_camera_rays:
-            blob = self.cork.last_blob_point()
-            self.sight.note_pair(step.t, self.rig.to_output(blob),
-                                 ((left.x, left.y), self.pairing.right_xy(right)))
-        if filtered is not None and sight_cam is not None and self.params.stereo.guided_other:
-            blind = 1 - sight_cam
-            shown = self.sight.projected_readout(blind, filtered, step.t, step.results[blind],
-                                                 step.frames[blind])
-            if shown is not None:
-                step.results[blind] = shown
-                step.fired("guided_other", blind)
-        if filtered is not None:
-            point = filtered
-        elif self._trajectory.point_rejected:
-            # An outlier to the followed flight: no point, unless it is the next shot's already.
-            point = self._trajectory.tentative_position()
-        elif measured is not None and self.rig.has_court_pose:
-            point = self._resting_cork(measured)
-        return point, flight
-
     # ---- stage 7: the shuttle's phase and its readout rules --------------------------------
-    def _phase_step(self, step: _Step, measured, accepted: bool, point, flight: FlightInfo):
-        speed = _speed(flight)
+    def _phase_step(self, step: Step, measured, accepted: bool, point, flight: FlightInfo):
         self.phase = transition(self.phase, PhaseObservation(
-            step.t, measured, accepted, speed, None if point is None else float(point[2])),
+            step.t, measured, accepted, _speed(flight), None if point is None else float(point[2])),
             self.params, self.rig.has_court_pose)
         if withheld(self.phase, step.t, self.params):
-            point, flight = None, _withheld_flight(flight)
+            point, flight = None, caught_flight(flight)
             step.results = self.rules.withhold_caught(step.results, self.phase)
             step.fired("caught")
-        for cam, det in enumerate(step.dets):
-            self.rules.note_anchor(cam, det, point is not None)
-            if (det is not None and not det.predicted and point is not None
-                    and float(point[2]) > self.params.stereo.landed_max_height):
-                self.rules.note_flown(cam, det.tracklet, step.t)
-        self._limit_alone(step, point is not None, (0, 1))
+        self.rules.note_step(step, point is not None, None if point is None else float(point[2]))
         return point, flight
 
-    def _limit_alone(self, step: _Step, has_point: bool, cameras: tuple[int, ...]) -> None:
-        limited = self.rules.limit_alone(step.results, has_point, cameras)
-        for cam in cameras:
-            if limited[cam] is not step.results[cam]:
-                step.fired("alone_limit", cam)
-        step.results = limited
-
-    def _result(self, step: _Step, index: int, index_right: int, point, flight: FlightInfo,
+    def _result(self, step: Step, index: int, index_right: int, point, flight: FlightInfo,
                 measured, start: float) -> TrackResult:
         distance = predicted_distance = None
         if point is not None:
@@ -516,8 +338,8 @@ class StereoTracker:
         other = self._last_results[1 - cam] or CameraResult(detection=None, image_size=(w, h))
         frames = [self._previous[0], self._previous[1]]
         frames[cam] = frame_bgr
-        step = _Step(t, t, (frames[0], frames[1]), StepGuide(self._trajectory, t),
-                     trace=[] if self.trace else None)
+        step = Step(t, t, (frames[0], frames[1]), StepGuide(self._trajectory, t),
+                    trace=[] if self.trace else None)
         detector.keep_whole = self.rules.holding(cam)
         detector.plan_window(frame_bgr, t)
         result = detector.find_candidates(frame_bgr, t, keep_masks)
@@ -525,15 +347,10 @@ class StereoTracker:
         step.results[cam] = result
         step.dets[cam] = detector.choose(result.candidates)
         detector.commit(step.dets[cam], t, result.candidates)
-        self._guided_look_one(step, cam)
+        self.look.look_one(step, cam, self._previous[cam])
         self._note_paths(step, (cam,))
-        self._exits(step, (cam,))
-        self.rules.cams[cam].holding = False
-        if sp.landed_frames > 0 and self.rig.has_court_pose:
-            step.results[cam], step.dets[cam] = self.rules.hold_landed(cam, step.results[cam], step.dets[cam],
-                                                                       t, self.phase)
-            if self.rules.holding(cam):
-                step.fired("landed_hold", cam)
+        self.look.exits(step, self.paths, (cam,))
+        self.rules.hold_one(step, cam, self.phase)
         self._protect_and_show(step, (cam,))
         det, result = step.dets[cam], step.results[cam]
         if (sp.one_camera_rays and det is not None and not det.predicted
@@ -544,59 +361,22 @@ class StereoTracker:
             flight = self._trajectory.update(t, None)
         point = self._trajectory.filtered_position()
         if withheld(self.phase, t, self.params):
-            point, flight = None, _withheld_flight(flight)
+            point, flight = None, caught_flight(flight)
             step.results = self.rules.withhold_caught(step.results, self.phase, cameras=(cam,))
             step.fired("caught")
         self.rules.note_anchor(cam, step.results[cam].detection, False)
-        self._limit_alone(step, False, (cam,))
+        self.rules.limit_alone_step(step, False, (cam,))
         self.phase = transition(self.phase, PhaseObservation(
             t, point_height=None if point is None else float(point[2]), paired=False),
             self.params, self.rig.has_court_pose)
         self._last_results[cam] = step.results[cam]
         return self._result(step, index, index_right, point, flight, None, start)
 
-    def _guided_look_one(self, step: _Step, cam: int) -> None:
-        """``_guided_look`` for a step with camera ``cam``'s image only."""
-        sp = self.params.stereo
-        det = step.dets[cam]
-        weak = self.look.weak_lone(det, False)
-        if not (sp.guided_search and (det is None or det.predicted or weak)):
-            return
-        guide = step.guide.get()
-        if guide is None:
-            return
-        found = self.look.guided(cam, step.frames[cam], self._previous[cam], det, guide, weak)
-        if found is not None:
-            step.add(cam, found)
-            step.fired("guided_search", cam)
-        if sp.guided_coast:
-            before = step.dets[cam]
-            step.results[cam], step.dets[cam] = self.look.coast(cam, step.frames[cam], step.results[cam],
-                                                                before, guide)
-            if step.dets[cam] is not before:
-                step.fired("guided_coast", cam)
-
-    def _resting_cork(self, point: tuple[float, float, float]) -> tuple[float, float, float]:
-        """A shuttle lying where the last flight landed: move the blob's point to the cork."""
-        direction = self._trajectory.resting_direction(point)
-        if direction is None:
-            return point
-        sp = self.params.stereo
-        return (point[0] + sp.rest_cork_ahead * direction[0], point[1] + sp.rest_cork_ahead * direction[1],
-                point[2] - sp.rest_cork_below)
-
 
 def _speed(flight: FlightInfo) -> float | None:
     if flight.velocity is None:
         return None
     return float(math.sqrt(sum(v * v for v in flight.velocity)))
-
-
-def _withheld_flight(flight: FlightInfo) -> FlightInfo:
-    """The flight as told while the shuttle is caught: out of play, no position, speed or landing
-    for the robot to chase (the flight filter itself runs on, for the next serve)."""
-    return dataclasses.replace(flight, velocity=None, prediction=None, in_flight=False,
-                               withheld_reason=CAUGHT_REASON, confirmed=(), confirmed_path=())
 
 
 def configure_opencv_threads() -> None:

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..params import TrackerParams
 from ..rig import StereoRig
+from ..step import Step
 from ..stereo.look import ImagePaths
 from ..stereo.vouch import VOUCH_WIDE_IMAGE_SPEED
 from ..types import REJECT_STEREO, CameraResult, Candidate
@@ -164,6 +165,15 @@ class CameraRules:
         state.hold_tracklet = -1
         return result, None
 
+    def hold_one(self, step: Step, cam: int, phase: PhaseState) -> None:
+        """``hold_landed`` for a step with camera ``cam``'s image only (no pair to drop)."""
+        self.cams[cam].holding = False
+        if self.params.stereo.landed_frames > 0 and self.rig.has_court_pose:
+            step.results[cam], step.dets[cam] = self.hold_landed(cam, step.results[cam], step.dets[cam],
+                                                                 step.t, phase)
+            if self.cams[cam].holding:
+                step.fired("landed_hold", cam)
+
     def lying_landed(self, cam: int, det: Candidate | None, t: float, width: int,
                      phase: PhaseState, paths: ImagePaths) -> bool:
         """Whether this camera's report is a landed shuttle lying still, whose pixels the next
@@ -236,6 +246,26 @@ class CameraRules:
             self.cams[cam].caught_xy = (det.x, det.y)
             results[cam] = reject_report(results[cam])
         return results
+
+    # ---- after the phase: what the next steps' rules remember -------------------------------
+    def note_step(self, step: Step, has_point: bool, height: float | None) -> None:
+        """This pair step's reports (``step.dets``) with or without a 3D point (``height``: its
+        court height): the landed hold's anchors and the tracks seen in the air, then the limit
+        on reports alone."""
+        for cam, det in enumerate(step.dets):
+            self.note_anchor(cam, det, has_point)
+            if (det is not None and not det.predicted and height is not None
+                    and height > self.params.stereo.landed_max_height):
+                self.note_flown(cam, det.tracklet, step.t)
+        self.limit_alone_step(step, has_point, (0, 1))
+
+    def limit_alone_step(self, step: Step, has_point: bool, cameras: tuple[int, ...]) -> None:
+        """``limit_alone`` on the step's results, naming the cameras it withheld."""
+        limited = self.limit_alone(step.results, has_point, cameras)
+        for cam in cameras:
+            if limited[cam] is not step.results[cam]:
+                step.fired("alone_limit", cam)
+        step.results = limited
 
     # ---- reports alone ---------------------------------------------------------------------
     def limit_alone(self, results: list[CameraResult], has_point: bool,

@@ -16,10 +16,14 @@ import math
 
 import numpy as np
 
+from collections.abc import Callable
+
 from ..detector import CameraDetector
 from ..guided import find_spot, white_near
 from ..params import TrackerParams
 from ..rig import StereoRig
+from ..step import Step
+from ..stereo.look import ImagePaths
 from ..types import CameraResult, Candidate
 
 # px at 1280 px width: how near the flight's projection a white pixel must show for a shuttle
@@ -153,3 +157,76 @@ class FlightLook:
         if 0 <= u < w and 0 <= v < h:
             return False
         return math.hypot(detection.x - u, detection.y - v) <= EXIT_NEAR * w / 1280.0
+
+    # ---- the stage: one step's look and exits ----------------------------------------------
+    def look(self, step: Step, previous: list[np.ndarray | None],
+             pair_point: Callable[[Candidate | None, Candidate | None], tuple]) -> None:
+        """A pair step's guided look (``stereo.guided_search``, ``guided_coast``) for a camera with
+        no detection, or a weak lone one (the flight's RK4 prediction is skipped when both cameras
+        have a sure one); a spot found re-pairs the two reports (``pair_point``). ``previous``:
+        each camera's last image."""
+        sp = self.params.stereo
+        unseen = [det is None or det.predicted for det in step.dets]
+        weak = [self.weak_lone(det, step.point is not None) for det in step.dets]
+        if not (sp.guided_search and (sp.guided_override or any(unseen) or any(weak))):
+            return
+        guide = step.guide.get()
+        if guide is None:
+            return
+        found = [self.guided(cam, step.frames[cam], previous[cam], step.dets[cam], guide, weak[cam])
+                 for cam in (0, 1)]
+        if found[0] is not None or found[1] is not None:
+            for cam in (0, 1):
+                if found[cam] is not None:
+                    step.add(cam, found[cam])
+                    step.fired("guided_search", cam)
+            step.point, step.epi = pair_point(step.dets[0], step.dets[1])
+        if sp.guided_coast:
+            for cam in (0, 1):
+                self._coast_step(step, cam, guide)
+
+    def look_one(self, step: Step, cam: int, previous: np.ndarray | None) -> None:
+        """``look`` for a step with camera ``cam``'s image only (no pair to re-make)."""
+        sp = self.params.stereo
+        det = step.dets[cam]
+        weak = self.weak_lone(det, False)
+        if not (sp.guided_search and (det is None or det.predicted or weak)):
+            return
+        guide = step.guide.get()
+        if guide is None:
+            return
+        found = self.guided(cam, step.frames[cam], previous, det, guide, weak)
+        if found is not None:
+            step.add(cam, found)
+            step.fired("guided_search", cam)
+        if sp.guided_coast:
+            self._coast_step(step, cam, guide)
+
+    def _coast_step(self, step: Step, cam: int, guide: Guide) -> None:
+        before = step.dets[cam]
+        step.results[cam], step.dets[cam] = self.coast(cam, step.frames[cam], step.results[cam], before, guide)
+        if step.dets[cam] is not before:
+            step.fired("guided_coast", cam)
+
+    def exits(self, step: Step, paths: ImagePaths, cameras: tuple[int, ...] = (0, 1)) -> None:
+        """No report where the shuttle has left the camera's view: a detection at the border
+        (its clipped skirt: a pair made with it is biased too), or a weak lone one while the
+        flight is out of this camera's view (``stereo.exit_margin``, ``exit_by_path``,
+        ``out_of_view_weak``)."""
+        sp = self.params.stereo
+        if not (sp.exit_margin > 0 or (sp.out_of_view_weak and step.point is None)):
+            return
+        for cam in cameras:
+            det, frame = step.dets[cam], step.frames[cam]
+            border = self.near_border(det, frame) and (step.point is None or sp.exit_by_path)
+            weak_now = sp.out_of_view_weak and self.weak_lone(det, step.point is not None)
+            if not (border or weak_now):
+                continue
+            guide = step.guide.get()
+            if ((border and sp.exit_by_path and paths.leaves(cam, frame, step.t))
+                    or (guide is not None
+                        and ((border and self.gone_out(cam, det, frame, guide[0]))
+                             or (weak_now and self.out_of_view(cam, frame, guide[0]))))):
+                step.dets[cam] = None
+                step.point, step.epi = None, None
+                step.fired("exit", cam)

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..court import NET_HEIGHT_POSTS
 from ..params import TrackerParams
+from ..types import FlightInfo
 
 # m/s: how fast the flight must have been followed just before its 3D points stopped dead for
 # ``stereo.caught_frames`` to call it caught (a shuttle held before the serve had no flight).
@@ -48,6 +49,8 @@ CAUGHT_FLIGHT_GAP = 0.05
 # m: how near the net's plane (court Y = 0) and above its top a stop counts as the net's, not a
 # hand's: the shuttle hangs in the mesh or falls off the tape in full view.
 CAUGHT_NET_MARGIN = 0.3
+# What the readout and the robot are told while the shuttle is caught (``FlightInfo.withheld_reason``).
+CAUGHT_REASON = "caught: out of play"
 # s: how recent the flight's last low 3D point must be for the shuttle to count as landed (a
 # shuttle lands and comes to rest in a fraction of a second; the pause allowance runs out 40
 # frames later at 119 fps).
@@ -108,32 +111,31 @@ class PhaseState:
                 and last[1] <= params.stereo.landed_max_height)
 
 
-def _catch(state: PhaseState, obs: PhaseObservation, params: TrackerParams) -> PhaseState:
-    """The caught rule on a pair step: ``state`` with its catch started, held or released."""
+def _catch(state: PhaseState, obs: PhaseObservation, params: TrackerParams
+           ) -> tuple[tuple, tuple[float, float] | None, float | None, bool]:
+    """The caught rule on a pair step: (stopped, last_flown, caught_at, caught_new) after it."""
     sp = params.stereo
     t = obs.t
-    caught_at = state.caught_at
+    stopped, flown, caught_at = state.stopped, state.last_flown, state.caught_at
     if caught_at is not None and t - caught_at > sp.caught_hold:
         caught_at = None
-    state = dataclasses.replace(state, caught_at=caught_at, caught_new=False)
     if obs.measured is not None and obs.accepted:
         if obs.speed is not None:
             if caught_at is not None and obs.speed >= sp.caught_release_speed:
                 caught_at = None
             if caught_at is None:
-                state = dataclasses.replace(state, last_flown=(t, obs.speed))
-        return dataclasses.replace(state, stopped=(), caught_at=caught_at)
+                flown = (t, obs.speed)
+        return (), flown, caught_at, False
     if caught_at is not None:
-        return state
+        return stopped, flown, caught_at, False
     if obs.measured is None:
-        return dataclasses.replace(state, stopped=())
-    flown = state.last_flown
-    if not state.stopped and (flown is None or t - flown[0] > CAUGHT_FLIGHT_GAP + 1e-9
-                              or flown[1] < CAUGHT_MIN_FLIGHT_SPEED):
-        return state
-    stopped = state.stopped + ((t, obs.measured),)
+        return (), flown, None, False
+    if not stopped and (flown is None or t - flown[0] > CAUGHT_FLIGHT_GAP + 1e-9
+                        or flown[1] < CAUGHT_MIN_FLIGHT_SPEED):
+        return stopped, flown, None, False
+    stopped = stopped + ((t, obs.measured),)
     if len(stopped) < sp.caught_frames:
-        return dataclasses.replace(state, stopped=stopped)
+        return stopped, flown, None, False
     points = np.array([p for _, p in stopped[-sp.caught_frames:]])
     centre = points.mean(axis=0)
     if (float(np.max(np.linalg.norm(points - centre, axis=1))) > sp.caught_radius
@@ -141,8 +143,8 @@ def _catch(state: PhaseState, obs: PhaseObservation, params: TrackerParams) -> P
             or (abs(centre[1]) <= CAUGHT_NET_MARGIN and centre[2] <= NET_HEIGHT_POSTS + CAUGHT_NET_MARGIN)):
         # Not caught: lying on the floor (the landed hold's case), or stopped by the net,
         # where it hangs in the mesh or on the tape in view (rally_11-47-21 879, labelled).
-        return dataclasses.replace(state, stopped=())
-    return dataclasses.replace(state, stopped=(), caught_at=t, caught_new=True)
+        return (), flown, None, False
+    return (), flown, t, True
 
 
 def transition(state: PhaseState, obs: PhaseObservation, params: TrackerParams,
@@ -159,16 +161,29 @@ def transition(state: PhaseState, obs: PhaseObservation, params: TrackerParams,
     stop (the flight accepts its points), nor is a hit (its points move fast), nor a shuttle held
     before a serve with no flight before it.
     """
-    state = dataclasses.replace(state, caught_new=False)
-    if params.stereo.caught_frames <= 0 or not has_court_pose:
-        state = dataclasses.replace(state, caught_at=None)
+    sp = params.stereo
+    stopped, flown, caught_at, new = state.stopped, state.last_flown, state.caught_at, False
+    if sp.caught_frames <= 0 or not has_court_pose:
+        caught_at = None
     elif obs.paired:
-        state = _catch(state, obs, params)
+        stopped, flown, caught_at, new = _catch(state, obs, params)
     # A one-camera step reads the catch without ending it: the next pair step does.
-    caught = withheld(state, obs.t, params)
+    caught = caught_at is not None and sp.caught_frames > 0 and obs.t - caught_at <= sp.caught_hold
+    last_point = state.last_point
     if not caught and obs.point_height is not None:
-        state = dataclasses.replace(state, last_point=(obs.t, obs.point_height))
-    return dataclasses.replace(state, phase=_phase(state, obs.t, caught, obs.point_height, params))
+        last_point = (obs.t, obs.point_height)
+    if caught:
+        phase = ShuttlePhase.CAUGHT
+    elif stopped:
+        phase = ShuttlePhase.STOPPED
+    elif obs.point_height is not None and obs.point_height > sp.landed_max_height:
+        phase = ShuttlePhase.IN_PLAY
+    elif (last_point is not None and obs.t - last_point[0] <= LANDED_RECENT
+          and last_point[1] <= sp.landed_max_height):
+        phase = ShuttlePhase.LANDED
+    else:
+        phase = ShuttlePhase.UNSEEN
+    return PhaseState(phase, stopped, flown, caught_at, new, last_point)
 
 
 def withheld(state: PhaseState, t: float, params: TrackerParams) -> bool:
@@ -177,14 +192,8 @@ def withheld(state: PhaseState, t: float, params: TrackerParams) -> bool:
             and t - state.caught_at <= params.stereo.caught_hold)
 
 
-def _phase(state: PhaseState, t: float, caught: bool, height: float | None,
-           params: TrackerParams) -> ShuttlePhase:
-    if caught:
-        return ShuttlePhase.CAUGHT
-    if state.stopped:
-        return ShuttlePhase.STOPPED
-    if height is not None and height > params.stereo.landed_max_height:
-        return ShuttlePhase.IN_PLAY
-    if state.landed(t, params):
-        return ShuttlePhase.LANDED
-    return ShuttlePhase.UNSEEN
+def caught_flight(flight: FlightInfo) -> FlightInfo:
+    """The flight as told while the shuttle is caught: out of play, no position, speed or landing
+    for the robot to chase (the flight filter itself runs on, for the next serve)."""
+    return dataclasses.replace(flight, velocity=None, prediction=None, in_flight=False,
+                               withheld_reason=CAUGHT_REASON, confirmed=(), confirmed_path=())

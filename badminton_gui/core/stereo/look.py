@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Callable
 
 import numpy as np
 
 from ..guided import find_spot
 from ..params import TrackerParams
 from ..rig import StereoRig
+from ..step import Step
 from ..types import Candidate
 from .epipolar import EpipolarGate
 
@@ -102,3 +104,25 @@ def stereo_look(rig: StereoRig, params: TrackerParams, gate: EpipolarGate, paths
         return None
     return Candidate(x=x, y=y, length=float("nan"), short_side=float("nan"), whiteness=contrast,
                      area=area, motion=math.hypot(x - u, y - v), score=0.0)
+
+
+def look_on_epipolar_lines(step: Step, rig: StereoRig, params: TrackerParams, gate: EpipolarGate,
+                           paths: ImagePaths, previous: list[np.ndarray | None],
+                           pair_point: Callable[[Candidate | None, Candidate | None], tuple]) -> None:
+    """The stage: neither the pair nor the flight found the shuttle in one camera, the other has a
+    sure detection (``stereo.stereo_look_min_score``): look where this camera's own image path
+    continues on that detection's epipolar line; a spot found makes the pair (``pair_point``).
+    ``previous``: each camera's last image."""
+    sp = params.stereo
+    if not sp.stereo_look or step.point is not None:
+        return
+    for cam in (0, 1):
+        own, other = step.dets[cam], step.dets[1 - cam]
+        if ((own is None or own.predicted) and other is not None
+                and not other.predicted and other.score >= sp.stereo_look_min_score):
+            found = stereo_look(rig, params, gate, paths, cam, step.frames[cam], previous[cam], other, step.t)
+            if found is not None:
+                step.add(cam, found)
+                step.fired("stereo_look", cam)
+                step.point, step.epi = pair_point(step.dets[0], step.dets[1])
+                return

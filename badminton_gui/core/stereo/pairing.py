@@ -19,6 +19,7 @@ import numpy as np
 from ..detector import CameraDetector
 from ..params import TrackerParams
 from ..rig import StereoRig
+from ..step import Step
 from ..types import CameraResult, Candidate
 from .epipolar import EpipolarGate
 
@@ -212,3 +213,17 @@ class StereoPairing:
         if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
             return None, None
         return point, err
+
+    def pair_off_gate(self, step: Step) -> None:
+        """The stage: two reports off the epipolar gate pair when the flight puts the shuttle where
+        they triangulate, or when they continue the last step's pair."""
+        left, right = step.dets
+        if step.point is not None or left is None or right is None:
+            return
+        step.point, step.epi = self.flight_vouched_pair(left, right, step.guide.get())
+        if step.point is not None:
+            step.fired("flight_vouch")
+            return
+        step.point, step.epi = self.continued_pair(left, right, step.t)
+        if step.point is not None:
+            step.fired("pair_continuity")
