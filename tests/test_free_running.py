@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from badminton_gui.core.evaluation import tolerance_px
+from badminton_gui.core.flight.sight import SightOfCamera
 from badminton_gui.core.lookahead import StereoLookahead
 from badminton_gui.core.params import TrackerParams
 from badminton_gui.core.tracker import StereoTracker
@@ -217,10 +218,10 @@ def test_a_pair_taken_apart_is_triangulated_at_the_left_image_time():
     def error(point):
         return float(np.linalg.norm(rig.to_output([point])[0] - at_left))
 
-    tracker._right_lag = 0.0
-    as_seen, _ = tracker._pair_point(left, right)
-    tracker._right_lag = lag
-    moved, _ = tracker._pair_point(left, right)
+    tracker.pairing.set_times(0.0, 0.0)
+    as_seen, _ = tracker.pairing.pair_point(left, right)
+    tracker.pairing.set_times(lag, 0.0)
+    moved, _ = tracker.pairing.pair_point(left, right)
     tracker.close()
     assert moved is not None and error(moved) < 0.002
     assert as_seen is None or error(as_seen) > 0.03
@@ -297,12 +298,12 @@ def test_a_rough_rigs_one_camera_sight_is_moved_by_the_pairs_reprojection_miss(m
     """A rig whose cameras' rays miss each other (the NYCU rig imported from its .cfg files is
     ≈ 10° off; launcher-stereo's one-camera sights missed the flight by 5–23 cm and were all
     refused) puts a single camera's sight off the triangulated flight. Corrected by where the
-    last pairs' points project in that camera (``StereoTracker._sight_offset``), the flight takes
+    last pairs' points project in that camera (``SightOfCamera.offset``), the flight takes
     41 of 44 one-camera steps with the right camera tilted 0.5°, 19 without; its position there
     stays with the pairs' (both are off the truth by the rig's error, ≈ 23 cm)."""
     pairs, alone, in_play = dropped_frame_errors(rig_error_deg=0.5)
     assert len(alone) >= 0.85 * in_play
     assert np.median(alone) < np.median(pairs) + 0.06
-    monkeypatch.setattr(StereoTracker, "_sight_offset", lambda self, cam, t, x, y: (0.0, 0.0))
+    monkeypatch.setattr(SightOfCamera, "offset", lambda self, cam, t, x, y: (0.0, 0.0))
     _, uncorrected, _ = dropped_frame_errors(rig_error_deg=0.5)
     assert len(uncorrected) <= 0.6 * in_play

@@ -59,7 +59,7 @@ def test_a_line_crossing_the_window_or_a_white_shirt_is_no_spot():
 
 
 def test_the_flight_projection_stands_in_only_where_the_camera_is_blind():
-    """``StereoTracker._coast_on_flight``: a camera with no detection reports the 3D flight's
+    """``FlightLook.coast``: a camera with no detection reports the 3D flight's
     projection only inside its blind spot (a light: background ≥ ``binarize.max_background``)
     or on a blob too large for a shuttle; a coasting prediction is moved onto the projection;
     a real detection is left alone."""
@@ -79,13 +79,13 @@ def test_the_flight_projection_stands_in_only_where_the_camera_is_blind():
 
     assert np.allclose(rig.project(0, guide_at(230.0, 60.0)[0][None])[0], (230.0, 60.0))
     empty = CameraResult(detection=None, candidates=(), image_size=(320, 180))
-    res, det = tracker._coast_on_flight(0, img, empty, None, guide_at(230.0, 60.0))
+    res, det = tracker.look.coast(0, img, empty, None, guide_at(230.0, 60.0))
     assert det is not None and det.predicted and math.hypot(det.x - 230, det.y - 60) < 1e-6
     assert det in res.candidates
-    res, det = tracker._coast_on_flight(0, img, empty, None, guide_at(100.0, 120.0))   # not blind there
+    res, det = tracker.look.coast(0, img, empty, None, guide_at(100.0, 120.0))   # not blind there
     assert det is None and res.candidates == ()
     coasting = Candidate(240.0, 70.0, math.nan, math.nan, math.nan, math.nan, 0.0, 2.0, None, predicted=True)
-    res, det = tracker._coast_on_flight(0, img, dataclasses_replace(empty, coasting), coasting, guide_at(100.0, 120.0))
+    res, det = tracker.look.coast(0, img, dataclasses_replace(empty, coasting), coasting, guide_at(100.0, 120.0))
     assert det.predicted and math.hypot(det.x - 100, det.y - 120) < 1e-6 and det.score == 2.0
     assert res.candidates == (det,)
     # A blob too large for a shuttle (a player's arm) covers the projection: the shuttle
@@ -95,14 +95,14 @@ def test_the_flight_projection_stands_in_only_where_the_camera_is_blind():
     tracker.process(arm, arm.copy(), 1 / 120, 1, 1, keep_masks=False)
     assert tracker.left.is_merged(90.0, 115.0) and not tracker.left.is_merged(90.0, 150.0)
     in_front = with_shuttle(arm, 90.0, 115.0, r=1.5)
-    res, det = tracker._coast_on_flight(0, in_front, empty, None, guide_at(90.0, 115.0))
+    res, det = tracker.look.coast(0, in_front, empty, None, guide_at(90.0, 115.0))
     assert det is not None and det.predicted
-    res, det = tracker._coast_on_flight(0, arm, empty, None, guide_at(90.0, 115.0))   # hidden behind it
+    res, det = tracker.look.coast(0, arm, empty, None, guide_at(90.0, 115.0))   # hidden behind it
     assert det is None
-    res, det = tracker._coast_on_flight(0, in_front, empty, None, guide_at(90.0, 150.0))
+    res, det = tracker.look.coast(0, in_front, empty, None, guide_at(90.0, 150.0))
     assert det is None
     seen = Candidate(150.0, 90.0, 30.0, 6.0, 200.0, 40.0, 1.0, 3.0, None)
-    res, det = tracker._coast_on_flight(0, img, dataclasses_replace(empty, seen), seen, guide_at(230.0, 60.0))
+    res, det = tracker.look.coast(0, img, dataclasses_replace(empty, seen), seen, guide_at(230.0, 60.0))
     assert det is seen
     tracker.close()
 

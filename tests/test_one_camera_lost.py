@@ -146,11 +146,11 @@ def test_an_older_pairs_reprojection_miss_serves_while_the_shuttle_is_still_near
     tracker = StereoTracker(scene.rig, TrackerParams(), parallel=False)
     try:
         for k in range(5):
-            tracker._sight_miss[1].append((1.0 + 0.008 * k, 600.0 + k, 300.0, 4.0, -2.0))
-        assert tracker._sight_offset(1, 1.05, 604.0, 300.0) == pytest.approx((4.0, -2.0))
-        assert tracker._sight_offset(1, 1.30, 620.0, 310.0) == pytest.approx((4.0, -2.0))   # near: kept
-        assert tracker._sight_offset(1, 1.30, 700.0, 300.0) == (0.0, 0.0)                    # moved on
-        assert tracker._sight_offset(1, 1.60, 604.0, 300.0) == (0.0, 0.0)                    # too old
+            tracker.sight.note_miss(1, 1.0 + 0.008 * k, 600.0 + k, 300.0, 4.0, -2.0)
+        assert tracker.sight.offset(1, 1.05, 604.0, 300.0) == pytest.approx((4.0, -2.0))
+        assert tracker.sight.offset(1, 1.30, 620.0, 310.0) == pytest.approx((4.0, -2.0))   # near: kept
+        assert tracker.sight.offset(1, 1.30, 700.0, 300.0) == (0.0, 0.0)                    # moved on
+        assert tracker.sight.offset(1, 1.60, 604.0, 300.0) == (0.0, 0.0)                    # too old
     finally:
         tracker.close()
         scene.close()

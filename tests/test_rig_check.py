@@ -12,7 +12,8 @@ import pytest
 
 from badminton_gui.core.params import TrackerParams
 from badminton_gui.core.rig import REFINE_FROM_PX, refine_threshold
-from badminton_gui.core.tracker import EPIPOLAR_LEARNT_SAMPLES, StereoTracker
+from badminton_gui.core.stereo.epipolar import EPIPOLAR_LEARNT_SAMPLES
+from badminton_gui.core.tracker import StereoTracker
 from badminton_gui.gui.rig_check import RigCheck, readout_text
 from badminton_gui.io.demo_scene import make_rig
 
@@ -20,9 +21,9 @@ from badminton_gui.io.demo_scene import make_rig
 def test_the_tracker_reports_the_rigs_error_once_it_has_enough_sure_pairs():
     tracker = StereoTracker(make_rig("binocular", (1280, 720)), TrackerParams(), parallel=False)
     for k in range(EPIPOLAR_LEARNT_SAMPLES - 1):
-        tracker._add_epipolar_sample(float(k))
+        tracker.gate.add_sample(float(k))
     assert tracker.rig_epipolar_px is None
-    tracker._add_epipolar_sample(100.0)
+    tracker.gate.add_sample(100.0)
     assert tracker.rig_epipolar_px == 9.5            # the median of 0 … 18 and 100
     tracker.reset()
     assert tracker.rig_epipolar_px is None

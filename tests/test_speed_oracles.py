@@ -97,13 +97,13 @@ def test_epipolar_median_kept_sorted_is_numpys_median_of_the_samples():
             values = np.round(rng.gamma(2.0, 1.5, 1500), 2 if phase else 12)
             values[[10, 700]] = np.nan
             for k, v in enumerate(values.tolist()):
-                tracker._add_epipolar_sample(v)
-                expected = float(np.median(tracker._epipolar_samples))
-                got = tracker._epipolar_median()
+                tracker.gate.add_sample(v)
+                expected = float(np.median(tracker.gate.samples()))
+                got = tracker.gate.median()
                 assert got == expected or (math.isnan(got) and math.isnan(expected)), k
-            assert len(tracker._epipolar_sorted) == len(tracker._epipolar_samples) == 600
+            assert len(tracker.gate.samples()) == 600
             tracker.reset()
-            assert not tracker._epipolar_sorted and tracker._epipolar_nans == 0
+            assert not tracker.gate.samples() and not tracker.gate.learnt
     finally:
         tracker.close()
 

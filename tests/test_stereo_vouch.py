@@ -5,9 +5,9 @@ held-back candidates pass when they lie on each other's epipolar line and their 
 velocities triangulate to a moving 3D point; not when the point is at rest, when one camera's
 candidate is off the epipolar line, when its track moves another way, or when that camera
 already has a survivor of its own (it is then only a partner). And the followed 3D flight
-vouches for a pair of reports just off the epipolar gate (``StereoTracker._flight_vouched_pair``),
+vouches for a pair of reports just off the epipolar gate (``StereoPairing.flight_vouched_pair``),
 and the last step's pair of tracklets continues off it while its miss changes smoothly
-(``StereoTracker._continued_pair``).
+(``StereoPairing.continued_pair``).
 """
 
 import dataclasses
@@ -18,6 +18,7 @@ import pytest
 from badminton_gui.core.association import Tracklet
 from badminton_gui.core.detector import CameraDetector
 from badminton_gui.core.params import TrackerParams
+from badminton_gui.core.stereo.look import ImagePaths, stereo_look
 from badminton_gui.core.tracker import StereoTracker
 from badminton_gui.core.types import REJECT_MOTION, CameraResult, Candidate
 from badminton_gui.io.demo_scene import make_rig
@@ -74,6 +75,7 @@ def _scene(tracker, velocity_3d, right_offset=(0.0, 0.0), right_velocity_offset=
         res.append(CameraResult(None, (clutter, c), image_size=(1280, 720)))
         dets.append(det)
     tracker.left, tracker.right = dets
+    tracker.vouch.detectors = tracker.pairing.detectors = tracker.look.detectors = tuple(dets)
     return res
 
 
@@ -89,11 +91,12 @@ def _passed(res):
 
 
 def test_a_moving_consistent_pair_passes_in_both_cameras(tracker):
-    left, right = tracker._vouch(*_scene(tracker, (0.0, 3.0, 1.0)))
+    left, right = tracker.vouch.apply(*_scene(tracker, (0.0, 3.0, 1.0)))
     (pl,), (pr,) = _passed(left), _passed(right)
     assert pl.score == pr.score == 0.5
     # ... and the pair is then the stereo choice
-    det_l, det_r, point, _ = tracker._choose_pair(left, right)
+    pair = tracker.pairing.choose_pair(left, right)
+    det_l, det_r, point = pair.left, pair.right, pair.point
     assert det_l is pl and det_r is pr and point is not None
 
 
@@ -101,12 +104,12 @@ def test_at_rest_off_the_epipolar_line_or_moving_apart_nothing_passes(tracker):
     for kwargs in ({"velocity_3d": (0.0, 0.0, 0.0)},
                    {"velocity_3d": (0.0, 3.0, 1.0), "right_offset": (0.0, 8.0)},
                    {"velocity_3d": (0.0, 3.0, 1.0), "right_velocity_offset": (0.0, 600.0)}):
-        left, right = tracker._vouch(*_scene(tracker, **kwargs))
+        left, right = tracker.vouch.apply(*_scene(tracker, **kwargs))
         assert not _passed(left) and not _passed(right), kwargs
 
 
 def test_a_camera_with_its_own_survivor_is_only_a_partner(tracker):
-    left, right = tracker._vouch(*_scene(tracker, (0.0, 3.0, 1.0), right_rejected=None))
+    left, right = tracker.vouch.apply(*_scene(tracker, (0.0, 3.0, 1.0), right_rejected=None))
     assert len(_passed(left)) == 1
     assert tracker.left.vouched and not tracker.right.vouched
 
@@ -134,7 +137,7 @@ def test_off_by_the_flag():
     t = StereoTracker(make_rig("binocular", (1280, 720)), params, parallel=False)
     try:
         called = []
-        t._vouch = lambda a, b: called.append(1) or (a, b)
+        t.vouch.apply = lambda a, b: called.append(1) or (a, b)
         frame = np.zeros((720, 1280, 3), np.uint8)
         t.process(frame, frame, 0.0)
         assert not called
@@ -148,13 +151,13 @@ def test_first_sightings_pass_by_position_when_they_look_like_a_shuttle(tracker)
     epipolar line, and never when that is 1."""
     q = tracker.params.stereo.vouch_first_quality
     assert q < 1.0
-    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=q + 0.05))
+    left, right = tracker.vouch.apply(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=q + 0.05))
     assert len(_passed(left)) == len(_passed(right)) == 1
     for kwargs in ({"score": q - 0.05}, {"score": 0.9, "right_offset": (0.0, 8.0)}):
-        left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, **kwargs))
+        left, right = tracker.vouch.apply(*_scene(tracker, (0.0, 0.0, 0.0), first=True, **kwargs))
         assert not _passed(left) and not _passed(right), kwargs
     tracker.params = tracker.params.with_value("stereo.vouch_first_quality", 1.0)
-    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.99))
+    left, right = tracker.vouch.apply(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.99))
     assert not _passed(left) and not _passed(right)
 
 
@@ -169,16 +172,16 @@ def test_a_weak_lone_detection_is_looked_past_at_the_flights_projection(tracker)
     frame = np.full((720, 1280, 3), 40, np.uint8)
     cv2.circle(frame, (int(round(u)), int(round(v))), 3, (255, 255, 255), -1)
     far = _candidate(u + 60, v + 40, rejected=None, score=1.0)
-    assert tracker._weak_lone(far, paired=False)
-    assert not tracker._weak_lone(dataclasses.replace(far, score=5.0), paired=False)
-    assert not tracker._weak_lone(far, paired=True)
-    assert not tracker._guided(1, frame, far, guide)                    # not looked past
-    found = tracker._guided(1, frame, far, guide, override=True)
+    assert tracker.look.weak_lone(far, paired=False)
+    assert not tracker.look.weak_lone(dataclasses.replace(far, score=5.0), paired=False)
+    assert not tracker.look.weak_lone(far, paired=True)
+    assert not tracker.look.guided(1, frame, None, far, guide)                    # not looked past
+    found = tracker.look.guided(1, frame, None, far, guide, override=True)
     assert found is not None and abs(found.x - u) < 1.5 and abs(found.y - v) < 1.5
     near = _candidate(u + 1, v, rejected=None, score=1.0)
-    assert tracker._guided(1, frame, near, guide, override=True) is None  # already there
+    assert tracker.look.guided(1, frame, None, near, guide, override=True) is None  # already there
     tracker.params = tracker.params.with_value("stereo.guided_weak_score", 0.0)
-    assert not tracker._weak_lone(far, paired=False)
+    assert not tracker.look.weak_lone(far, paired=False)
 
 
 def test_a_weak_first_sighting_passes_only_with_a_sure_partner(tracker):
@@ -186,14 +189,14 @@ def test_a_weak_first_sighting_passes_only_with_a_sure_partner(tracker):
     ``vouch_first_quality`` but at least this passes beside one that scores enough; two weak
     ones do not, nor one below it, nor any with the setting at 1."""
     tracker.params = tracker.params.with_value("stereo.vouch_first_partner_quality", 0.1)
-    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.6, right_score=0.15))
+    left, right = tracker.vouch.apply(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.6, right_score=0.15))
     assert len(_passed(left)) == len(_passed(right)) == 1
     for score, right_score in ((0.15, 0.15), (0.6, 0.05)):
-        left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=score,
+        left, right = tracker.vouch.apply(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=score,
                                              right_score=right_score))
         assert not _passed(left) and not _passed(right), (score, right_score)
     tracker.params = tracker.params.with_value("stereo.vouch_first_partner_quality", 1.0)
-    left, right = tracker._vouch(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.6, right_score=0.15))
+    left, right = tracker.vouch.apply(*_scene(tracker, (0.0, 0.0, 0.0), first=True, score=0.6, right_score=0.15))
     assert not _passed(left) and not _passed(right)
 
 
@@ -203,13 +206,13 @@ def test_shuttle_like_blobs_pass_by_position_when_their_velocities_disagree(trac
     score at least this passes anyway, a less shuttle-like one does not, nor any off the line."""
     tracker.params = tracker.params.with_value("stereo.vouch_position_quality", 0.8)
     kwargs = {"velocity_3d": (0.0, 3.0, 1.0), "right_velocity_offset": (0.0, 600.0)}
-    left, right = tracker._vouch(*_scene(tracker, score=0.9, **kwargs))
+    left, right = tracker.vouch.apply(*_scene(tracker, score=0.9, **kwargs))
     assert len(_passed(left)) == len(_passed(right)) == 1
     for extra in ({"score": 0.9, "right_score": 0.5}, {"score": 0.9, "right_offset": (0.0, 8.0)}):
-        left, right = tracker._vouch(*_scene(tracker, **kwargs, **extra))
+        left, right = tracker.vouch.apply(*_scene(tracker, **kwargs, **extra))
         assert not _passed(left) and not _passed(right), extra
     tracker.params = tracker.params.with_value("stereo.vouch_position_quality", 1.0)
-    left, right = tracker._vouch(*_scene(tracker, score=0.99, **kwargs))
+    left, right = tracker.vouch.apply(*_scene(tracker, score=0.99, **kwargs))
     assert not _passed(left) and not _passed(right)
 
 
@@ -225,13 +228,14 @@ def test_a_camera_whose_survivor_has_no_partner_is_helped(tracker):
     clutter_r = dataclasses.replace(res_r.candidates[0], rejected_by=None, score=1.5)
     tracker.right.velocities[id(clutter_r)] = (0.0, 0.0)
     res_r = dataclasses.replace(res_r, candidates=(clutter_r, res_r.candidates[1]))
-    left, right = tracker._vouch(res_l, res_r)
+    left, right = tracker.vouch.apply(res_l, res_r)
     assert tracker.right.vouched == [res_r.candidates[1]] and not tracker.left.vouched
-    det_l, det_r, point, _ = tracker._choose_pair(left, right)
+    pair = tracker.pairing.choose_pair(left, right)
+    det_l, det_r, point = pair.left, pair.right, pair.point
     assert det_l is left_shuttle and det_r.x == res_r.candidates[1].x and point is not None
     tracker.right.vouched.clear()
     tracker.params = tracker.params.with_value("stereo.vouch_lone", False)
-    left, right = tracker._vouch(res_l, res_r)
+    left, right = tracker.vouch.apply(res_l, res_r)
     assert len(_passed(right)) == 1 and not tracker.right.vouched
     # the right survivor pairs with the left choice: not lone, nothing is let through
     tracker.params = tracker.params.with_value("stereo.vouch_lone", True)
@@ -239,7 +243,7 @@ def test_a_camera_whose_survivor_has_no_partner_is_helped(tracker):
     tracker.right.velocities[id(paired_r)] = tracker.right.velocities[id(res_r.candidates[1])]
     held = dataclasses.replace(res_r.candidates[1], x=res_r.candidates[1].x + 1.0)
     tracker.right.velocities[id(held)] = tracker.right.velocities[id(res_r.candidates[1])]
-    left, right = tracker._vouch(res_l, dataclasses.replace(res_r, candidates=(paired_r, held)))
+    left, right = tracker.vouch.apply(res_l, dataclasses.replace(res_r, candidates=(paired_r, held)))
     assert not tracker.right.vouched
 
 
@@ -261,15 +265,15 @@ def test_a_lone_detection_at_the_border_gives_way_when_the_flight_has_left_the_i
     assert -2.5 < u < -1.5 and 0 <= v < 720
     tracker.params = tracker.params.with_value("stereo.exit_margin", 3.0)
     at_border = _candidate(0.8, v - 2.0, rejected=None, score=5.0)
-    assert tracker._near_border(at_border, frame)
-    assert tracker._gone_out(0, at_border, frame, out)
+    assert tracker.look.near_border(at_border, frame)
+    assert tracker.look.gone_out(0, at_border, frame, out)
     assert rig.project(0, inside[None])[0][0] > 0
-    assert not tracker._gone_out(0, at_border, frame, inside)
+    assert not tracker.look.gone_out(0, at_border, frame, inside)
     far = dataclasses.replace(at_border, y=v + 80.0)
-    assert not tracker._gone_out(0, far, frame, out)
-    assert not tracker._near_border(dataclasses.replace(at_border, x=10.0), frame)
+    assert not tracker.look.gone_out(0, far, frame, out)
+    assert not tracker.look.near_border(dataclasses.replace(at_border, x=10.0), frame)
     tracker.params = tracker.params.with_value("stereo.exit_margin", 0.0)
-    assert not tracker._near_border(dataclasses.replace(at_border, x=0.0), frame)
+    assert not tracker.look.near_border(dataclasses.replace(at_border, x=0.0), frame)
 
 
 def test_the_stereo_look_finds_a_spot_on_the_path_and_the_epipolar_line(tracker):
@@ -291,10 +295,12 @@ def test_the_stereo_look_finds_a_spot_on_the_path_and_the_epipolar_line(tracker)
         return f
 
     def look(spot, reports, t=2 * dt):
-        tracker._reports[1].clear()
-        tracker._reports[1].extend(reports)
-        tracker._previous = (None, np.full((720, 1280, 3), 40, np.uint8))
-        return tracker._stereo_look(1, frame_with(*spot), other, t)
+        paths = ImagePaths()
+        for report in reports:
+            paths.note(1, *report)
+        previous = np.full((720, 1280, 3), 40, np.uint8)
+        return stereo_look(tracker.rig, tracker.params, tracker.gate, paths, 1, frame_with(*spot), previous,
+                           other, t)
 
     # the right camera's path: 6 px a frame to the right, last reported one frame ago
     path = [(0.0, ur - 12.0, vr, None), (dt, ur - 6.0, vr, None)]
@@ -315,25 +321,26 @@ def test_the_image_path_and_the_flight_say_when_the_shuttle_is_out_of_view(track
     the flight projects outside the image."""
     frame = np.zeros((720, 1280, 3), np.uint8)
     dt = 1.0 / 120.0
-    tracker._reports[0].clear()
-    tracker._reports[0].extend([(0.0, 1.3, 132.0, (-177.0, 274.0)), (dt, 0.8, 133.5, None)])
+    tracker.paths = ImagePaths()
+    tracker.paths.note(0, 0.0, 1.3, 132.0, (-177.0, 274.0))
+    tracker.paths.note(0, dt, 0.8, 133.5, None)
     # the report of this very frame is not used: the path from the one before leaves the image
-    assert tracker._path_leaves(0, frame, dt)
-    tracker._reports[0].clear()
-    tracker._reports[0].append((0.0, 1.3, 132.0, (177.0, 274.0)))
-    assert not tracker._path_leaves(0, frame, dt)          # moving into the image
-    assert not tracker._path_leaves(0, frame, 0.1)         # stale report: no path
+    assert tracker.paths.leaves(0, frame, dt)
+    tracker.paths = ImagePaths()
+    tracker.paths.note(0, 0.0, 1.3, 132.0, (177.0, 274.0))
+    assert not tracker.paths.leaves(0, frame, dt)          # moving into the image
+    assert not tracker.paths.leaves(0, frame, 0.1)         # stale report: no path
     rig = tracker.rig
     p = np.array([0.3, -2.0, 1.8])
-    assert not tracker._out_of_view(0, frame, p)
+    assert not tracker.look.out_of_view(0, frame, p)
     K = rig.M1
     cam = np.array([(-50.0 - K[0, 2]) * 4.0 / K[0, 0], (300.0 - K[1, 2]) * 4.0 / K[1, 1], 4.0])
-    assert tracker._out_of_view(0, frame, np.asarray(rig.to_output(cam[None]))[0])
+    assert tracker.look.out_of_view(0, frame, np.asarray(rig.to_output(cam[None]))[0])
 
 
 def _measured_rig_error(tracker, median_px):
     for _ in range(40):
-        tracker._add_epipolar_sample(median_px)
+        tracker.gate.add_sample(median_px)
 
 
 def test_the_gate_widens_to_the_rigs_error_only_for_pairs_moving_in_both_images(tracker):
@@ -343,16 +350,16 @@ def test_the_gate_widens_to_the_rigs_error_only_for_pairs_moving_in_both_images(
     within the fixed gate."""
     fast = {"velocity_3d": (0.0, 6.0, 2.0), "right_offset": (0.0, 8.0)}     # ≈ 390 px/s
     slow = {"velocity_3d": (0.0, 3.0, 1.0), "right_offset": (0.0, 8.0)}     # ≈ 195 px/s
-    left, right = tracker._vouch(*_scene(tracker, **fast))
+    left, right = tracker.vouch.apply(*_scene(tracker, **fast))
     assert not _passed(left) and not _passed(right)           # nothing measured yet: fixed gate
     _measured_rig_error(tracker, 10.0)
-    left, right = tracker._vouch(*_scene(tracker, **fast))
+    left, right = tracker.vouch.apply(*_scene(tracker, **fast))
     assert len(_passed(left)) == 1 and len(_passed(right)) == 1
-    left, right = tracker._vouch(*_scene(tracker, **slow))
+    left, right = tracker.vouch.apply(*_scene(tracker, **slow))
     assert not _passed(left) and not _passed(right)
-    left, right = tracker._vouch(*_scene(tracker, (0.0, 3.0, 1.0)))  # on the line: fixed gate
+    left, right = tracker.vouch.apply(*_scene(tracker, (0.0, 3.0, 1.0)))  # on the line: fixed gate
     assert len(_passed(left)) == 1 and len(_passed(right)) == 1
-    left, right = tracker._vouch(*_scene(tracker, first=True, score=0.9, **fast))
+    left, right = tracker.vouch.apply(*_scene(tracker, first=True, score=0.9, **fast))
     assert not _passed(left) and not _passed(right)           # first sightings: by position
 
 
@@ -361,7 +368,7 @@ def test_the_widened_gate_is_off_at_factor_zero():
     p = dataclasses.replace(p, stereo=dataclasses.replace(p.stereo, vouch_rig_factor=0.0))
     t = StereoTracker(make_rig("binocular", (1280, 720)), p, parallel=False)
     _measured_rig_error(t, 10.0)
-    left, right = t._vouch(*_scene(t, (0.0, 6.0, 2.0), right_offset=(0.0, 8.0)))
+    left, right = t.vouch.apply(*_scene(t, (0.0, 6.0, 2.0), right_offset=(0.0, 8.0)))
     assert not _passed(left) and not _passed(right)
     t.close()
 
@@ -393,14 +400,17 @@ def test_a_pair_just_off_the_epipolar_gate_is_taken_where_the_flight_puts_the_sh
         near_guide = (point + 0.03, np.eye(3) * 0.02 ** 2)
         far_guide = (point + np.array([0.0, 0.0, 0.5]), np.eye(3) * 0.02 ** 2)
         left, right = _pair_off_its_line(rig, point, 1.2 * tol)
-        assert tracker._pair_point(left, right) == (None, None)         # off the gate
-        found, err = tracker._flight_vouched_pair(left, right, near_guide)
+        assert tracker.pairing.pair_point(left, right) == (None, None)         # off the gate
+        found, err = tracker.pairing.flight_vouched_pair(left, right, near_guide)
         assert found is not None and tol < err <= 1.5 * tol
         assert np.linalg.norm(rig.to_output(found)[0] - point) < 0.1
-        assert tracker._flight_vouched_pair(left, right, far_guide) == (None, None)
-        assert tracker._flight_vouched_pair(left, right, None) == (None, None)
+        assert tracker.pairing.flight_vouched_pair(left, right, far_guide) == (None, None)
+        assert tracker.pairing.flight_vouched_pair(left, right, None) == (None, None)
+        tracker.params = tracker.params.with_value("stereo.flight_vouch", False)    # the rule off
+        assert tracker.pairing.flight_vouched_pair(left, right, near_guide) == (None, None)
+        tracker.params = tracker.params.with_value("stereo.flight_vouch", True)
         left, right = _pair_off_its_line(rig, point, 2.0 * tol)
-        assert tracker._flight_vouched_pair(left, right, near_guide) == (None, None)
+        assert tracker.pairing.flight_vouched_pair(left, right, near_guide) == (None, None)
     finally:
         tracker.close()
 
@@ -417,20 +427,23 @@ def test_the_last_pair_of_tracklets_continues_off_the_gate_while_its_miss_change
         point = np.array([0.5, 2.0, 2.5])
         left, right = (dataclasses.replace(c, tracklet=k) for c, k in zip(_pair_off_its_line(rig, point, 1.6 * tol), (3, 7)))
         err = float(rig.epipolar_errors([[left.x, left.y]], [[right.x, right.y]])[0, 0])
-        assert err > 1.5 * tol and tracker._pair_point(left, right) == (None, None)
-        assert tracker._continued_pair(left, right, 1.0) == (None, None)          # no last pair
-        tracker._last_pair = (0.99, 3, 7, err - 4.0)                               # 4 px less a step ago
-        found, got = tracker._continued_pair(left, right, 1.0)
+        assert err > 1.5 * tol and tracker.pairing.pair_point(left, right) == (None, None)
+        assert tracker.pairing.continued_pair(left, right, 1.0) == (None, None)          # no last pair
+        tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=7), err - 4.0)  # 4 px less a step ago
+        found, got = tracker.pairing.continued_pair(left, right, 1.0)
         assert found is not None and got == pytest.approx(err)
+        tracker.params = tracker.params.with_value("stereo.pair_continuity", False)  # the rule off
+        assert tracker.pairing.continued_pair(left, right, 1.0) == (None, None)
+        tracker.params = tracker.params.with_value("stereo.pair_continuity", True)
         assert np.linalg.norm(rig.to_output(found)[0] - point) < 0.2           # its triangulation
-        assert tracker._continued_pair(left, right, 1.05) == (None, None)         # that pair too old
-        tracker._last_pair = (0.99, 3, 8, err - 4.0)                               # another right tracklet
-        assert tracker._continued_pair(left, right, 1.0) == (None, None)
-        tracker._last_pair = (0.99, 3, 7, err - 12.0)                              # a jump, not a drift
-        assert tracker._continued_pair(left, right, 1.0) == (None, None)
+        assert tracker.pairing.continued_pair(left, right, 1.05) == (None, None)         # that pair too old
+        tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=8), err - 4.0)  # another right tracklet
+        assert tracker.pairing.continued_pair(left, right, 1.0) == (None, None)
+        tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=7), err - 12.0)  # a jump, not a drift
+        assert tracker.pairing.continued_pair(left, right, 1.0) == (None, None)
         far_left, far_right = (dataclasses.replace(c, tracklet=k) for c, k in zip(_pair_off_its_line(rig, point, 2.2 * tol), (3, 7)))
         far_err = float(rig.epipolar_errors([[far_left.x, far_left.y]], [[far_right.x, far_right.y]])[0, 0])
-        tracker._last_pair = (0.99, 3, 7, far_err - 2.0)
-        assert tracker._continued_pair(far_left, far_right, 1.0) == (None, None)  # beyond 2 × the gate
+        tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=7), far_err - 2.0)
+        assert tracker.pairing.continued_pair(far_left, far_right, 1.0) == (None, None)  # beyond 2 × the gate
     finally:
         tracker.close()

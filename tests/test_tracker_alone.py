@@ -13,7 +13,9 @@ import dataclasses
 import pytest
 
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.core.tracker import FLOWN_MEMORY, StereoTracker
+from badminton_gui.core.flight.camera_rules import FLOWN_MEMORY
+from badminton_gui.core.flight.phase import PhaseState
+from badminton_gui.core.tracker import StereoTracker
 from badminton_gui.core.types import REJECT_STEREO, CameraResult, Candidate
 from badminton_gui.io.demo_scene import make_rig
 
@@ -38,7 +40,7 @@ def _run(tracker: StereoTracker, frames: str) -> str:
     out = []
     for f in frames:
         left, right = _result(f in "LB3"), _result(f in "RB3P")
-        left, right = tracker._limit_alone(left, right, f in "3P")
+        left, right = tracker.rules.limit_alone([left, right], f in "3P")
         shown = (left.detection is not None, right.detection is not None)
         out.append({(True, True): "B", (True, False): "L", (False, True): "R", (False, False): "."}[shown])
         for res in (left, right):
@@ -84,17 +86,17 @@ def _hold(tracker, xs, last_z=0.0, t0=1.0, dt=0.01, paired=True, flown_at=0.5):
     above the floor (None: never). Returns the x reported per frame (None: nothing)."""
     out = []
     if flown_at is not None:
-        tracker._note_flown(0, 4, flown_at)
+        tracker.rules.note_flown(0, 4, flown_at)
     for k, x in enumerate(xs):
         t = t0 + k * dt
         if k == 0:
-            tracker._last_point = (t, last_z)
+            tracker.phase = PhaseState(last_point=(t, last_z))
             c = _cand(x)
-            res, det = tracker._hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, t)
-            tracker._held[0][4] = paired        # that report had a 3D point (set by process())
+            res, det = tracker.rules.hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, t, tracker.phase)
+            tracker.rules.cams[0].anchored = paired        # that report had a 3D point (set by process())
         else:
             c = _cand(x, "motion")
-            res, det = tracker._hold_landed(0, CameraResult(None, (c,), image_size=(1280, 720)), None, t)
+            res, det = tracker.rules.hold_landed(0, CameraResult(None, (c,), image_size=(1280, 720)), None, t, tracker.phase)
             if det is not None:
                 assert det.rejected_by is None and det in res.candidates
         out.append(None if det is None else det.x)
@@ -114,13 +116,13 @@ def test_no_hold_above_the_floor_when_the_flight_is_old_or_the_candidate_moves_o
     # a track reported without a 3D point (clutter after the rally) is not held
     assert _hold(_tracker(landed_frames=10), xs, paired=False) == [100, None, None]
     t = _tracker(landed_frames=10)
-    t._note_flown(0, 4, -5.5)
-    t._last_point = (-5.0, 0.0)
+    t.rules.note_flown(0, 4, -5.5)
+    t.phase = PhaseState(last_point=(-5.0, 0.0))
     c = _cand(100)
-    t._hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, 0.0)
-    t._held[0][4] = True
+    t.rules.hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, 0.0, t.phase)
+    t.rules.cams[0].anchored = True
     m = _cand(101, "motion")
-    assert t._hold_landed(0, CameraResult(None, (m,), image_size=(1280, 720)), None, 0.01)[1] is None
+    assert t.rules.hold_landed(0, CameraResult(None, (m,), image_size=(1280, 720)), None, 0.01, t.phase)[1] is None
     t.close()
     assert _hold(_tracker(landed_frames=10), [100, 101, 120, 121]) == [100, 101, None, None]
 
@@ -135,7 +137,7 @@ def test_only_a_track_seen_in_the_air_is_held():
     assert _hold(_tracker(landed_frames=10), xs, flown_at=1.0 - FLOWN_MEMORY - 0.1) == [100, None, None]
     # another tracklet seen in the air does not vouch for this one
     t = _tracker(landed_frames=10)
-    t._note_flown(0, 5, 0.9)
+    t.rules.note_flown(0, 5, 0.9)
     assert _hold(t, xs, flown_at=None) == [100, None, None]
 
 
@@ -144,11 +146,11 @@ def _landed(tracker, flown=(4,), flown_at=0.5):
     """Tracklet 4 reported at x 100 at t 1.0 with a 3D point just after a low flight point, the
     tracklets in ``flown`` seen in the air at ``flown_at``: a landed hold can start next frame."""
     for ident in flown:
-        tracker._note_flown(0, ident, flown_at if ident == 4 else 0.9)
-    tracker._last_point = (1.0, 0.0)
+        tracker.rules.note_flown(0, ident, flown_at if ident == 4 else 0.9)
+    tracker.phase = PhaseState(last_point=(1.0, 0.0))
     shuttle = _cand(100)
-    tracker._hold_landed(0, CameraResult(shuttle, (shuttle,), image_size=(1280, 720)), shuttle, 1.0)
-    tracker._held[0][4] = True
+    tracker.rules.hold_landed(0, CameraResult(shuttle, (shuttle,), image_size=(1280, 720)), shuttle, 1.0, tracker.phase)
+    tracker.rules.cams[0].anchored = True
 
 
 def test_a_shoe_walking_past_does_not_take_the_report_from_the_landed_shuttle():
@@ -162,8 +164,8 @@ def test_a_shoe_walking_past_does_not_take_the_report_from_the_landed_shuttle():
         for k in range(1, frames + 1):
             lying = _cand(100 + 0.5 * k, "motion")
             shoe = dataclasses.replace(_cand(400 + 3 * k), tracklet=9)
-            res, det = tracker._hold_landed(0, CameraResult(shoe, (lying, shoe), image_size=(1280, 720)),
-                                            shoe, 1.0 + 0.01 * k, paired)
+            res, det = tracker.rules.hold_landed(0, CameraResult(shoe, (lying, shoe), image_size=(1280, 720)),
+                                                 shoe, 1.0 + 0.01 * k, tracker.phase, paired)
             out.append(None if det is None else (det.tracklet, det.x))
         tracker.close()
         return out
@@ -180,17 +182,17 @@ def test_the_other_camera_holding_keeps_this_cameras_anchor():
     when its report stops. Without a hold on the other side, no 3D point drops the anchor."""
     t = _tracker(landed_frames=10)
     c = _cand(100)
-    t._note_anchor(1, c, True)
-    t._held_now = [True, False]
-    t._note_anchor(1, c, False)
-    assert t._held[1][4]
-    t._held_now = [False, False]
-    t._note_anchor(1, c, False)
-    assert not t._held[1][4]
+    t.rules.note_anchor(1, c, True)
+    t.rules.cams[0].holding = True
+    t.rules.note_anchor(1, c, False)
+    assert t.rules.cams[1].anchored
+    t.rules.cams[0].holding = False
+    t.rules.note_anchor(1, c, False)
+    assert not t.rules.cams[1].anchored
     # a camera that was never anchored is not anchored by the other camera's hold
-    t._held_now = [True, False]
-    t._note_anchor(1, c, False)
-    assert not t._held[1][4]
+    t.rules.cams[0].holding = True
+    t.rules.note_anchor(1, c, False)
+    assert not t.rules.cams[1].anchored
     t.close()
 
 
@@ -200,14 +202,14 @@ def test_the_epipolar_gate_is_the_cold_one_until_the_rigs_error_is_learnt():
     """From a fresh start the pair gate is ``cold_epipolar_error`` (a rough rig misses by tens of
     px); after EPIPOLAR_LEARNT_SAMPLES sure pairs it is the learnt one, even when narrower; 0
     keeps the fixed tolerance; without learning there is no cold gate either."""
-    from badminton_gui.core.tracker import EPIPOLAR_LEARNT_SAMPLES
+    from badminton_gui.core.stereo.epipolar import EPIPOLAR_LEARNT_SAMPLES
 
     t = _tracker(cold_epipolar_error=30.0, max_epipolar_error=6.0, adaptive_factor=2.5)
     assert t.epipolar_tolerance() == 30.0
     for _ in range(EPIPOLAR_LEARNT_SAMPLES - 1):
-        t._add_epipolar_sample(4.0)
+        t.gate.add_sample(4.0)
     assert t.epipolar_tolerance() == 30.0
-    t._add_epipolar_sample(4.0)
+    t.gate.add_sample(4.0)
     assert t.epipolar_tolerance() == 10.0          # 2.5 × the median 4 px
     t.reset()
     assert t.epipolar_tolerance() == 30.0
@@ -229,9 +231,9 @@ def test_the_shoes_pair_is_no_3d_point_once_the_hold_takes_the_report_back():
         shoe = dataclasses.replace(_cand(400), tracklet=9)
         other = dataclasses.replace(_cand(380), tracklet=2)
         below = tracker.rig.to_left([(0.0, 0.0, -1.7)])[0]
-        left, right, point, epi = tracker._hold_both(
+        left, right, point, epi = tracker.rules.hold_both(
             (CameraResult(shoe, (lying, shoe), image_size=(1280, 720)), shoe),
-            (CameraResult(other, (other,), image_size=(1280, 720)), other), below, 2.0, 1.01)
+            (CameraResult(other, (other,), image_size=(1280, 720)), other), below, 2.0, 1.01, tracker.phase)
         tracker.close()
         return left[1], right[1], point, epi
 
@@ -248,30 +250,30 @@ def test_the_hold_takes_an_untracked_blob_at_its_spot_but_not_another_tracks():
     there is not (rally_11-48-00 right 641, coarse preset)."""
     for tracklet, expected in ((-1, 101.0), (9, None)):
         t = _tracker(landed_frames=10)
-        t._note_flown(0, 4, 0.5)
-        t._last_point = (1.0, 0.0)
+        t.rules.note_flown(0, 4, 0.5)
+        t.phase = PhaseState(last_point=(1.0, 0.0))
         c = _cand(100)
-        t._hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, 1.0)
-        t._held[0][4] = True
+        t.rules.hold_landed(0, CameraResult(c, (c,), image_size=(1280, 720)), c, 1.0, t.phase)
+        t.rules.cams[0].anchored = True
         other = dataclasses.replace(_cand(101, "score"), tracklet=tracklet)
-        res, det = t._hold_landed(0, CameraResult(None, (other,), image_size=(1280, 720)), None, 1.01)
+        res, det = t.rules.hold_landed(0, CameraResult(None, (other,), image_size=(1280, 720)), None, 1.01, t.phase)
         assert (None if det is None else det.x) == expected
         t.close()
 
 
 def test_a_reported_landed_shuttle_lying_still_is_protected_in_the_mask():
-    """``_lying_landed``: the report of a track that carried the flight down, barely moving,
+    """``CameraRules.lying_landed``: the report of a track that carried the flight down, barely moving,
     just after the flight's last point lay near the floor, keeps its pixels in the next mask
     even while the association reports it itself (no hold); not a moving report, a track never
     seen in the air, or a flight still above the floor."""
     def lying(speed=0.0, flown=True, z=0.0, tracklet=4, landed_frames=10):
         t = _tracker(landed_frames=landed_frames)
         if flown:
-            t._note_flown(0, 4, 0.5)
-        t._last_point = (1.0, z)
+            t.rules.note_flown(0, 4, 0.5)
+        t.phase = PhaseState(last_point=(1.0, z))
         c = dataclasses.replace(_cand(100), tracklet=tracklet)
-        t._reports[0].append((1.01, c.x, c.y, (speed, 0.0)))
-        out = t._lying_landed(0, c, 1.01, 1280)
+        t.paths.note(0, 1.01, c.x, c.y, (speed, 0.0))
+        out = t.rules.lying_landed(0, c, 1.01, 1280, t.phase, t.paths)
         t.close()
         return out
     assert lying()

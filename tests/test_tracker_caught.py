@@ -2,9 +2,9 @@
 neither camera reports it (``stereo.caught_frames``, ``caught_radius``, ``caught_release_speed``,
 ``caught_hold``).
 
-The rule's decision (``StereoTracker._note_caught``) is driven here with the flight's verdict on
-each frame's point set by hand; the withholding (``_withhold_caught``) with one-candidate camera
-results. What must not count as a catch: an apex (the flight takes its points), a stop on the
+The rule's decision (the phase's pure ``transition``, flight/phase.py) is driven here with the
+flight's verdict on each frame's point set by hand; the withholding
+(``CameraRules.withhold_caught``) with one-candidate camera results. What must not count as a catch: an apex (the flight takes its points), a stop on the
 floor (the landed hold's case), a stop in the net, a shuttle held still with no flight before it
 (before a serve), a slow flight moving on. On the real rally where it was found
 (rally_11-47-02, a shuttle caught by hand at 0.9 m) the caught shuttle stops being reported.
@@ -15,12 +15,13 @@ from __future__ import annotations
 import dataclasses
 import math
 from contextlib import closing
-from types import SimpleNamespace
 
 import pytest
 
+from badminton_gui.core.flight.camera_rules import CameraRules
+from badminton_gui.core.flight.phase import PhaseObservation, PhaseState, transition, withheld
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.core.tracker import CAUGHT_REASON, StereoTracker
+from badminton_gui.core.flight.phase import CAUGHT_REASON
 from badminton_gui.core.types import REJECT_STEREO, CameraResult, Candidate
 from badminton_gui.io.demo_scene import make_rig
 from .conftest_data import NYCU_DIR, tracked_rally
@@ -28,23 +29,32 @@ from .conftest_data import NYCU_DIR, tracked_rally
 DT = 1.0 / 120.0
 
 
-def _tracker(**stereo) -> StereoTracker:
+class _Shuttle:
+    """The shuttle's phase and the cameras' readout rules, advanced frame by frame."""
+
+    def __init__(self, params: TrackerParams) -> None:
+        self.params = params
+        rig = make_rig("binocular", (1280, 720))
+        assert rig.has_court_pose
+        self.rules = CameraRules(rig, params)
+        self.phase = PhaseState()
+
+    def step(self, t: float, point=None, rejected: bool = False, speed: float | None = None) -> bool:
+        """One pair step; whether the shuttle is caught after it."""
+        self.phase = transition(self.phase, PhaseObservation(t, point, point is not None and not rejected, speed),
+                                self.params)
+        return withheld(self.phase, t, self.params)
+
+
+def _tracker(**stereo) -> _Shuttle:
     p = TrackerParams()
-    p = dataclasses.replace(p, stereo=dataclasses.replace(p.stereo, **stereo))
-    tracker = StereoTracker(make_rig("binocular", (1280, 720)), p, parallel=False)
-    assert tracker.rig.has_court_pose
-    tracker._trajectory = SimpleNamespace(point_rejected=False)
-    return tracker
+    return _Shuttle(dataclasses.replace(p, stereo=dataclasses.replace(p.stereo, **stereo)))
 
 
-def _feed(tracker: StereoTracker, frames) -> list[bool]:
+def _feed(shuttle: _Shuttle, frames) -> list[bool]:
     """``frames``: per frame (point or None, the flight refused it, the flight's speed or None).
     Returns per frame whether the shuttle is caught after it."""
-    out = []
-    for i, (point, rejected, speed) in enumerate(frames):
-        tracker._trajectory.point_rejected = rejected
-        out.append(tracker._note_caught(i * DT, point, speed))
-    return out
+    return [shuttle.step(i * DT, point, rejected, speed) for i, (point, rejected, speed) in enumerate(frames)]
 
 
 def _flight(n: int, z: float = 0.93, y: float = -2.5, speed: float = 5.0):
@@ -103,8 +113,10 @@ def test_the_caught_shuttle_is_withheld_in_both_cameras_while_it_stays_near_the_
     t = _tracker(caught_frames=10)
     assert _feed(t, _flight(20) + _stop(10))[-1]
     shown = []
-    for xl, xr in [(600, 800), (605, 806), (612, 815), (700, 822), (618, 900)]:
-        left, right = t._withhold_caught(_camera(xl), _camera(xr))
+    for k, (xl, xr) in enumerate([(600, 800), (605, 806), (612, 815), (700, 822), (618, 900)]):
+        if k:
+            assert t.step((30 + k) * DT)            # the next frames: no 3D point, still caught
+        left, right = t.rules.withhold_caught([_camera(xl), _camera(xr)], t.phase)
         for res in (left, right):
             if res.detection is None:
                 assert res.candidates[0].rejected_by == REJECT_STEREO

@@ -62,17 +62,17 @@ def test_cork_correction_variance_follows_the_3d_step():
     last = np.array([0.5, 0.2, 5.0])
     step = np.array([0.0, 0.0, -0.2])             # 24 m/s at 120 fps, towards the camera
     blob = last + step
-    tracker._last_blob = (0.0, last)
+    tracker.cork.note_blob(0.0, last)
     along = offset * step / np.linalg.norm(step)
     across = offset * np.array([1.0, 0.0, 0.0])
-    assert tracker._head_variance(1 / 120, blob, along) == pytest.approx(0.0, abs=1e-12)
-    assert tracker._head_variance(1 / 120, blob, across) == pytest.approx(2 * offset ** 2)
-    assert tracker._head_variance(1 / 120, blob, np.zeros(3)) == pytest.approx(offset ** 2)
+    assert tracker.cork.variance(1 / 120, blob, along) == pytest.approx(0.0, abs=1e-12)
+    assert tracker.cork.variance(1 / 120, blob, across) == pytest.approx(2 * offset ** 2)
+    assert tracker.cork.variance(1 / 120, blob, np.zeros(3)) == pytest.approx(offset ** 2)
     # Too old a previous point, or too short a step: no direction to check against.
-    assert tracker._head_variance(0.5, blob, across) == 0.0
-    assert tracker._head_variance(0.5, blob, np.zeros(3)) == pytest.approx(offset ** 2)
-    tracker._last_blob = (0.0, blob - 0.01 * step)
-    assert tracker._head_variance(1 / 120, blob, across) == 0.0
+    assert tracker.cork.variance(0.5, blob, across) == 0.0
+    assert tracker.cork.variance(0.5, blob, np.zeros(3)) == pytest.approx(offset ** 2)
+    tracker.cork.note_blob(0.0, blob - 0.01 * step)
+    assert tracker.cork.variance(1 / 120, blob, across) == 0.0
     tracker.close()
 
 

@@ -35,6 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                          "('court' or 'left-camera'), rig_epipolar_px (null: not measured), rig_note "
                          "('' when the rig held), score (null without labels, else left/right with "
                          "tp, tn, fp1, fp2, fn and accuracy, precision, recall, f1 as fractions)")
+    p.add_argument("--trace", action="store_true", help="a last CSV column, Trace, naming the tracker's "
+                   "rules that fired on each row's step")
     p.set_defaults(func=run)
 
 
@@ -50,7 +52,8 @@ def run(args: argparse.Namespace) -> int:
     progress = Progress(total, "track")
     try:
         summary = track_to_csv(source, rig, params, args.output, max_frames=args.max_frames, link=link,
-                               progress=None if args.quiet else progress.update, truth=truth)
+                               progress=None if args.quiet else progress.update, truth=truth,
+                               trace=args.trace)
     except TrackFileError as exc:
         raise UserError(str(exc)) from None
     finally:

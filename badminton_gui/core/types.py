@@ -184,6 +184,9 @@ class TrackResult:
     # no 3D point (one camera hidden or coasting): the readout shows it marked as predicted
     # rather than a dash in the middle of a flight. None whenever ``distance`` is set.
     predicted_distance: float | None = None
+    # The rules that fired on this step, in order (``StereoTracker.trace``; empty unless enabled,
+    # so a result stays cheap), e.g. ("guided_search:left", "landed_hold:right", "phase:landed").
+    trace: tuple[str, ...] = ()
 
     @property
     def has_point(self) -> bool:

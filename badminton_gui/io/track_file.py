@@ -101,7 +101,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                  max_frames: int | None = None, link=None,
                  progress: Callable[[int], None] | None = None,
                  should_stop: Callable[[], bool] | None = None, truth=None,
-                 classifiers: tuple | None = None) -> TrackFileSummary:
+                 classifiers: tuple | None = None, trace: bool = False) -> TrackFileSummary:
     """Track every pair ``source.read()`` gives (a ``FrameSource``: a ``VideoPair``, possibly
     behind a ``PrefetchingReader``) and write one row per step to ``output``: per left frame, and
     per right frame no left frame was paired with (free-running cameras, ``VideoPair``).
@@ -113,7 +113,9 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     ``truth`` (io/truth.py ``LabelTruth``; default: the source's ``frame_truth``, as the GUI's
     sources carry): the written rows are scored against it (GUIDE §6) in the summary.
     ``classifiers``: (left, right) candidate classifiers used instead of the preset's (one
-    adapted to each camera's recording, or a leave-one-rally-out study's).
+    adapted to each camera's recording, or a leave-one-rally-out study's). ``trace``: a last
+    column, ``Trace``, names the tracker's rules that fired on each row's step (space-separated,
+    ``TrackResult.trace``; the look-ahead's re-decisions are not in it).
     """
     if truth is None:
         truth = getattr(source, "frame_truth", None)
@@ -132,6 +134,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
 
     out_path = Path(output)
     tracker = StereoTracker(rig, params)
+    tracker.trace = trace
     if classifiers is not None:
         tracker.left.use_classifier(classifiers[0])
         tracker.right.use_classifier(classifiers[1])
@@ -150,14 +153,15 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
         if reason:
             withheld[reason] = withheld.get(reason, 0) + 1
         hits3d += decided.point is not None and not reason
-        return track_row(decided, reason)
+        return track_row(decided, reason) + ([" ".join(decided.trace)] if trace else [])
 
     start = time.perf_counter()
     try:
         out_path.parent.mkdir(parents=True, exist_ok=True)
         with out_path.open("w", newline="") as fh:
             writer = csv.writer(fh)
-            writer.writerow(TRACK_COLUMNS)
+            writer.writerow(TRACK_COLUMNS + (("Trace",) if trace else ()))
+
             while max_frames is None or n < max_frames:
                 if should_stop is not None and should_stop():
                     cancelled = True
