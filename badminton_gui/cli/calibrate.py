@@ -4,7 +4,7 @@ Why this file exists: calibrating without a screen (or re-running a calibration 
 images) must give the same rig and the same figures as the wizard; both call the core
 (``core.calib_folders`` + ``core.calibration.solve_stereo``). Images are paired by sorted file
 name (one folder holding both cameras' images is split by "left"/"right" in the names). The
-rig file is written with ``StereoRig.save`` (GUIDE §8).
+rig file is written with ``StereoRig.save``.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""`badminton-track eval PRED.csv LABELS.csv`: the five-outcome protocol of GUIDE §6."""
+"""`badminton-track eval PRED.csv LABELS.csv`: TrackNet's five-outcome protocol."""
 
 from __future__ import annotations
 

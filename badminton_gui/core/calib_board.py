@@ -2,7 +2,7 @@
 
 Why this file exists: the calibration wizard, the ``calibrate`` CLI and the tests all detect
 the same boards the same way, and every view that is refused is refused with a sentence the
-operator can act on ("board moving: hold it still"), never silently (GUIDE §3.6). Only numpy
+operator can act on ("board moving: hold it still"), never silently. Only numpy
 and cv2 here (core layer).
 
 Detection is coarse-to-fine so that live use stays fast on large frames: the board is searched

@@ -2,7 +2,7 @@
 
 Why this file exists: the wizard must tell the operator, honestly, how much of the field of
 view and of the pose space the *captured* views cover, and whether the view in front of the
-camera now would add anything. That logic is core (GUIDE §3.6) and is unit-tested; the wizard
+camera now would add anything. That logic is core and is unit-tested; the wizard
 only draws the bars.
 
 Each view is summarised by four numbers in 0..1 computed from the board's four outer corners,

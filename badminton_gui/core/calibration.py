@@ -1,7 +1,7 @@
 """Stereo calibration: from board views to a rig file, with honest figures and reasons.
 
-Why this file exists: the calibration wizard and the ``calibrate`` CLI run exactly this code
-(GUIDE §2, §3.6); the wizard only renders it. It holds
+Why this file exists: the calibration wizard and the ``calibrate`` CLI run exactly this code;
+the wizard only renders it. It holds
 
 * :class:`StereoView` (one board seen by both cameras) and :func:`pair_detections`,
 * :class:`CaptureGate`, the live capture decision (quality reasons + novelty + coverage),

@@ -1,4 +1,5 @@
-"""Badminton court geometry in the court frame of GUIDE §8.
+"""Badminton court geometry in the court frame: metres, origin at the court centre on the floor,
+X across the court, Y along it (the net at Y = 0), Z up.
 
 Why this file exists: the demo court draws these lines, the GUI plots them, the court-pose step
 of calibration asks the operator to click their intersections, and the in/out call tests

@@ -1,4 +1,4 @@
-"""The five-outcome evaluation protocol of TrackNet (GUIDE §6), so figures compare with the literature.
+"""The five-outcome evaluation protocol of TrackNet, so figures compare with the literature.
 
 Why this file exists: `badminton-track eval`, the accuracy benchmark and the tests must count
 TP / TN / FP1 / FP2 / FN the same way. Every labelled frame is one outcome:

@@ -2,7 +2,7 @@
 
 Why this file exists: every threshold of the pipeline lives here, once. The tuning dialog,
 presets, the CLI and the tests all read the same declarations, so adding a parameter needs no
-GUI code (stytra's ``Param(default, (lo, hi))`` idea, GUIDE §3.1). Each group dataclass is one
+GUI code (stytra's ``Param(default, (lo, hi))`` idea). Each group dataclass is one
 box in the tuning dialog; :class:`TrackerParams` composes them.
 
 All pixel quantities are in *full-resolution* pixels of the camera image, whatever resolution

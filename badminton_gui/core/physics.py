@@ -1,4 +1,4 @@
-"""Shuttlecock flight physics: the quadratic-drag model of GUIDE §7.
+"""Shuttlecock flight physics: the quadratic-drag model.
 
 Why this file exists: the demo court flies its shuttle with this model and the trajectory
 module fits it to measured points; both must agree on one definition.

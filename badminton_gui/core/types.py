@@ -1,7 +1,7 @@
-"""The values that flow through the pipeline (GUIDE §1), all frozen.
+"""The values that flow through the pipeline, all frozen.
 
 Why this file exists: sources, the tracker, the GUI worker, the CLI and the robot link exchange
-only these types. They are frozen (caliscope's packets, GUIDE §3.7) so that a result handed to
+only these types. They are frozen (caliscope's packets) so that a result handed to
 the GUI thread can never be changed under its feet by the worker.
 """
 

@@ -9,9 +9,9 @@ every refusal is a sentence, and the rig is saved as ``calibration/rig_YYYYmmdd_
 with the full path shown and ``rigSaved(path)`` emitted so the main window can load it at once.
 
 All the judgement (is this view good, is it new, how much is covered, which views are outliers,
-the solve, the court pose) is ``core.calibration`` and friends; these pages only render it
-(GUIDE §3.6). Workers hand over numpy arrays and frozen results, never widgets (GUIDE §3.4);
-the live view is a newest-wins mailbox polled at ~30 Hz (GUIDE §3.3).
+the solve, the court pose) is ``core.calibration`` and friends; these pages only render it.
+Workers hand over numpy arrays and frozen results, never widgets;
+the live view is a newest-wins mailbox polled at ~30 Hz.
 """
 
 from __future__ import annotations
@@ -1260,7 +1260,7 @@ class CalibrationWizard(QDialog):
 
     # ---- closing ----------------------------------------------------------------------------
     def shutdown(self) -> None:
-        """Stop every worker cooperatively and wait for its thread (GUIDE §3.5)."""
+        """Stop every worker cooperatively and wait for its thread."""
         self._stop_capture()
         if self._solve_worker is not None:
             self._solve_worker.cancel()

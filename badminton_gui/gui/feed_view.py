@@ -1,7 +1,7 @@
 """One camera feed with the shuttle overlays: red circle, fading trail, rejected candidates.
 
-Why this file exists: the operator's main view. Painting must cost little on the GUI thread
-(GUIDE §4): the worker already shrank the frame to the feed's size and made it 4-channel BGRA,
+Why this file exists: the operator's main view. Painting must cost little on the GUI thread:
+the worker already shrank the frame to the feed's size and made it 4-channel BGRA,
 so here the numpy array is wrapped in a QImage without copying (Format_RGB32, the raster
 engine's own layout) and blitted 1:1; the overlays are a few QPainter primitives in
 full-resolution coordinates mapped to the widget. Measured with the QPainter raster engine on a

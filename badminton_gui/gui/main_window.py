@@ -213,7 +213,7 @@ def latency_tooltip(stats) -> str:
 
 
 def score_text(left: Outcomes | None, right: Outcomes | None, truth_name: str) -> str:
-    """The live score: each camera's accuracy against the source's truth (GUIDE §6's protocol)
+    """The live score: each camera's accuracy against the source's truth (TrackNet's protocol)
     since the parameters last changed, or why there is none."""
     if left is None or right is None:
         return "<span style='color:#888'>no labels for this source</span>"

@@ -19,7 +19,7 @@ tracking (cameras, a video pair or the demo court) and:
   ``TrackingWorker.set_rig``) and saved as a rig YAML (``calibration_wizard.write_rig``: a
   failure is one sentence and the refined rig stays in the dialog).
 
-All the judgement is the core's; this file renders it (GUIDE §3.6).
+All the judgement is the core's; this file renders it.
 """
 
 from __future__ import annotations
@@ -577,7 +577,7 @@ class RefineCalibrationDialog(QDialog):
 
     # ---- closing -------------------------------------------------------------------------------
     def shutdown(self) -> None:
-        """Cancel a running refit and wait for its thread (GUIDE §3.5)."""
+        """Cancel a running refit and wait for its thread."""
         self._timer.stop()
         if self._job is not None:
             self._job.cancel()

@@ -8,7 +8,7 @@ each other's epipolar lines by ≈ 30 px, where *Calibration ▸ Refine from tra
 brings them to ≈ 1.5 px (benchmarks/README.md). The tracker measures this on the shuttle's own
 sure pairs; this turns the figure into a readout and, once per source, an advice line with the
 button that opens the refinement (the same check ROS camera_calibration shows as its epipolar
-error, GUIDE §3).
+error).
 
 Plain Python, no Qt: the window feeds it the worker's statistics and shows what it returns.
 """

@@ -3,8 +3,8 @@
 Why this file exists: the operator tunes the pipeline live. Nothing here knows any particular
 parameter: every field of every group in ``core/params.py`` becomes a row (slider + spin box
 with its range and unit, or a check box, or a choice list) with its help as tooltip, one tab
-per group (GUIDE §3.1). Each edit makes a new frozen ``TrackerParams`` snapshot; snapshots are
-sent at most every 50 ms (≈20 Hz) so dragging a slider never floods the worker (GUIDE §3.2).
+per group. Each edit makes a new frozen ``TrackerParams`` snapshot; snapshots are
+sent at most every 50 ms (≈20 Hz) so dragging a slider never floods the worker.
 Beside the controls, a live preview shows the foreground mask with the candidates coloured by
 the filter that rejected them. Every change can be undone (Ctrl+Z) and redone (Ctrl+Shift+Z), and
 Reset goes back to the preset the parameters came from, not to the built-in values.

@@ -1,7 +1,7 @@
 """The tracking worker: reads the source and runs the StereoTracker off the GUI thread.
 
-Why this file exists: the GUI thread must never wait for a camera or for OpenCV (GUIDE §3,
-anti-patterns). A :class:`TrackingWorker` (a QObject moved to a QThread) owns the source and the
+Why this file exists: the GUI thread must never wait for a camera or for OpenCV. A
+:class:`TrackingWorker` (a QObject moved to a QThread) owns the source and the
 tracker. Everything the GUI sends it (parameters, pause, step, robot link) goes through
 lock-protected setters the loop reads at the top of each iteration (stytra's
 ``retrieve_params``), so the blocking loop never needs the Qt event queue. Everything it hands

@@ -1,7 +1,7 @@
 """The rally script of the demo court: shots, shuttle flights and player motion, with exact truth.
 
 Why this file exists: the synthetic demo court (``demo_scene.py``) needs a shuttle that flies
-like a real one (the quadratic-drag model of ``core/physics.py``, GUIDE §7) between two players
+like a real one (the quadratic-drag model of ``core/physics.py``) between two players
 who are where the shuttle is when they hit it. This module decides the shots (serve, clear,
 drop, drive, smash), solves each launch velocity so that the shot lands in the opponent's court
 (a shooting method on the planar drag equations), integrates the flight with

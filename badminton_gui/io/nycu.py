@@ -1,4 +1,4 @@
-"""Import of the NYCU recordings' per-camera ``.cfg`` calibration into a rig file (GUIDE §5).
+"""Import of the NYCU recordings' per-camera ``.cfg`` calibration into a rig file.
 
 Why this file exists: the NYCU rig is two cameras at the two ends of a court, each calibrated
 separately against the court (``extrinsic_mat`` maps the court/world frame to the camera). A rig

@@ -1,7 +1,7 @@
 """Frame sources: one protocol for live cameras, video files and the synthetic demo court.
 
-Why this file exists: the tracker, the GUI worker and the CLI never care where frames come from
-(GUIDE §2). Every source delivers :class:`~badminton_gui.core.types.StereoFrame` from ``read()``
+Why this file exists: the tracker, the GUI worker and the CLI never care where frames come from.
+Every source delivers :class:`~badminton_gui.core.types.StereoFrame` from ``read()``
 and returns None at the end; failures raise :class:`SourceError` with one clear sentence.
 """
 

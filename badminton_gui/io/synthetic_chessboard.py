@@ -1,6 +1,6 @@
 """A FrameSource showing a chessboard that moves in front of a known stereo rig.
 
-Why this file exists: calibration needs ground truth to be tested (GUIDE §3.8: project through
+Why this file exists: calibration needs ground truth to be tested (project through
 known cameras, run the pipeline, assert the error bound), and the calibration wizard must be
 usable without cameras. The board is rendered exactly through each camera, distortion included:
 every output pixel is undistorted to a ray (cached per camera), the ray is intersected with the

@@ -2,7 +2,7 @@
 
 Why this file exists: real rigs do not trigger both cameras together (the NYCU cameras drift by
 frames over a rally), so pairing by index is wrong for them; pairing by the nearest timestamp
-from each camera's timestamp file is what `track --left-times/--right-times` does (GUIDE §5).
+from each camera's timestamp file is what `track --left-times/--right-times` does.
 """
 
 from __future__ import annotations
