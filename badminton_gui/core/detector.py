@@ -45,8 +45,11 @@ import cv2
 import numpy as np
 
 from .association import TrackletAssociator
-from .background import BackgroundModel, median_float32
+from .background import BackgroundModel
 from .classifier import load_classifier
+from .detect.measure import (FEATURE_NAMES, GROW, N_APPEARANCE, PATCH_CELLS, PATCH_HALF,  # noqa: F401
+                             PATCH_NAMES, REFINE_MARGIN, measure_blobs, patch_features,
+                             scaled_boxes, window_maxima)
 from .params import TrackerParams
 from .window import WindowTracker
 from .types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SIDE,
@@ -58,26 +61,11 @@ MAX_COLOUR_CHECKS = 64
 # px at 1280 px width: the half-size of the box around a held shuttle thresholded lower in the
 # next frame (``protect_report``); a shuttle lying on the floor is ≈ 6–10 px long there.
 PROTECT_RADIUS = 8.0
-# Margin (full-res px) around a blob's box for the sub-pixel refinement window.
-REFINE_MARGIN = 5
-_GROW = np.ones((3, 3), np.uint8)
 # px: a held-back candidate's track must have moved at least this in its last step for the other
 # camera to vouch for it (``vouchable``): its smoothed velocity remembers older motion.
 VOUCH_MIN_STEP = 1.0
 # Frames of a tracklet's blob areas remembered for ``colour.edge_exit``.
 EDGE_AREA_FRAMES = 8
-# Appearance features measured in the full-resolution window (order matters: the classifier).
-APPEARANCE_NAMES = ("contrast", "background", "log_bright_area", "spill", "whiteness",
-                    "saturation", "log_mask_area", "peak_saturation", "window_std")
-N_APPEARANCE = len(APPEARANCE_NAMES)
-# Shape features from the contour, then the appearance features: the classifier's input.
-FEATURE_NAMES = ("log_length", "log_short_side", "log_area", "aspect") + APPEARANCE_NAMES
-# A classifier may also read the blob's look itself: the grey patch around its centroid
-# (``PATCH_HALF`` px either side at 1280 px width, scaled with the frame), averaged down to
-# PATCH_CELLS × PATCH_CELLS and normalised (``patch_features``), after FEATURE_NAMES.
-PATCH_HALF = 8
-PATCH_CELLS = 8
-PATCH_NAMES = tuple(f"patch_{r}{c}" for r in range(PATCH_CELLS) for c in range(PATCH_CELLS))
 
 
 class Segmented(NamedTuple):
@@ -262,7 +250,7 @@ class CameraDetector:
         area_all = np.array([cv2.contourArea(c) for c in contours], dtype=float) * sx * sy
         rects = np.array([cv2.boundingRect(c) for c in contours], dtype=float).reshape(-1, 4)
         bx, by, bw, bh = rects[:, 0], rects[:, 1], rects[:, 2], rects[:, 3]
-        boxes_all = _scaled_boxes(rects, sx, sy)
+        boxes_all = scaled_boxes(rects, sx, sy)
         length_ok = ((p.contour_length.min_length <= length_all)
                      & (length_all <= p.contour_length.max_length))
         short_ok = ((p.tilted_rect.min_short_side <= short_all)
@@ -321,7 +309,7 @@ class CameraDetector:
                 y0 = (boxes[:, 1] / sy).astype(np.int64)
                 win_w = np.minimum(np.maximum((boxes[:, 2] / sx).astype(np.int64), 1), mask.shape[1] - x0)
                 win_h = np.minimum(np.maximum((boxes[:, 3] / sy).astype(np.int64), 1), mask.shape[0] - y0)
-                diff_max, gray_max = _window_maxima((diff, gray), x0, y0, win_w, win_h,
+                diff_max, gray_max = window_maxima((diff, gray), x0, y0, win_w, win_h,
                                                     self._background.last_unlit)
                 strength = diff_max.astype(np.float64) + 0.5 * gray_max.astype(np.float64)
             else:
@@ -615,7 +603,7 @@ class CameraDetector:
             cv2.bitwise_and(core, blob, dst=core)
             if not cv2.countNonZero(core):
                 continue
-            core = cv2.dilate(core, _GROW)
+            core = cv2.dilate(core, GROW)
             cv2.bitwise_and(core, blob, dst=core)
             found, _ = cv2.findContours(core, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
             for c in found:
@@ -630,7 +618,7 @@ class CameraDetector:
                 if core_mask is None:
                     core_mask = np.zeros((h_m, w_m), np.uint8)
                 cv2.drawContours(core_mask, [c], 0, 255, -1, offset=(x0, y0))
-                box = _scaled_boxes(np.array([[cx + x0, cy + y0, cw, ch]], dtype=float), sx, sy)[0]
+                box = scaled_boxes(np.array([[cx + x0, cy + y0, cw, ch]], dtype=float), sx, sy)[0]
                 parts.append((k, length, short_side, cv2.contourArea(c) * sx * sy, tuple(box.tolist())))
         if not parts:
             return None
@@ -918,387 +906,3 @@ def model_scale(background, width: int) -> float:
     if 0 < int(background.coarse_from_width) <= width:
         scale *= 0.5
     return scale
-
-
-def patch_features(frame: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
-    """(N, PATCH_CELLS²) normalised grey patches around the points (xs, ys), full-res px.
-
-    Each patch is the square of ``2 × PATCH_HALF`` px (at 1280 px width and below; scaled with
-    a larger frame, the image border repeated) around the rounded point, in luma (OpenCV's BGR → grey, in
-    float), area-averaged to PATCH_CELLS × PATCH_CELLS cells, minus the patch's median cell,
-    divided by its peak above that median (at least 8 grey levels, so a flat patch stays flat).
-    The hand-made features say how bright, white and small a blob is; the patch says what shape
-    its brightness has around it — a cork with its skirt, a line, a shoe's edge, a logo's
-    letter (benchmarks/README.md, sixteenth round: the shuttle ranked first among its frame's
-    candidates in ≈ 10 % more TV frames, leave-one-clip-out).
-
-    Speed: the squares are copied one below the other into one canvas (a slice each; an
-    advanced-index gather of all of them at once took 3× longer), and the grey conversion and
-    the area averaging run once on the canvas — its patches are whole multiples of their cells'
-    height, so no cell mixes two patches.
-    """
-    xs = np.asarray(xs, dtype=float)
-    ys = np.asarray(ys, dtype=float)
-    n = len(xs)
-    if n == 0:
-        return np.zeros((0, PATCH_CELLS * PATCH_CELLS), np.float32)
-    h, w = frame.shape[:2]
-    # Never below the 1280 px square: scaled down with a small frame it shrank to the blob
-    # itself (a 6 px dot at 320 px filled its 8 px square), a look no classifier was shown.
-    half = max(PATCH_HALF, int(round(PATCH_HALF * w / 1280.0)))
-    size = 2 * half
-    canvas = np.empty((n * size, size, 3), np.uint8)
-    offsets = np.arange(-half, half)
-    for k, (x, y) in enumerate(zip(np.rint(xs).astype(np.int64).tolist(),
-                                   np.rint(ys).astype(np.int64).tolist())):
-        if half <= x <= w - half and half <= y <= h - half:
-            canvas[k * size:(k + 1) * size] = frame[y - half:y + half, x - half:x + half]
-        else:
-            rows = np.clip(y + offsets, 0, h - 1)
-            cols = np.clip(x + offsets, 0, w - 1)
-            canvas[k * size:(k + 1) * size] = frame[rows[:, None], cols[None, :]]
-    luma = cv2.cvtColor(canvas.astype(np.float32), cv2.COLOR_BGR2GRAY)
-    cells = cv2.resize(luma, (PATCH_CELLS, n * PATCH_CELLS),
-                       interpolation=cv2.INTER_AREA).reshape(n, -1)
-    median = np.median(cells, axis=1, keepdims=True)
-    peak = np.maximum(cells.max(axis=1, keepdims=True) - median, 8.0)
-    return (cells - median) / peak
-
-
-def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: float,
-                  head_fraction: float = 0.5
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(x, y, whiteness, saturation, appearance features) of blobs, in full-resolution windows.
-
-    Per blob, its window is the box grown by ``REFINE_MARGIN``. The position is the
-    intensity-weighted centroid of the blob's brightest part above the window's local
-    background (median of the window border), which locates the white cork head rather than
-    the middle of head + skirt, to a fraction of a pixel. The appearance features (see
-    ``FEATURE_NAMES``) describe how small, bright, isolated and white the blob is; the
-    candidate classifier and the hand-made score read them.
-
-    Speed: up to ``association.max_measured`` blobs per frame and camera come here. Their
-    windows are copied into one canvas, one below the other (left-aligned, a blank row between
-    two, so growing a mask by a pixel never reaches the next window), and every step runs once
-    on the canvas: per-window sums as row sums (``cv2.reduce``) added over each window's rows,
-    per-window maxima over each window's contiguous range of the flat canvas (both by
-    ``reduceat``). A few dozen calls per frame instead of ~30 per blob (each with numpy's
-    overhead and the GIL held, so the two camera threads queued on it). Padding pixels are
-    made neutral for every step (0 for counts and sums, -inf for maxima). The values are those
-    of the plain per-window numpy formulas the classifiers were trained on
-    (``tests/test_detector_fast_paths.py`` keeps them as the reference): grey is
-    ``mean(B, G, R)`` in float32, the border median is numpy's, counts and sums of integers are
-    exact; only the window's standard deviation (from the sums of g and g²) and the centroid's
-    sums are accumulated in double instead of float32 (relative differences ~1e-7).
-    """
-    n = len(boxes)
-    h, w = frame.shape[:2]
-    pos_x = np.empty(n)
-    pos_y = np.empty(n)
-    whiteness = np.zeros(n)
-    saturation = np.full(n, 255.0)
-    features = np.zeros((n, N_APPEARANCE), dtype=np.float32)
-    blobs, windows, heights, widths = [], [], [], []
-    for i, box in enumerate(boxes):
-        x0 = max(box[0] - REFINE_MARGIN, 0)
-        y0 = max(box[1] - REFINE_MARGIN, 0)
-        x1 = min(box[0] + box[2] + REFINE_MARGIN, w)
-        y1 = min(box[1] + box[3] + REFINE_MARGIN, h)
-        if x1 <= x0 or y1 <= y0:
-            pos_x[i], pos_y[i] = box[0] + box[2] / 2, box[1] + box[3] / 2
-            continue
-        blobs.append(i)
-        windows.append((x0, y0, x1, y1))
-        heights.append(y1 - y0)
-        widths.append(x1 - x0)
-    if not blobs:
-        return pos_x, pos_y, whiteness, saturation, features
-    m = len(blobs)
-    if n == 1:
-        # A windowed frame's usual case: the same canvas and arithmetic without the
-        # bookkeeping that spreads it over several windows (tests/test_detector_fast_paths.py).
-        return _measure_one(frame, mask, boxes[0], windows[0], sx, sy, head_fraction)
-    height = np.array(heights)
-    width = np.array(widths)
-    start = np.zeros(m, dtype=np.intp)
-    np.cumsum(height[:-1] + 1, out=start[1:])
-    rows, cols = int(start[-1] + height[-1] + 1), int(width.max())
-    canvas = np.zeros((rows, cols, 3), np.uint8)
-    inside = np.zeros((rows, cols), np.uint8)
-    for (x0, y0, x1, y1), r0 in zip(windows, start.tolist()):
-        r1, cw = r0 + y1 - y0, x1 - x0
-        canvas[r0:r1, :cw] = frame[y0:y1, x0:x1]
-        # The blob's pixels at full resolution: the mask window, resized (0 / 255) straight
-        # into its place on the canvas (no temporary, no second copy).
-        mx0, my0 = int(x0 / sx), int(y0 / sy)
-        mx1, my1 = max(math.ceil(x1 / sx), mx0 + 1), max(math.ceil(y1 / sy), my0 + 1)
-        mcrop = mask[my0:my1, mx0:mx1]
-        if mcrop.shape == (r1 - r0, cw):
-            inside[r0:r1, :cw] = mcrop
-        else:
-            cv2.resize(mcrop, (cw, r1 - r0), dst=inside[r0:r1, :cw], interpolation=cv2.INTER_NEAREST)
-
-    # Row bookkeeping: each window owns its rows and the blank row after it.
-    seg_rows = height + 1
-    row_width = np.repeat(width, seg_rows)
-    row_width[start + height] = 0   # the blank rows
-    padding = np.arange(cols) >= row_width[:, None]
-    local_row = np.arange(rows) - np.repeat(start, seg_rows)
-
-    def window_sum(per_row: np.ndarray) -> np.ndarray:
-        return np.add.reduceat(per_row, start)
-
-    def row_sums(image: np.ndarray, depth: int) -> np.ndarray:
-        # cv2.reduce: 3-4x faster than numpy's axis-1 sum on these narrow images
-        return cv2.reduce(image, 1, cv2.REDUCE_SUM, dtype=depth)[:, 0]
-
-    def window_max(image: np.ndarray) -> np.ndarray:
-        # A window's rows (and its blank row) are one contiguous range of the flat canvas.
-        return np.maximum.reduceat(image.ravel(), start * cols)
-
-    blue, green, red = cv2.split(canvas)
-    cmin = cv2.min(cv2.min(blue, green), red)
-    cmax = cv2.max(cv2.max(blue, green), red)
-    n_inside = window_sum(row_sums(inside, cv2.CV_32S)) // 255
-    white_sum = window_sum(row_sums(cv2.bitwise_and(cmin, inside), cv2.CV_32S))
-    sat_sum = window_sum(row_sums(cv2.bitwise_and(cv2.subtract(cmax, cmin), inside), cv2.CV_32S))
-    has_inside = n_inside > 0
-    whiteness_m = np.where(has_inside, white_sum / np.maximum(n_inside, 1), 0.0)
-    saturation_m = np.where(has_inside, sat_sum / np.maximum(n_inside, 1), 255.0)
-    whiteness[blobs] = whiteness_m
-    saturation[blobs] = saturation_m
-    # mean(B, G, R) in float32: the integer sum is exact, then one float32 division.
-    gray = cv2.add(blue, green, dtype=cv2.CV_32F)
-    cv2.add(gray, red, dst=gray, dtype=cv2.CV_32F)
-    np.divide(gray, 3, out=gray)
-
-    # Border of each window in numpy's order (top row, bottom row, left column, right column;
-    # corners twice), as flat canvas indices; then each window's median by one sort of
-    # window × 1024 + value keys (exact in double: the values are float32 below 256).
-    along_row = _ragged_arange(width)
-    row_owner = np.repeat(np.arange(m), width)
-    col_owner = np.repeat(np.arange(m), height)
-    top = start[row_owner] * cols + along_row
-    bottom = top + ((height - 1) * cols)[row_owner]
-    left = (start[col_owner] + _ragged_arange(height)) * cols
-    right = left + (width - 1)[col_owner]
-    border_owner = np.concatenate([row_owner, row_owner, col_owner, col_owner])
-    border = gray.ravel()[np.concatenate([top, bottom, left, right])]
-    border_len = 2 * (width + height)
-    keyed = np.sort(border_owner * 1024.0 + border)
-    first = np.zeros(m, dtype=np.intp)
-    np.cumsum(border_len[:-1], out=first[1:])
-    half_len = border_len // 2
-    upper = (keyed[first + half_len] - np.arange(m) * 1024.0).astype(np.float32)
-    lower = (keyed[first + half_len - 1] - np.arange(m) * 1024.0).astype(np.float32)
-    odd = border_len % 2 == 1
-    # np.median averages the two middle values in float32 (sum, then / 2).
-    background = np.where(odd, upper, (lower + upper) / np.float32(2)).astype(np.float32)
-
-    background_row = np.repeat(background, seg_rows)
-    excess = gray - background_row[:, None]
-    np.copyto(excess, -np.inf, where=padding)
-    peak = window_max(excess)
-    half_peak = np.float32(0.5) * peak
-    half_row = np.repeat(half_peak, seg_rows)
-    n_bright = window_sum(row_sums((excess > half_row[:, None]).view(np.uint8), cv2.CV_32S))
-    border_bright = (border - background[border_owner]) > half_peak[border_owner]
-    spill = np.bincount(border_owner, weights=border_bright, minlength=m) / border_len
-    peak_sat = window_max(cmax).astype(np.float64) - window_max(cmin).astype(np.float64)
-    # Standard deviation from the sums of g and g² in double (products of float32 values are
-    # exact there; padding is 0 and adds nothing).
-    n_pixels = height * width
-    mean = window_sum(row_sums(gray, cv2.CV_64F)) / n_pixels
-    mean_square = window_sum(row_sums(cv2.multiply(gray, gray, dtype=cv2.CV_64F), cv2.CV_64F)) / n_pixels
-    window_std = np.sqrt(np.maximum(mean_square - mean * mean, 0.0))
-    # One row per feature, cast to float32 as it is written (what assigning np.stack's
-    # float64 rows did, without np.stack's ~10 µs of Python wrappers).
-    appearance = np.empty((N_APPEARANCE, m), np.float32)
-    for row, values in enumerate((peak, background, np.log1p(n_bright), spill, whiteness_m,
-                                  saturation_m, np.log1p(n_inside), peak_sat, window_std)):
-        appearance[row] = values
-    features[blobs] = appearance.T
-
-    # The position is measured on the blob's own pixels only (its mask, grown by one
-    # full-resolution pixel for the blur fringe): a light or a court line inside the window is
-    # brighter than the shuttle and used to drag the centroid towards itself. Off the support
-    # the excess counts as 0 (so a blob's peak is at least 0); padding stays -inf or 0.
-    # (the excess where the grown mask is set, +0.0 elsewhere, as np.where(support, excess, 0)
-    # gave: a masked AND of the float image with itself into zeros — a masked OpenCV call
-    # leaves dst untouched where the mask is 0 —, 4x faster than the comparison and np.where)
-    blob_excess = cv2.bitwise_and(excess, excess, dst=np.zeros_like(excess),
-                                  mask=cv2.dilate(inside, _GROW))
-    blob_peak = np.maximum(window_max(blob_excess), 0)
-    # No support, or nothing on it above the background: the whole window's excess instead.
-    whole = blob_peak <= 0
-    if whole.any():
-        whole_rows = np.repeat(whole, seg_rows)
-        blob_excess[whole_rows] = np.maximum(excess[whole_rows], 0)
-        blob_peak = np.where(whole, peak, blob_peak)
-    # Keep the part of the blob above ``head_fraction`` of its peak: the cork is whiter than
-    # the feathers (0 = the whole blob's intensity centroid). The cut is rounded to float32
-    # as numpy rounded ``float32 array - Python float``.
-    cut = (head_fraction * blob_peak.astype(np.float64)).astype(np.float32)
-    weights = blob_excess - np.repeat(cut, seg_rows)[:, None]
-    np.maximum(weights, 0, out=weights)
-    row_weight = row_sums(weights, cv2.CV_64F)
-    total = window_sum(row_weight)
-    # OpenCV's convention: integer coordinates are pixel centres (as projectPoints gives).
-    sum_x = window_sum(weights @ np.arange(cols, dtype=np.float64))
-    sum_y = window_sum(row_weight * local_row)
-    origin_x = np.array([win[0] for win in windows], dtype=float)
-    origin_y = np.array([win[1] for win in windows], dtype=float)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        pos_x[blobs] = sum_x / total + origin_x
-        pos_y[blobs] = sum_y / total + origin_y
-    # Rare cases, window by window: nothing brighter than the border (the mask's centroid),
-    # or no weight above the cut (the whole blob's intensity centroid).
-    for k in np.flatnonzero((peak <= 0) | (total <= 0)).tolist():
-        i, (x0, y0, x1, y1), r0 = blobs[k], windows[k], int(start[k])
-        rows_k = slice(r0, r0 + int(height[k]))
-        cols_k = slice(0, int(width[k]))
-        if peak[k] <= 0:
-            ys, xs = np.nonzero(inside[rows_k, cols_k])
-            if len(xs) == 0:
-                box = boxes[i]
-                pos_x[i], pos_y[i] = box[0] + box[2] / 2, box[1] + box[3] / 2
-            else:
-                pos_x[i], pos_y[i] = x0 + xs.mean(), y0 + ys.mean()
-            continue
-        fallback = np.maximum(blob_excess[rows_k, cols_k], 0).astype(np.float64)
-        ys, xs = np.mgrid[0:fallback.shape[0], 0:fallback.shape[1]]
-        pos_x[i] = (fallback * xs).sum() / fallback.sum() + x0
-        pos_y[i] = (fallback * ys).sum() / fallback.sum() + y0
-    return pos_x, pos_y, whiteness, saturation, features
-
-
-def _measure_one(frame: np.ndarray, mask: np.ndarray, box, window: tuple[int, int, int, int],
-                 sx: float, sy: float, head_fraction: float
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``measure_blobs`` of a single blob: the canvas of one window (its rows, then the blank
-    row), every sum, maximum and median taken as there, but on whole arrays and scalars instead
-    of through the per-window index bookkeeping (≈ 40 fewer numpy calls; with the GIL held
-    those calls were most of a windowed frame's measure). Same values bit for bit: the float
-    sums go through the same ``cv2.reduce`` rows and ``np.add.reduceat`` over the same
-    (blank-row-terminated) vectors, maxima and integer counts are exact, and the border median
-    is the same order statistic (``median_float32``)."""
-    x0, y0, x1, y1 = window
-    height, width = y1 - y0, x1 - x0
-    rows = height + 1
-    canvas = np.zeros((rows, width, 3), np.uint8)
-    canvas[:height] = frame[y0:y1, x0:x1]
-    inside = np.zeros((rows, width), np.uint8)
-    mx0, my0 = int(x0 / sx), int(y0 / sy)
-    mx1, my1 = max(math.ceil(x1 / sx), mx0 + 1), max(math.ceil(y1 / sy), my0 + 1)
-    mcrop = mask[my0:my1, mx0:mx1]
-    if mcrop.shape == (height, width):
-        inside[:height] = mcrop
-    else:
-        cv2.resize(mcrop, (width, height), dst=inside[:height], interpolation=cv2.INTER_NEAREST)
-
-    blue, green, red = cv2.split(canvas)
-    cmin = cv2.min(cv2.min(blue, green), red)
-    cmax = cv2.max(cv2.max(blue, green), red)
-    # Integer counts and sums: exact however they are added.
-    n_inside = int(cv2.countNonZero(inside))
-    if n_inside:
-        whiteness = int(cv2.sumElems(cv2.bitwise_and(cmin, inside))[0]) / n_inside
-        saturation = int(cv2.sumElems(cv2.bitwise_and(cv2.subtract(cmax, cmin), inside))[0]) / n_inside
-    else:
-        whiteness, saturation = 0.0, 255.0
-    gray = cv2.add(blue, green, dtype=cv2.CV_32F)
-    cv2.add(gray, red, dst=gray, dtype=cv2.CV_32F)
-    np.divide(gray, 3, out=gray)
-
-    # The border in numpy's order (top row, bottom row, left column, right column).
-    border = np.concatenate((gray[0], gray[height - 1], gray[:height, 0], gray[:height, width - 1]))
-    background = np.float32(median_float32(border))
-    excess = gray - background
-    excess[height] = -np.inf                 # the blank row, padding as on the shared canvas
-    peak = excess.max()
-    half_peak = np.float32(0.5) * peak
-    n_bright = int(np.count_nonzero(excess > half_peak))
-    spill = int(np.count_nonzero((border - background) > half_peak)) / border.size
-    peak_sat = float(cmax.max()) - float(cmin.max())
-    n_pixels = height * width
-    start = _FIRST_ROW
-    mean = np.add.reduceat(cv2.reduce(gray, 1, cv2.REDUCE_SUM, dtype=cv2.CV_64F)[:, 0], start) / n_pixels
-    mean_square = np.add.reduceat(cv2.reduce(cv2.multiply(gray, gray, dtype=cv2.CV_64F), 1, cv2.REDUCE_SUM,
-                                             dtype=cv2.CV_64F)[:, 0], start) / n_pixels
-    window_std = math.sqrt(max(float(mean_square[0]) - float(mean[0]) * float(mean[0]), 0.0))
-    features = np.array([[peak, background, math.log1p(n_bright), spill, whiteness, saturation,
-                          math.log1p(n_inside), peak_sat, window_std]], dtype=np.float32)
-
-    blob_excess = cv2.bitwise_and(excess, excess, dst=np.zeros_like(excess),   # (as in measure_blobs)
-                                  mask=cv2.dilate(inside, _GROW))
-    blob_peak = max(blob_excess.max(), 0)
-    if blob_peak <= 0:
-        blob_excess = np.maximum(excess, 0)
-        blob_peak = peak
-    cut = np.float32(head_fraction * float(blob_peak))
-    weights = blob_excess - cut
-    np.maximum(weights, 0, out=weights)
-    row_weight = cv2.reduce(weights, 1, cv2.REDUCE_SUM, dtype=cv2.CV_64F)[:, 0]
-    total = float(np.add.reduceat(row_weight, start)[0])
-    if peak <= 0:
-        ys, xs = np.nonzero(inside[:height])
-        if len(xs) == 0:
-            x, y = box[0] + box[2] / 2, box[1] + box[3] / 2
-        else:
-            x, y = x0 + xs.mean(), y0 + ys.mean()
-    elif total <= 0:
-        fallback = np.maximum(blob_excess[:height], 0).astype(np.float64)
-        ys, xs = np.mgrid[0:fallback.shape[0], 0:fallback.shape[1]]
-        x = (fallback * xs).sum() / fallback.sum() + x0
-        y = (fallback * ys).sum() / fallback.sum() + y0
-    else:
-        sum_x = float(np.add.reduceat(weights @ np.arange(width, dtype=np.float64), start)[0])
-        sum_y = float(np.add.reduceat(row_weight * np.arange(rows), start)[0])
-        x, y = sum_x / total + x0, sum_y / total + y0
-    return (np.array([x]), np.array([y]), np.array([whiteness]), np.array([saturation]), features)
-
-
-_FIRST_ROW = np.zeros(1, dtype=np.intp)
-
-
-def _window_maxima(images: tuple[np.ndarray, ...], x0: np.ndarray, y0: np.ndarray,
-                   width: np.ndarray, height: np.ndarray,
-                   counts_where: np.ndarray | None = None) -> list[np.ndarray]:
-    """Maximum of each image in each window (all non-empty, inside the images), one gather each.
-
-    The images have the same size, so they share the windows' pixel indices (computed once).
-    ``counts_where``: an image of that size, 0 where the *first* image is to be taken as 0.
-    """
-    counts = height * width
-    local = _ragged_arange(counts)
-    row_width = np.repeat(width, counts)
-    rows = local // row_width
-    flat = ((np.repeat(y0, counts) + rows) * images[0].shape[1] + np.repeat(x0, counts)
-            + local - rows * row_width)
-    starts = np.cumsum(counts) - counts
-    maxima = []
-    for k, image in enumerate(images):
-        values = image.ravel()[flat]
-        if k == 0 and counts_where is not None:
-            values = np.where(counts_where.ravel()[flat] != 0, values, values.dtype.type(0))
-        maxima.append(np.maximum.reduceat(values, starts))
-    return maxima
-
-
-def _scaled_boxes(rects: np.ndarray, sx: float, sy: float) -> np.ndarray:
-    """(N, 4) float boxes (x, y, w, h) at the mask scale → full-resolution int64 boxes.
-
-    Origin rounded down, size up: ``floor(x·sx), floor(y·sy), ceil(w·sx), ceil(h·sy)``, in
-    four operations on the whole array (it was four per column and a stack).
-    """
-    scaled = rects * np.array([sx, sy, sx, sy])
-    np.floor(scaled[:, :2], out=scaled[:, :2])
-    np.ceil(scaled[:, 2:], out=scaled[:, 2:])
-    return scaled.astype(np.int64)
-
-
-def _ragged_arange(lengths: np.ndarray) -> np.ndarray:
-    """``np.concatenate([np.arange(k) for k in lengths])`` in three vector operations."""
-    total = int(lengths.sum())
-    offsets = np.repeat(np.cumsum(lengths) - lengths, lengths)
-    return np.arange(total) - offsets
