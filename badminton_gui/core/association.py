@@ -247,7 +247,7 @@ class TrackletAssociator:
     def coasting(self, t: float, blind: Callable[[float, float], bool] | None
                  ) -> tuple[Tracklet, float] | None:
         """(followed tracklet, merit) when it was missed this frame inside a blind spot."""
-        tr = self._followed()
+        tr = self.followed
         if tr is None or tr not in self.tracklets or not self._coasts(tr, t, blind):
             return None
         p = self.params
@@ -257,13 +257,29 @@ class TrackletAssociator:
                  - tr.residual / max(p.residual_scale, 1e-6) + p.hysteresis)
         return tr, max(merit, 0.0)
 
-    def _followed(self) -> Tracklet | None:
+    @property
+    def followed(self) -> Tracklet | None:
+        """The followed tracklet: alive, or its ghost while a candidate may still inherit its
+        history (``motion.lost_after``); None when nothing is followed."""
         for tr in self.tracklets:
             if tr.ident == self.selected:
                 return tr
         if self._ghost is not None and self._ghost.ident == self.selected:
             return self._ghost
         return None
+
+    def tracklet(self, ident: int) -> Tracklet | None:
+        """The live tracklet ``ident`` (a candidate's ``tracklet`` field), or None."""
+        for tr in self.tracklets:
+            if tr.ident == ident:
+                return tr
+        return None
+
+    @property
+    def next_ident(self) -> int:
+        """The ident the next new tracklet will get: every tracklet born from now on has an
+        ident at least this."""
+        return self._next_id
 
     def _heir(self, t: float, positions: np.ndarray, assigned: list[int],
               scores: np.ndarray) -> int | None:
@@ -273,7 +289,7 @@ class TrackletAssociator:
         nearest free candidate close to where it was inherits its history instead of
         waiting ``min_hits`` frames to be confirmed again.
         """
-        old = self._followed()
+        old = self.followed
         if old is None or old.hit_now or not len(positions) or self.params.rebirth_radius <= 0:
             return None
         # The radius grows with the frames the followed tracklet has been missing.
@@ -287,7 +303,7 @@ class TrackletAssociator:
         return best
 
     def _inherit(self, t: float, pos: np.ndarray, score: float) -> int:
-        old = self._followed()
+        old = self.followed
         tr = Tracklet(self._next_id, float(pos[0]), float(pos[1]), t, old.start_x, old.start_y,
                       hits=old.hits, quality=0.5 * (old.quality + score), travel=old.travel)
         tr.recent.extend(old.recent)

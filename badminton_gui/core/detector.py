@@ -85,7 +85,6 @@ class CameraDetector:
         self.params = params or TrackerParams()
         self._background = BackgroundModel(self.params.background, self.params.binarize)
         self._associator = TrackletAssociator(self.params.motion, self.params.association)
-        self._tracklet_of: dict[int, int] = {}   # id(candidate) → tracklet ident, this frame
         self._widths: dict[int, deque] = {}      # tracklet ident → its blobs' recent short sides
         self._areas: dict[int, deque] = {}       # tracklet ident → its blobs' recent areas (edge_exit)
         self.last_features: list = []   # (x, y, features, rejected_by) of the last frame's blobs
@@ -130,13 +129,17 @@ class CameraDetector:
         self._window.reset()
         self._planned = None
         self._associator.reset()
-        self._tracklet_of = {}
         self._widths = {}
         self._areas = {}
         self._previous_gray = None
         self._previous_positions = np.zeros((0, 2))
         self._outside = None
         self._eligible = set()
+
+    @property
+    def associator(self) -> TrackletAssociator:
+        """This camera's image tracklets (filter 4): a candidate's ``tracklet`` field names one."""
+        return self._associator
 
     @property
     def tracking(self) -> bool:
@@ -258,7 +261,7 @@ class CameraDetector:
         cl = p.contour_length
         if 0 < cl.guided_min_length < cl.min_length and len(contours):
             # Guided exception to filter 1: a short blob where the followed shuttle is predicted.
-            followed = self._associator._followed()
+            followed = self._associator.followed
             if followed is not None and followed.velocity_known:
                 px, py = followed.predict(t)
                 short = (cl.guided_min_length <= length_all) & (length_all < cl.min_length)
@@ -388,7 +391,6 @@ class CameraDetector:
         self._left_picture = -1
         if p.association.exit_margin > 0:
             links = self._out_of_picture(t, w, h, links)
-        self._tracklet_of = {}
         width_frames = int(p.colour.head_lead_width_frames)
         edge_exit = p.colour.edge_exit > 0
         k = 0
@@ -411,7 +413,6 @@ class CameraDetector:
             c = make_candidate(x, y, length, short_side, whiteness, area, motion, score, reason,
                                tracklet=-1 if ident is None else ident)
             if ident is not None:
-                self._tracklet_of[id(c)] = ident
                 if width_frames > 1:
                     widths = self._widths.get(ident)
                     if widths is None or widths.maxlen != width_frames:
@@ -437,7 +438,6 @@ class CameraDetector:
             px, py = tr.predict(t)
             c = Candidate(px, py, math.nan, math.nan, math.nan, math.nan, 0.0, merit, None,
                           predicted=True, tracklet=tr.ident)
-            self._tracklet_of[id(c)] = tr.ident
             candidates.append(c)
         elif refused and self._outside is None:
             self._accept_lone(candidates, refused)
@@ -459,12 +459,7 @@ class CameraDetector:
         followed track coasts through a blind spot.
         """
         best = max(refused, key=lambda i: candidates[i].score)
-        c = candidates[best]
-        accepted = dataclasses.replace(c, rejected_by=None)
-        ident = self._tracklet_of.pop(id(c), None)
-        if ident is not None:
-            self._tracklet_of[id(accepted)] = ident
-        candidates[best] = accepted
+        candidates[best] = dataclasses.replace(candidates[best], rejected_by=None)
 
     def _out_of_picture(self, t: float, w: int, h: int,
                         links: list[tuple[int, float, float]]) -> list[tuple[int, float, float]]:
@@ -501,7 +496,7 @@ class CameraDetector:
                     and tr.velocity_known and tr.vy < 0 and tr.y + 0.5 < margin):
                 if tr.predict(t)[1] < -0.5:
                     # The followed shuttle is the one that left: no clutter keeps the hysteresis.
-                    self._outside = (t, a._next_id, {other.ident: other.hits for other in a.tracklets})
+                    self._outside = (t, a.next_ident, {other.ident: other.hits for other in a.tracklets})
                     a.select(tr.ident)
                     self._left_picture = tr.ident
                     break
@@ -570,7 +565,7 @@ class CameraDetector:
         ph, pw = prev_gray.shape
         # Only where the followed shuttle may be (its tracklet's gate around its prediction):
         # elsewhere a moving hand or racket edge split off a player would start tracks of its own.
-        followed = self._associator._followed()
+        followed = self._associator.followed
         if followed is None or not followed.velocity_known:
             return None
         if followed.misses > cl.split_max_misses:
@@ -676,11 +671,8 @@ class CameraDetector:
 
     def tracklet_hits(self, candidate: Candidate) -> int:
         """Frames the candidate's tracklet has been seen (0 when it is on none)."""
-        ident = self._tracklet_of.get(id(candidate))
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                return tr.hits
-        return 0
+        tr = self._associator.tracklet(candidate.tracklet)
+        return 0 if tr is None else tr.hits
 
     def vouchable(self, candidate: Candidate, min_quality: float) -> tuple[float, float] | None:
         """Image velocity (px/s) of a candidate the association held back (filter 4: its tracklet
@@ -693,14 +685,11 @@ class CameraDetector:
         """
         if candidate.rejected_by != REJECT_MOTION or candidate.predicted:
             return None
-        ident = self._tracklet_of.get(id(candidate))
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                if (tr.hit_now and tr.velocity_known and tr.quality >= min_quality
-                        and len(tr.recent) >= 2
-                        and math.hypot(tr.x - tr.recent[-2][0], tr.y - tr.recent[-2][1]) >= VOUCH_MIN_STEP):
-                    return tr.vx, tr.vy
-                return None
+        tr = self._associator.tracklet(candidate.tracklet)
+        if (tr is not None and tr.hit_now and tr.velocity_known and tr.quality >= min_quality
+                and len(tr.recent) >= 2
+                and math.hypot(tr.x - tr.recent[-2][0], tr.y - tr.recent[-2][1]) >= VOUCH_MIN_STEP):
+            return tr.vx, tr.vy
         return None
 
     def first_sighting(self, candidate: Candidate, min_quality: float) -> bool:
@@ -708,36 +697,26 @@ class CameraDetector:
         least ``min_quality`` by its looks: the other camera may vouch for it by position alone."""
         if candidate.rejected_by != REJECT_MOTION or candidate.predicted or candidate.score < min_quality:
             return False
-        ident = self._tracklet_of.get(id(candidate))
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                return tr.hit_now and tr.hits == 1
-        return False
+        tr = self._associator.tracklet(candidate.tracklet)
+        return tr is not None and tr.hit_now and tr.hits == 1
 
     def vouch(self, candidate: Candidate, score: float) -> Candidate:
         """The held-back candidate let through with ``score`` (it keeps its tracklet)."""
-        passed = dataclasses.replace(candidate, rejected_by=None, score=score)
-        ident = self._tracklet_of.get(id(candidate))
-        if ident is not None:
-            self._tracklet_of[id(passed)] = ident
-        return passed
+        return dataclasses.replace(candidate, rejected_by=None, score=score)
 
     def tracklet_velocity(self, candidate: Candidate) -> tuple[float, float] | None:
         """Image velocity (px/s) of the candidate's tracklet, or None when not yet known."""
-        ident = self._tracklet_of.get(id(candidate))
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                return (tr.vx, tr.vy) if tr.velocity_known else None
-        return None
+        tr = self._associator.tracklet(candidate.tracklet)
+        return (tr.vx, tr.vy) if tr is not None and tr.velocity_known else None
 
-    def _velocity_of(self, ident: int | None) -> tuple[float, float] | None:
+    def _velocity_of(self, ident: int) -> tuple[float, float] | None:
         """Image velocity (px/s) of the tracklet ``ident`` (or of the followed one's ghost)."""
-        if ident is None:
+        if ident < 0:
             return None
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                return (tr.vx, tr.vy) if tr.velocity_known else None
-        ghost = self._associator._followed()
+        tr = self._associator.tracklet(ident)
+        if tr is not None:
+            return (tr.vx, tr.vy) if tr.velocity_known else None
+        ghost = self._associator.followed
         if ghost is not None and ghost.ident == ident and ghost.velocity_known:
             return ghost.vx, ghost.vy
         return None
@@ -759,8 +738,7 @@ class CameraDetector:
         if chosen is not None and chosen.predicted:
             # A coasting prediction (no blob) at the edge its track leaves through: the blob is
             # missing because the shuttle has left the image, not because it is hidden.
-            ident = self._tracklet_of.get(id(chosen), chosen.tracklet if chosen.tracklet >= 0 else None)
-            velocity = self._velocity_of(ident)
+            velocity = self._velocity_of(chosen.tracklet)
             if (c.edge_exit > 0 and w > 0 and velocity is not None
                     and _leaving_edge(chosen.x, chosen.y, velocity, w, h, c.edge_exit * w / 1280.0)):
                 return result, None
@@ -775,7 +753,7 @@ class CameraDetector:
         speed = math.hypot(*velocity)
         if c.head_lead > 0 and speed >= c.head_lead_min_speed:
             width = chosen.short_side
-            widths = self._widths.get(self._tracklet_of.get(id(chosen)))
+            widths = self._widths.get(chosen.tracklet)
             if c.head_lead_width_frames > 1 and widths:
                 # A shuttle merged with a racket or an arm: the blob is wider than the shuttle,
                 # whose own width shows in the tracklet's recent frames.
@@ -792,16 +770,13 @@ class CameraDetector:
             # A shuttle clipped by the edge it is leaving through: its visible part's bright
             # centroid stays inside while the cork is already out (``colour.edge_exit``). The
             # cork leads, so it is out once the blob has lost a good part of its usual area.
-            areas = self._areas.get(self._tracklet_of.get(id(chosen)))
+            areas = self._areas.get(chosen.tracklet)
             if areas is not None and len(areas) >= 3:
                 usual = float(np.median(list(areas)[:-1]))
                 if chosen.area < c.edge_exit_area * usual:
                     return result, None
         if moved is chosen:
             return result, chosen
-        ident = self._tracklet_of.get(id(chosen))
-        if ident is not None:
-            self._tracklet_of[id(moved)] = ident
         candidates = tuple(moved if cand is chosen else cand for cand in result.candidates)
         return dataclasses.replace(result, candidates=candidates), moved
 
@@ -818,7 +793,7 @@ class CameraDetector:
         """Follow the chosen candidate's tracklet (hysteresis in the next frames' choice)."""
         if detection is None:
             return  # the followed tracklet keeps its bonus while it coasts
-        self._associator.select(self._tracklet_of.get(id(detection)))
+        self._associator.select(detection.tracklet if detection.tracklet >= 0 else None)
 
     def protect_report(self, report: Candidate | None, width: int) -> None:
         """The next frame's mask keeps the pixels around ``report`` from a lower threshold
