@@ -239,10 +239,12 @@ def test_a_classifier_trained_with_patches_reads_them():
 
     for names in (FEATURE_NAMES, FEATURE_NAMES + PATCH_NAMES):
         det = CameraDetector(_params())
-        det.use_classifier(Spy(names))   # as train_classifier.py --leave-one-out does
+        spy = Spy(names)
+        det.use_classifier(spy)   # as train_classifier.py --leave-one-out does
         for i, img in enumerate(frames):
             det.process(img, i / FPS)
-        seen = det._classifier.seen[-1]
+        seen = spy.seen[-1]
+        assert np.array_equal(det.last_scored[1], seen)   # what adaptation reads: the rows scored
         assert seen.shape[1] == len(names)
         if len(names) > len(FEATURE_NAMES):
             xs = np.array([f[0] for f in det.last_features])
@@ -253,7 +255,9 @@ def test_a_classifier_trained_with_patches_reads_them():
     for model in ("candidate_classifier", "candidate_classifier_broadcast", "candidate_classifier_coarse"):
         assert load_classifier(model).feature_names == FEATURE_NAMES + PATCH_NAMES
         det = CameraDetector(_params(classifier__enabled=True, classifier__model=model))
-        assert det._needs_patches
+        for i, img in enumerate(frames):
+            det.process(img, i / FPS)
+        assert len(det.last_features) and det.last_scored[1].shape[1] == len(FEATURE_NAMES + PATCH_NAMES)
 
 
 @pytest.mark.parametrize("method", ["mog2", "frame_diff", "bright_diff"])

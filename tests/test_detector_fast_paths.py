@@ -17,6 +17,7 @@ import pytest
 
 from badminton_gui.core import detector as detector_module
 from badminton_gui.core.detect.measure import N_APPEARANCE, REFINE_MARGIN, measure_blobs, window_maxima
+from badminton_gui.core.detect.segmentation import ModelGrey
 from badminton_gui.core.detector import CameraDetector
 from badminton_gui.io.presets import load_preset
 
@@ -313,17 +314,15 @@ def test_background_model_equals_the_numpy_formulas(overrides):
 def test_model_grey_at_half_scale_is_the_area_resize():
     # The default path: INTER_AREA of the colour frame, then grey (what the model was tuned on).
     frame = _synthetic_frame(4)
-    det = CameraDetector(load_preset("default"))
     expected = cv2.cvtColor(cv2.resize(frame, (160, 120), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2GRAY)
-    assert np.array_equal(det._model_grey(frame, 0.5), expected)
+    assert np.array_equal(ModelGrey()(frame, 0.5), expected)
 
 
 def test_quarter_scale_model_grey_averages_every_other_row():
     # The row-sampled quarter path: each model pixel is the mean of rows 4k and 4k + 2 of its
     # 4×4 block, four columns each, in grey (three rounding steps: within 1.5 grey levels).
     frame = cv2.add(_synthetic_frame(5), np.random.default_rng(5).integers(0, 60, (240, 320, 3), dtype=np.uint8))
-    det = CameraDetector(load_preset("default"))
-    gray = det._model_grey(frame, 0.25)
+    gray = ModelGrey()(frame, 0.25)
     assert gray.shape == (60, 80)
     full = frame.astype(np.float64) @ np.array([0.114, 0.587, 0.299])
     blocks = full.reshape(60, 4, 80, 4)[:, [0, 2]].mean(axis=(1, 3))

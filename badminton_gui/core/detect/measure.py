@@ -52,11 +52,8 @@ class BlobMeasurements:
     appearance: np.ndarray   # (N, N_APPEARANCE) float32, see APPEARANCE_NAMES
 
     def __iter__(self):
-        # (x, y, whiteness, saturation, appearance): unpacks as the tuple it replaces
+        # x, y, whiteness, saturation, appearance = measure_blobs(...)
         return iter((self.x, self.y, self.whiteness, self.saturation, self.appearance))
-
-    def __getitem__(self, k: int) -> np.ndarray:
-        return (self.x, self.y, self.whiteness, self.saturation, self.appearance)[k]
 
     @staticmethod
     def concatenate(a: "BlobMeasurements", b: "BlobMeasurements") -> "BlobMeasurements":
