@@ -43,11 +43,12 @@ from .detect.candidates import (MAX_COLOUR_CHECKS, ContourShapes, MergedBlobSpli
                                 rank_for_measuring, shape_filters, shape_rejects, too_large)
 from .detect.measure import (FEATURE_NAMES, PATCH_CELLS, PATCH_HALF, PATCH_NAMES,  # noqa: F401
                              BlobMeasurements, measure_blobs, patch_features)
+from .detect.diagnostics import DetectionDiagnostics, ScoreReport, ShapeReport
 from .detect.scoring import BlobScorer, ScoredBlobs, ScoreFunction, ShapedBlob, score_blobs
 from .detect.segmentation import ModelGrey, Segmented, external_contours, model_scale  # noqa: F401
 from .detect.tracklets import TrackletStage
 from .params import TrackerParams
-from .types import REJECT_MOTION, REJECT_SCORE, CameraResult, Candidate
+from .types import REJECT_MOTION, REJECT_SCORE, REJECT_WHITENESS, CameraResult, Candidate
 from .window import WindowTracker
 
 # px at 1280 px width: the half-size of the box around a held shuttle thresholded lower in the
@@ -91,6 +92,7 @@ class CameraDetector:
         # player walking past) and the lying shuttle outside it would have no candidate.
         self.keep_whole = False
         self.last_split = 0   # candidates split off merged blobs in the last frame
+        self.last_diagnostics: DetectionDiagnostics | None = None   # the last frame, stage by stage
         self._fresh_state()
 
     def _fresh_state(self) -> None:
@@ -213,7 +215,7 @@ class CameraDetector:
         mask = segmented.mask
         sx, sy = w / mask.shape[1], h / mask.shape[0]
         self._mask_scale = mask.shape[1] / w
-        rejected, blobs, shapes = self._shape_stage(segmented, t, w, sx, sy)
+        rejected, blobs, shapes, shape_report = self._shape_stage(segmented, t, w, sx, sy)
         scored = self._score_stage(frame_bgr, segmented, blobs, shapes, t, w, sx, sy)
         blind = None
         if self.params.motion.coast_blind > 0:
@@ -221,7 +223,13 @@ class CameraDetector:
 
             def blind(x: float, y: float) -> bool:
                 return self._background.is_blind(x * ms_x, y * ms_y)
-        linked = self._tracklets.link(t, scored, w, h, blind)
+        linked, tracklet_report = self._tracklets.link(t, scored, w, h, blind)
+        reasons = scored.rejected_by
+        self.last_diagnostics = DetectionDiagnostics(
+            segmented.windowed, dataclasses.replace(shape_report, split_parts=self.last_split),
+            ScoreReport(len(reasons), reasons.count(REJECT_WHITENESS), reasons.count(REJECT_MOTION),
+                        reasons.count(REJECT_SCORE)),
+            tracklet_report)
         window = segmented.window
         return CameraResult(detection=None, candidates=tuple(rejected + linked),
                             mask=mask if keep_mask else None,
@@ -230,10 +238,10 @@ class CameraDetector:
                             left_picture=self._tracklets.exit_hold.left_picture)
 
     def _shape_stage(self, segmented: Segmented, t: float, w: int, sx: float, sy: float
-                     ) -> tuple[list[Candidate], list[ShapedBlob], ContourShapes]:
+                     ) -> tuple[list[Candidate], list[ShapedBlob], ContourShapes, ShapeReport]:
         """Filters 1 and 2 on the contours, then at most ``association.max_measured`` blobs for
         the full-resolution look: (the candidates rejected on the way, the blobs that go on,
-        every contour's shape)."""
+        every contour's shape, the counts)."""
         p = self.params
         mask = segmented.mask
         shapes = measure_contours(segmented.contours, sx, sy)
@@ -242,13 +250,16 @@ class CameraDetector:
         self._large_boxes = too_large(shapes, p)
         rejected, blobs = shape_rejects(shapes, length_ok, short_ok)
         limit = min(int(p.association.max_measured), MAX_COLOUR_CHECKS)
+        dropped = []
         if len(blobs) > limit:
             bg = self._background
             blobs, dropped = rank_for_measuring(blobs, limit, self._associator.live_predictions(t),
                                                 bg.last_difference, segmented.gray, bg.last_unlit,
                                                 shapes, mask.shape)
             rejected += dropped
-        return rejected, blobs, shapes
+        report = ShapeReport(len(shapes.length), int(np.count_nonzero(~length_ok)),
+                             int(np.count_nonzero(length_ok & ~short_ok)), len(dropped), 0)
+        return rejected, blobs, shapes, report
 
     def _score_stage(self, frame_bgr: np.ndarray, segmented: Segmented, blobs: list[ShapedBlob],
                      shapes: ContourShapes, t: float, w: int, sx: float, sy: float) -> ScoredBlobs:

@@ -23,6 +23,7 @@ import numpy as np
 from ..association import Tracklet, TrackletAssociator
 from ..params import TrackerParams
 from ..types import REJECT_MOTION, Candidate, make_candidate
+from .diagnostics import TrackletReport
 from .scoring import ScoredBlobs
 
 # Frames of a tracklet's blob areas remembered for ``colour.edge_exit``.
@@ -178,10 +179,11 @@ class TrackletStage:
         self.looks = TrackletLooks()
 
     def link(self, t: float, blobs: ScoredBlobs, w: int, h: int,
-             blind: Callable[[float, float], bool] | None) -> list[Candidate]:
+             blind: Callable[[float, float], bool] | None) -> tuple[list[Candidate], TrackletReport]:
         """This frame's candidates from the scored blobs, in their order (plus the coasting
-        prediction last). Only candidates on a confirmed, travelling, smooth tracklet pass (the
-        speed-aware gate lives in the associator); the others are rejected by motion."""
+        prediction last), and what this stage did. Only candidates on a confirmed, travelling,
+        smooth tracklet pass (the speed-aware gate lives in the associator); the others are
+        rejected by motion."""
         p = self.params
         live = [k for k, reason in enumerate(blobs.rejected_by) if reason is None]
         positions = np.asarray([(blobs.x[k], blobs.y[k]) for k in live], dtype=float).reshape(-1, 2)
@@ -194,6 +196,7 @@ class TrackletStage:
         # The followed shuttle crossing a light or a white line leaves no blob: its track's
         # prediction stands in (flagged, never triangulated) until it shows again.
         coast = self.associator.coasting(t, blind) if not self.exit_hold.holding else None
+        lone = False
         if coast is not None:
             tr, merit = coast
             px, py = tr.predict(t)
@@ -201,7 +204,11 @@ class TrackletStage:
                                         None, predicted=True, tracklet=tr.ident))
         elif refused and not self.exit_hold.holding:
             accept_lone(candidates, refused)
-        return candidates
+            lone = True
+        held = sum(1 for _, _, merit in links if merit < 0) - lone
+        report = TrackletReport(len(live), held, len(live) - held, self.exit_hold.holding,
+                                coast is not None, lone)
+        return candidates, report
 
     def _candidates(self, blobs: ScoredBlobs, links: list[Link]) -> tuple[list[Candidate], list[int] | None]:
         """(a candidate per blob, the indices of those the association refused while none
