@@ -215,7 +215,7 @@ class CameraDetector:
         mask = segmented.mask
         sx, sy = w / mask.shape[1], h / mask.shape[0]
         self._mask_scale = mask.shape[1] / w
-        rejected, blobs, shapes, shape_report = self._shape_stage(segmented, t, w, sx, sy)
+        rejected, blobs, shapes, shape_counts = self._shape_stage(segmented, t, w, sx, sy)
         scored = self._score_stage(frame_bgr, segmented, blobs, shapes, t, w, sx, sy)
         blind = None
         if self.params.motion.coast_blind > 0:
@@ -226,7 +226,7 @@ class CameraDetector:
         linked, tracklet_report = self._tracklets.link(t, scored, w, h, blind)
         reasons = scored.rejected_by
         self.last_diagnostics = DetectionDiagnostics(
-            segmented.windowed, dataclasses.replace(shape_report, split_parts=self.last_split),
+            segmented.windowed, ShapeReport(*shape_counts, self.last_split),
             ScoreReport(len(reasons), reasons.count(REJECT_WHITENESS), reasons.count(REJECT_MOTION),
                         reasons.count(REJECT_SCORE)),
             tracklet_report)
@@ -238,10 +238,10 @@ class CameraDetector:
                             left_picture=self._tracklets.exit_hold.left_picture)
 
     def _shape_stage(self, segmented: Segmented, t: float, w: int, sx: float, sy: float
-                     ) -> tuple[list[Candidate], list[ShapedBlob], ContourShapes, ShapeReport]:
+                     ) -> tuple[list[Candidate], list[ShapedBlob], ContourShapes, tuple[int, int, int, int]]:
         """Filters 1 and 2 on the contours, then at most ``association.max_measured`` blobs for
         the full-resolution look: (the candidates rejected on the way, the blobs that go on,
-        every contour's shape, the counts)."""
+        every contour's shape, the counts of ``ShapeReport`` but the split parts)."""
         p = self.params
         mask = segmented.mask
         shapes = measure_contours(segmented.contours, sx, sy)
@@ -257,9 +257,9 @@ class CameraDetector:
                                                 bg.last_difference, segmented.gray, bg.last_unlit,
                                                 shapes, mask.shape)
             rejected += dropped
-        report = ShapeReport(len(shapes.length), int(np.count_nonzero(~length_ok)),
-                             int(np.count_nonzero(length_ok & ~short_ok)), len(dropped), 0)
-        return rejected, blobs, shapes, report
+        counts = (len(shapes.length), int(np.count_nonzero(~length_ok)),
+                  int(np.count_nonzero(length_ok & ~short_ok)), len(dropped))
+        return rejected, blobs, shapes, counts
 
     def _score_stage(self, frame_bgr: np.ndarray, segmented: Segmented, blobs: list[ShapedBlob],
                      shapes: ContourShapes, t: float, w: int, sx: float, sy: float) -> ScoredBlobs:
