@@ -43,7 +43,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from badminton_gui.core import detector as detector_module  # noqa: E402
 from badminton_gui.core.adaptation import DEFAULT_MIN_RUN, adapt_to_recording  # noqa: E402
 from badminton_gui.core.detector import CameraDetector  # noqa: E402
 from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
@@ -65,35 +64,22 @@ class LabelOracle:
     candidates the detector makes — the errors left are the candidates' and the association's,
     not the classifier's. For measuring only: it reads the labels at run time.
 
-    Installed on one detector (``install``); ``label`` is set before each frame. The candidates'
-    positions are taken from ``detector.measure_blobs``, which the detector calls once for its
-    blobs and once more for parts split off merged blobs, before it scores them all in one call.
+    Installed on one detector (``install``, through ``CameraDetector.use_score``, which hands it
+    the measured blobs' positions); ``label`` is set before each frame.
     """
     SHUTTLE, OTHER = 0.99, 0.01
 
     def __init__(self, tol: float):
         self.tol = tol
         self.label: tuple[bool, float, float] = (False, 0.0, 0.0)
-        self._xs: list[np.ndarray] = []
-        self._ys: list[np.ndarray] = []
 
     def install(self, det: CameraDetector) -> None:
-        original = detector_module.measure_blobs
-
-        def recording(*a, **kw):
-            out = original(*a, **kw)
-            self._xs.append(np.asarray(out[0], float))
-            self._ys.append(np.asarray(out[1], float))
-            return out
-        detector_module.measure_blobs = recording
         det.use_classifier(None)
-        det._qualities = self._scores
+        det.use_score(self.scores)
 
-    def _scores(self, lengths: np.ndarray, contrasts: np.ndarray, features: np.ndarray) -> np.ndarray:
-        xs, ys = np.concatenate(self._xs), np.concatenate(self._ys)
-        self._xs.clear()
-        self._ys.clear()
-        assert len(xs) == len(lengths), "the oracle lost track of the candidates"
+    def scores(self, xs: np.ndarray, ys: np.ndarray, lengths: np.ndarray, contrasts: np.ndarray,
+               features: np.ndarray) -> np.ndarray:
+        """The blobs at (xs, ys) scored from the label of the frame."""
         visible, lx, ly = self.label
         if not visible:
             return np.full(len(xs), self.OTHER)
@@ -174,23 +160,19 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
     decided = []
     i = 0
     judge = LabelOracle(tol) if oracle else None
-    restore = detector_module.measure_blobs
-    try:
+    if judge is not None:
+        judge.install(det)
+    while (frame := video.read()) is not None:
+        if transform is not None:
+            frame = transform.frame(frame)
+        visible, x, y = labels.get(i, (False, 0.0, 0.0))
         if judge is not None:
-            judge.install(det)
-        while (frame := video.read()) is not None:
-            if transform is not None:
-                frame = transform.frame(frame)
-            visible, x, y = labels.get(i, (False, 0.0, 0.0))
-            if judge is not None:
-                judge.label = (visible, x, y)
-            res = det.process(frame, i / video.fps, keep_mask=True)
-            if visible:
-                causes[i] = label_cause(det, res, x, y, tol)
-            decided += la.push(dataclass_without_mask(res), i / video.fps)
-            i += 1
-    finally:
-        detector_module.measure_blobs = restore
+            judge.label = (visible, x, y)
+        res = det.process(frame, i / video.fps, keep_mask=True)
+        if visible:
+            causes[i] = label_cause(det, res, x, y, tol)
+        decided += la.push(dataclass_without_mask(res), i / video.fps)
+        i += 1
     decided += la.flush()
     video.close()
     out = collections.Counter()

@@ -318,11 +318,13 @@ def test_the_hold_ends_when_a_young_track_takes_the_returning_shuttle():
 
 
 def test_an_old_track_comes_in_only_by_the_points_it_gained_since_the_exit():
-    """``CameraDetector._came_in``: an old clutter track can take the returning shuttle's blob
+    """``came_in``, the exit hold's test of a returning track: an old clutter track can take the
+    returning shuttle's blob
     into its gate (bwf_00001 90 with the gate slack at 30 px: a track that had sat at (733, 317)
     took the shuttle at the top edge and everything stayed held for 40 frames). Its points
     before the exit say nothing; those since do."""
     from badminton_gui.core.association import Tracklet
+    from badminton_gui.core.detect.tracklets import came_in
 
     def track(ident, points, hits):
         tr = Tracklet(ident, *points[-1], 0.0, *points[0], hits=hits)
@@ -333,15 +335,15 @@ def test_an_old_track_comes_in_only_by_the_points_it_gained_since_the_exit():
     sat = [(733.0, 317.0)] * 5
     # An old track (ident 24 < first) with 5 hits at the exit, 2 more since: the shuttle's.
     old = track(24, sat + [(736.0, 13.0), (737.0, 29.0)], hits=7)
-    assert CameraDetector._came_in(old, first, {24: 5}, w, h, entry)
+    assert came_in(old, first, {24: 5}, w, h, entry)
     # The same track without new points near an edge: still held.
-    assert not CameraDetector._came_in(track(24, sat + [(735.0, 320.0)], hits=6), first, {24: 5}, w, h, entry)
+    assert not came_in(track(24, sat + [(735.0, 320.0)], hits=6), first, {24: 5}, w, h, entry)
     # Its edge points from before the exit do not count (it was the shuttle leaving).
     leaving = track(24, [(736.0, 13.0)] + sat, hits=6)
-    assert not CameraDetector._came_in(leaving, first, {24: 5}, w, h, entry)
+    assert not came_in(leaving, first, {24: 5}, w, h, entry)
     # A track born after the exit: any of its points.
     young = track(60, [(992.0, 173.0), (847.0, 6.0), (847.0, 17.0)], hits=3)
-    assert CameraDetector._came_in(young, first, {}, w, h, entry)
+    assert came_in(young, first, {}, w, h, entry)
 
 
 def test_another_track_leaving_through_the_top_does_not_hold_the_followed_shuttle():

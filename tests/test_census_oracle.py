@@ -24,34 +24,48 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 sys.path.insert(0, str(BENCHMARKS))
 
 import broadcast_census  # noqa: E402
-from badminton_gui.core import detector as detector_module  # noqa: E402
-
-
-def _record(oracle, *positions):
-    """What the detector's calls of ``measure_blobs`` hand the oracle: one array pair a call."""
-    for xs, ys in positions:
-        oracle._xs.append(np.asarray(xs, float))
-        oracle._ys.append(np.asarray(ys, float))
+from badminton_gui.core.detector import CameraDetector  # noqa: E402
+from badminton_gui.io.presets import load_preset  # noqa: E402
+from badminton_gui.io.video import VideoFile  # noqa: E402
 
 
 def test_only_candidates_at_a_visible_label_score_as_the_shuttle():
     oracle = broadcast_census.LabelOracle(tol=10.0)
     oracle.label = (True, 100.0, 100.0)
-    # The frame's blobs, then the parts split off merged blobs: scored in one call, in that order;
     # 8 px from the label is within the tolerance, 15 px is not.
-    _record(oracle, ([100.0, 300.0], [105.0, 300.0]), ([92.0, 85.0], [100.0, 100.0]))
-    scores = oracle._scores(np.zeros(4), np.zeros(4), np.zeros((4, 1)))
+    xs, ys = np.array([100.0, 300.0, 92.0, 85.0]), np.array([105.0, 300.0, 100.0, 100.0])
+    scores = oracle.scores(xs, ys, np.zeros(4), np.zeros(4), np.zeros((4, 1)))
     assert scores.tolist() == [oracle.SHUTTLE, oracle.OTHER, oracle.SHUTTLE, oracle.OTHER]
     oracle.label = (False, 100.0, 100.0)
-    _record(oracle, ([100.0], [100.0]))
-    assert oracle._scores(np.zeros(1), np.zeros(1), np.zeros((1, 1))).tolist() == [oracle.OTHER]
+    assert oracle.scores(np.array([100.0]), np.array([100.0]), np.zeros(1), np.zeros(1),
+                         np.zeros((1, 1))).tolist() == [oracle.OTHER]
 
 
-def test_a_count_that_does_not_match_the_scored_rows_is_an_error():
-    oracle = broadcast_census.LabelOracle(tol=10.0)
-    _record(oracle, ([1.0, 2.0], [1.0, 2.0]))
-    with pytest.raises(AssertionError):
-        oracle._scores(np.zeros(3), np.zeros(3), np.zeros((3, 1)))
+def test_the_detector_hands_its_score_function_the_measured_blobs_positions(tmp_path):
+    """``CameraDetector.use_score``: the oracle gets the positions of exactly the rows scored
+    (the frame's blobs and any parts split off merged blobs), as the detector measured them."""
+    calls = []
+
+    def score(xs, ys, lengths, contrasts, features):
+        calls.append((np.array(xs), np.array(ys), len(features)))
+        return np.full(len(xs), 0.5)
+
+    det = CameraDetector(load_preset("broadcast"))
+    det.use_score(score)
+    video = VideoFile(_dot_clip(tmp_path, 0.0).video)
+    checked = 0
+    for i in range(10):
+        before = len(calls)
+        det.process(video.read(), i / 30.0)
+        if len(calls) == before:
+            assert len(det.last_scored[0]) == 0   # no blob measured, nothing to score
+            continue
+        xs, ys, rows = calls[-1]
+        assert len(xs) == len(ys) == rows > 0
+        assert np.array_equal(np.column_stack([xs, ys]), det.last_scored[0])
+        checked += 1
+    video.close()
+    assert checked >= 5
 
 
 @dataclass(frozen=True)
@@ -81,14 +95,11 @@ def _dot_clip(tmp_path: Path, label_shift: float) -> _Clip:
     return _Clip("dot", video, labels)
 
 
-def test_the_oracle_decides_what_the_chain_reports_and_leaves_the_detector_as_it_was(tmp_path):
-    original = detector_module.measure_blobs
+def test_the_oracle_decides_what_the_chain_reports(tmp_path):
     right = broadcast_census.census(_dot_clip(tmp_path, 0.0), "broadcast", 4, None, oracle=True)
-    assert detector_module.measure_blobs is original
     # Labels beside the dot: the oracle calls every candidate clutter, so the dot is never
     # followed — the chain's reports come from the oracle's scores, not from the classifier.
     wrong = broadcast_census.census(_dot_clip(tmp_path, 60.0), "broadcast", 4, None, oracle=True)
-    assert detector_module.measure_blobs is original
     assert right["TP"] >= 35, right
     assert wrong["FN"] >= 35 and wrong["FP1"] <= 5, wrong
 

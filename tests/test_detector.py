@@ -239,10 +239,12 @@ def test_a_classifier_trained_with_patches_reads_them():
 
     for names in (FEATURE_NAMES, FEATURE_NAMES + PATCH_NAMES):
         det = CameraDetector(_params())
-        det.use_classifier(Spy(names))   # as train_classifier.py --leave-one-out does
+        spy = Spy(names)
+        det.use_classifier(spy)   # as train_classifier.py --leave-one-out does
         for i, img in enumerate(frames):
             det.process(img, i / FPS)
-        seen = det._classifier.seen[-1]
+        seen = spy.seen[-1]
+        assert np.array_equal(det.last_scored[1], seen)   # what adaptation reads: the rows scored
         assert seen.shape[1] == len(names)
         if len(names) > len(FEATURE_NAMES):
             xs = np.array([f[0] for f in det.last_features])
@@ -253,7 +255,9 @@ def test_a_classifier_trained_with_patches_reads_them():
     for model in ("candidate_classifier", "candidate_classifier_broadcast", "candidate_classifier_coarse"):
         assert load_classifier(model).feature_names == FEATURE_NAMES + PATCH_NAMES
         det = CameraDetector(_params(classifier__enabled=True, classifier__model=model))
-        assert det._needs_patches
+        for i, img in enumerate(frames):
+            det.process(img, i / FPS)
+        assert len(det.last_features) and det.last_scored[1].shape[1] == len(FEATURE_NAMES + PATCH_NAMES)
 
 
 @pytest.mark.parametrize("method", ["mog2", "frame_diff", "bright_diff"])
@@ -622,3 +626,41 @@ def test_no_split_around_a_track_that_lost_its_blob(max_misses):
         assert not any(splits)
     else:
         assert any(splits)
+
+
+@pytest.mark.parametrize("overrides", [{}, {"association__max_measured": 1, "motion__min_displacement": 1.0},
+                                       {"contour_length__split_min_length": 30.0}])
+def test_each_stage_counts_the_candidates_it_rejected(overrides):
+    """``last_diagnostics``: per stage, the numbers the candidates' ``rejected_by`` show — filters
+    1 and 2 and the measuring limit in the candidates stage, filter 3, the still-blob rule and the
+    score in the scoring stage, filter 4 in the tracklets stage — and every contour (and split
+    part) is one candidate."""
+    from badminton_gui.core.types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SIDE,
+                                          REJECT_WHITENESS)
+    frames, _ = _scene(40)
+    frames += _flight_across_a_wide_blob(40)[0]
+    det = CameraDetector(_params(**overrides))
+    seen = {"motion": 0, "still": 0, "whiteness": 0, "passed": 0}
+    for i, img in enumerate(frames):
+        result = det.find_candidates(img, i / FPS)
+        d = det.last_diagnostics
+        real = [c.rejected_by for c in result.candidates if not c.predicted]
+        assert d.shapes.contours + d.shapes.split_parts == len(real), i
+        assert real.count(REJECT_LENGTH) == d.shapes.rejected_length
+        assert real.count(REJECT_SHORT_SIDE) == d.shapes.rejected_short_side
+        assert real.count(REJECT_WHITENESS) == d.shapes.not_measured + d.scoring.rejected_whiteness
+        assert real.count(REJECT_SCORE) == d.scoring.rejected_score
+        assert real.count(REJECT_MOTION) == d.scoring.rejected_still + d.tracklets.rejected_motion
+        assert real.count(None) == d.tracklets.passed
+        assert d.tracklets.coasting == any(c.predicted for c in result.candidates)
+        assert d.scoring.measured == d.tracklets.linked + d.scoring.rejected_whiteness \
+            + d.scoring.rejected_still + d.scoring.rejected_score
+        det.commit(det.choose(result.candidates), i / FPS)
+        seen["motion"] += d.tracklets.rejected_motion
+        seen["still"] += d.scoring.rejected_still
+        seen["whiteness"] += d.scoring.rejected_whiteness + d.shapes.not_measured
+        seen["passed"] += d.tracklets.passed
+    # The scene exercises the stages: something passes, something waits for its tracklet.
+    assert seen["passed"] > 0 and seen["motion"] > 0
+    if overrides.get("motion__min_displacement"):
+        assert seen["still"] > 0 and seen["whiteness"] > 0

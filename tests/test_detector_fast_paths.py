@@ -16,7 +16,9 @@ import numpy as np
 import pytest
 
 from badminton_gui.core import detector as detector_module
-from badminton_gui.core.detector import N_APPEARANCE, REFINE_MARGIN, CameraDetector, measure_blobs
+from badminton_gui.core.detect.measure import N_APPEARANCE, REFINE_MARGIN, measure_blobs, window_maxima
+from badminton_gui.core.detect.segmentation import ModelGrey
+from badminton_gui.core.detector import CameraDetector
 from badminton_gui.io.presets import load_preset
 
 _GROW = np.ones((3, 3), np.uint8)
@@ -91,7 +93,8 @@ def _as_vector(measured):
 
 def assert_same_measure(frame, mask, box, sx, sy, head_fraction=0.5):
     ref = _as_vector(reference_measure(frame, mask, box, sx, sy, head_fraction))
-    fast = _as_vector(CameraDetector._measure(frame, mask, box, sx, sy, head_fraction))
+    x, y, whiteness, saturation, features = measure_blobs(frame, mask, [box], sx, sy, head_fraction)
+    fast = _as_vector((x[0], y[0], whiteness[0], saturation[0], features[0]))
     # Sums of integer data are exact in both; the window's std and the centroid's sums are
     # accumulated in double instead of float32 (~1e-7 relative).
     np.testing.assert_allclose(fast, ref, rtol=1e-5, atol=1e-5, err_msg=f"box {box}")
@@ -311,17 +314,15 @@ def test_background_model_equals_the_numpy_formulas(overrides):
 def test_model_grey_at_half_scale_is_the_area_resize():
     # The default path: INTER_AREA of the colour frame, then grey (what the model was tuned on).
     frame = _synthetic_frame(4)
-    det = CameraDetector(load_preset("default"))
     expected = cv2.cvtColor(cv2.resize(frame, (160, 120), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2GRAY)
-    assert np.array_equal(det._model_grey(frame, 0.5), expected)
+    assert np.array_equal(ModelGrey()(frame, 0.5), expected)
 
 
 def test_quarter_scale_model_grey_averages_every_other_row():
     # The row-sampled quarter path: each model pixel is the mean of rows 4k and 4k + 2 of its
     # 4×4 block, four columns each, in grey (three rounding steps: within 1.5 grey levels).
     frame = cv2.add(_synthetic_frame(5), np.random.default_rng(5).integers(0, 60, (240, 320, 3), dtype=np.uint8))
-    det = CameraDetector(load_preset("default"))
-    gray = det._model_grey(frame, 0.25)
+    gray = ModelGrey()(frame, 0.25)
     assert gray.shape == (60, 80)
     full = frame.astype(np.float64) @ np.array([0.114, 0.587, 0.299])
     blocks = full.reshape(60, 4, 80, 4)[:, [0, 2]].mean(axis=(1, 3))
@@ -357,7 +358,7 @@ def test_window_maxima_of_several_images_share_the_windows():
     unlit = np.where(rng.random((40, 60)) < 0.3, 0, 255).astype(np.uint8)
     x0, y0 = np.array([0, 10, 55, 30]), np.array([0, 5, 35, 20])
     width, height = np.array([1, 7, 5, 12]), np.array([1, 9, 5, 3])
-    diff_max, gray_max = detector_module._window_maxima((diff, gray), x0, y0, width, height, unlit)
+    diff_max, gray_max = window_maxima((diff, gray), x0, y0, width, height, unlit)
     for k in range(len(x0)):
         window = np.s_[y0[k]:y0[k] + height[k], x0[k]:x0[k] + width[k]]
         assert diff_max[k] == np.where(unlit[window] != 0, diff[window], np.float32(0)).max()

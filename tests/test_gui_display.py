@@ -466,11 +466,11 @@ def test_the_adaptation_pass_is_an_opening_step_stop_gives_up_and_tuning_keeps(q
     tuned = params.with_value("contour_length.min_length", params.contour_length.min_length + 2)
     tracker.set_params(tuned)
     worker._keep_adapted(tracker, tuned)
-    assert tracker.detector._classifier is adapted
+    assert tracker.detector.classifier is adapted
     other = tuned.with_value("classifier.enabled", False)
     tracker.set_params(other)
     worker._keep_adapted(tracker, other)
-    assert tracker.detector._classifier is not adapted and worker._adapted is None
+    assert tracker.detector.classifier is not adapted and worker._adapted is None
 
 
 def test_tuning_a_filter_does_not_restart_the_look_ahead_view(qapp):

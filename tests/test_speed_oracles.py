@@ -12,9 +12,9 @@ import cv2
 import numpy as np
 import pytest
 
-from badminton_gui.core import detector as detector_module
 from badminton_gui.core.association import Tracklet, TrackletAssociator
 from badminton_gui.core.background import median_float32
+from badminton_gui.core.detect.measure import scaled_boxes
 from badminton_gui.core.params import TrackerParams
 
 
@@ -37,9 +37,9 @@ def test_scaled_boxes_are_the_per_column_floor_and_ceil():
         bx, by, bw, bh = rects[:, 0], rects[:, 1], rects[:, 2], rects[:, 3]
         expected = np.stack([np.floor(bx * sx), np.floor(by * sy), np.ceil(bw * sx),
                              np.ceil(bh * sy)], axis=1).astype(np.int64)
-        got = detector_module._scaled_boxes(rects, sx, sy)
+        got = scaled_boxes(rects, sx, sy)
         assert got.dtype == np.int64 and np.array_equal(got, expected)
-    assert detector_module._scaled_boxes(np.zeros((0, 4)), 2.0, 2.0).shape == (0, 4)
+    assert scaled_boxes(np.zeros((0, 4)), 2.0, 2.0).shape == (0, 4)
 
 
 def test_match_costs_are_the_per_tracklet_formulas():

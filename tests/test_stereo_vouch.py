@@ -15,7 +15,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from badminton_gui.core.association import Tracklet
 from badminton_gui.core.detector import CameraDetector
 from badminton_gui.core.params import TrackerParams
 from badminton_gui.core.stereo.look import ImagePaths, stereo_look
@@ -116,20 +115,21 @@ def test_a_camera_with_its_own_survivor_is_only_a_partner(tracker):
 
 def test_vouchable_needs_a_moving_track_of_enough_quality():
     det = CameraDetector(TrackerParams())
-    c = _candidate(100.0, 100.0)
-    tr = Tracklet(7, 100.0, 100.0, 0.0, 97.0, 100.0, vx=300.0, vy=0.0, hits=2, quality=0.3,
-                  velocity_known=True)
-    tr.recent.extend([(97.0, 100.0), (100.0, 100.0)])
-    det._associator.tracklets = [tr]
-    det._tracklet_of = {id(c): 7}
-    assert det.vouchable(c, 0.1) == (300.0, 0.0)
+    # Two hits 3 px apart, 10 ms apart: a young tracklet (not confirmed yet) moving at 300 px/s.
+    for k, x in enumerate((97.0, 100.0)):
+        [(ident, _, merit)] = det.associator.update(k / 100.0, np.array([[x, 100.0]]), np.array([0.3]))
+    assert merit < 0                                         # held back by the association
+    c = dataclasses.replace(_candidate(100.0, 100.0), tracklet=ident)
+    assert det.vouchable(c, 0.1) == pytest.approx((300.0, 0.0))
     assert det.vouchable(c, 0.5) is None                     # quality too low
     assert det.vouchable(dataclasses.replace(c, rejected_by=None), 0.1) is None
-    tr.recent.append((100.5, 100.0))
-    tr.x = 100.5
-    assert det.vouchable(c, 0.1) is None                     # hardly moved in its last step
+    assert det.vouchable(dataclasses.replace(c, tracklet=-1), 0.1) is None   # on no tracklet
     passed = det.vouch(c, 0.3)
-    assert passed.rejected_by is None and det._tracklet_of[id(passed)] == 7
+    assert passed.rejected_by is None and passed.score == 0.3
+    assert det.tracklet_velocity(passed) == det.tracklet_velocity(c) is not None   # keeps its tracklet
+    [(same, _, _)] = det.associator.update(0.02, np.array([[100.5, 100.0]]), np.array([0.3]))
+    assert same == ident
+    assert det.vouchable(c, 0.1) is None                     # hardly moved in its last step
 
 
 def test_off_by_the_flag():

@@ -10,6 +10,7 @@ import pytest
 
 from badminton_gui.core import window as window_module
 from badminton_gui.core.background import BackgroundModel
+from badminton_gui.core.detect.segmentation import ModelGrey
 from badminton_gui.core.detector import CameraDetector
 from badminton_gui.core.params import TrackerParams
 from badminton_gui.core.window import ALIGN, WindowTracker, crop_grey, followed_tracklet
@@ -42,9 +43,9 @@ def test_a_window_covering_the_frame_changes_nothing(monkeypatch, coarse):
     n_windowed = 0
     for i, img in enumerate(frames):
         a = whole.process(img, i / FPS)
-        before = windowed._window.windowed
+        before = windowed.window_tracker.windowed
         b = windowed.process(img, i / FPS)
-        n_windowed += windowed._window.windowed - before
+        n_windowed += windowed.window_tracker.windowed - before
         assert _key(a) == _key(b), i
         assert np.array_equal(a.mask, b.mask), i
         assert (a.detection is None) == (b.detection is None)
@@ -61,7 +62,7 @@ def test_a_windows_grey_and_mask_are_the_whole_frames_pixels(scale):
     det = CameraDetector(p)
     win = (128, 96, 416, 328)
     for i, img in enumerate(frames):
-        g = det._model_grey(img, scale)
+        g = ModelGrey()(img, scale)
         mx0, my0 = int(win[0] * scale), int(win[1] * scale)
         gw = crop_grey(img, scale, win)
         assert np.array_equal(gw, g[my0:my0 + gw.shape[0], mx0:mx0 + gw.shape[1]])
@@ -84,10 +85,10 @@ def _run(params, frames, truth):
     log = []
     for i, (img, xy) in enumerate(zip(frames, truth)):
         t = i / FPS
-        tr = followed_tracklet(det._associator)
+        tr = followed_tracklet(det.associator)
         predicted = tr.predict(t) if tr is not None else None
         res = det.process(img, t, keep_mask=False)
-        log.append((det._window.last_window, predicted, xy, res.detection))
+        log.append((det.window_tracker.last_window, predicted, xy, res.detection))
     return det, log
 
 
@@ -136,7 +137,7 @@ def test_keep_whole_processes_the_whole_frame_while_it_is_set():
     for i, img in enumerate(frames):
         det.keep_whole = 60 <= i < 80
         det.process(img, i / FPS, keep_mask=False)
-        windows.append(det._window.last_window)
+        windows.append(det.window_tracker.last_window)
     assert all(w is None for w in windows[60:80])
     assert sum(w is not None for w in windows[40:60]) >= 15 and sum(w is not None for w in windows[90:]) >= 20
 
@@ -245,7 +246,7 @@ def test_staggered_cameras_never_take_a_scheduled_whole_frame_together():
     for i, img in enumerate(frames):
         for det in (left, right):
             det.process(img, i / FPS)
-        modes.append((left._window.last_window is not None, right._window.last_window is not None))
+        modes.append((left.window_tracker.last_window is not None, right.window_tracker.last_window is not None))
     following = [i for i, (a, b) in enumerate(modes) if i >= 30 and (a or b)]
     assert len(following) >= 60
     both_whole = [i for i in range(following[0], len(modes)) if not modes[i][0] and not modes[i][1]]
@@ -263,7 +264,7 @@ def test_staggered_cameras_never_take_a_scheduled_whole_frame_together():
     for i, img in enumerate(frames):
         for det in (left, right):
             det.process(img, i / FPS)
-        together += i >= following[0] and left._window.last_window is None and right._window.last_window is None
+        together += i >= following[0] and left.window_tracker.last_window is None and right.window_tracker.last_window is None
     assert together >= 5
 
 
@@ -275,7 +276,7 @@ def test_the_result_says_which_box_was_processed():
     seen = set()
     for i, img in enumerate(frames):
         res = det.process(img, i / FPS, keep_mask=True)
-        assert res.window == det._window.last_window
+        assert res.window == det.window_tracker.last_window
         if res.window is not None:
             x0, y0, x1, y1 = res.window
             k = res.mask_scale
@@ -297,8 +298,8 @@ def test_no_window_while_the_followed_tracklet_looks_poor():
         windowed = 0
         for i, img in enumerate(frames):
             det.process(img, i / FPS, keep_mask=False)
-            windowed += det._window.last_window is not None
-            tr = followed_tracklet(det._associator)
+            windowed += det.window_tracker.last_window is not None
+            tr = followed_tracklet(det.associator)
             if tr is not None and min_quality == 0.0:
                 qualities.append(tr.quality)
         assert (windowed > 40) if min_quality == 0.0 else (windowed == 0)
@@ -306,12 +307,12 @@ def test_no_window_while_the_followed_tracklet_looks_poor():
     det = CameraDetector(_params(window__full_every=8, window__min_quality=threshold))
     seen = set()
     for i, img in enumerate(frames):
-        tr = followed_tracklet(det._associator)
+        tr = followed_tracklet(det.associator)
         before = None if tr is None else tr.quality
         det.process(img, i / FPS, keep_mask=False)
-        if det._window.last_window is not None:
+        if det.window_tracker.last_window is not None:
             assert before is not None and before >= threshold
-        seen.add(det._window.last_window is not None)
+        seen.add(det.window_tracker.last_window is not None)
     assert seen == {True, False}
 
 
@@ -327,12 +328,12 @@ def test_a_shuttle_merged_with_a_wide_blob_is_split_off_it_in_windows_too():
         det = CameraDetector(_params(contour_length__split_min_length=split, window__full_every=100))
         hits = []
         for i, img in enumerate(frames):
-            before = det._window.windowed
+            before = det.window_tracker.windowed
             res = det.process(img, i / FPS, keep_mask=False)
             if 30 <= i <= 40:
                 d = res.detection
                 hits.append(d is not None and math.hypot(d.x - truth[i][0], d.y - truth[i][1]) <= 6)
-                if split and det._window.windowed > before and det.last_split:
+                if split and det.window_tracker.windowed > before and det.last_split:
                     split_in_window += 1
         found.append(hits)
     assert split_in_window >= 8

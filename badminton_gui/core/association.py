@@ -140,94 +140,23 @@ class TrackletAssociator:
         tracklet's prediction (nan for a new tracklet). ``blind(x, y)`` (full-resolution px)
         says where the detector cannot see the shuttle: the followed tracklet survives there
         for ``motion.coast_blind`` frames instead of ``max_misses``.
+
+        In steps: match the candidates to the tracklets' predictions → drop the lost tracklets
+        → start new ones from the candidates left (one may inherit the followed tracklet's
+        history) → each candidate's merit.
         """
-        p = self.params
-        n = len(positions)
         for tr in self.tracklets:
             tr.hit_now = False
-        assigned_track = [-1] * n
-        motion = [math.nan] * n
-        if self.tracklets and n:
-            d, gates, cost = self._match_costs(t, positions)
-            if p.followed_swap_margin < 1.0:
-                # After a hit the nearest blob to the followed path is often the racket or the
-                # hand that struck (larger, less white: a low quality) while the shuttle leaves
-                # on a path of its own inside the same gate: the followed tracklet takes the
-                # blob that looks far more like a shuttle.
-                for i, tr in enumerate(self.tracklets):
-                    if tr.ident != self.selected:
-                        continue
-                    if tr.quality < p.followed_swap_track_quality:
-                        break
-                    inside = np.flatnonzero(d[i] <= gates[i])
-                    if len(inside) < 2:
-                        break
-                    nearest = inside[np.argmin(cost[i, inside])]
-                    best = inside[np.argmax(scores[inside])]
-                    if scores[best] - scores[nearest] >= p.followed_swap_margin:
-                        cost[i, best] = cost[i, nearest] - 1e-3
-                    break
-            if p.blind_gate > 0 and blind is not None and self.selected is not None:
-                # The followed shuttle predicted where the detector is blind (a light, a white
-                # line) cannot show there: a blob far from the prediction is something else (a
-                # hand, a racket) that would take the track over; the track coasts instead.
-                for i, tr in enumerate(self.tracklets):
-                    if (tr.ident == self.selected and tr.velocity_known and tr.hits >= p.min_hits
-                            and blind(*tr.predict(t))):
-                        gates[i] = min(gates[i], p.blind_gate)
-                        break
-            order = np.argsort(cost, axis=None)
-            # Only pairs inside the tracklet's gate can be taken: drop the others before the
-            # Python loop (it used to visit all tracklets × candidates, ~800 pairs a frame, to
-            # take a dozen), keeping the cost order; stop once either side is used up.
-            in_gate = (d <= gates[:, None]).ravel()[order]
-            used_t = set()
-            used_c = set()
-            n_tracklets = len(self.tracklets)
-            for flat in order[in_gate].tolist():
-                i, j = divmod(flat, n)
-                if i in used_t or j in used_c:
-                    continue
-                used_t.add(i)
-                used_c.add(j)
-                assigned_track[j] = self.tracklets[i].ident
-                motion[j] = float(d[i, j])
-                self._extend(self.tracklets[i], t, positions[j], scores[j], float(d[i, j]))
-                if len(used_t) == n_tracklets or len(used_c) == n:
-                    break
-        # Drop lost tracklets; start new ones from unassigned candidates.
-        kept = []
-        for tr in self.tracklets:
-            if not tr.hit_now:
-                tr.misses += 1
-            if tr.misses <= p.max_misses or self._coasts(tr, t, blind):
-                kept.append(tr)
-            elif tr.ident == self.selected:
-                self._ghost = tr
-        self.tracklets = kept
-        if self._ghost is not None and t - self._ghost.t > self.motion.lost_after:
-            self._ghost = None
-        heir = self._heir(t, positions, assigned_track, scores)
-        ids = []
-        for j in range(n):
-            if assigned_track[j] >= 0:
-                ids.append(assigned_track[j])
-            elif j == heir:
-                ids.append(self._inherit(t, positions[j], float(scores[j])))
-            else:
-                tr = Tracklet(self._next_id, float(positions[j, 0]), float(positions[j, 1]), t,
-                              float(positions[j, 0]), float(positions[j, 1]),
-                              quality=float(scores[j]))
-                tr.recent.append((tr.x, tr.y))
-                self._next_id += 1
-                self.tracklets.append(tr)
-                ids.append(tr.ident)
+        assigned, motion = self._match(t, positions, scores, blind)
+        self._drop_lost(t, blind)
+        ids = self._start_new(t, positions, scores, assigned)
+        p = self.params
         if len(self.tracklets) > p.max_tracklets:
             self.tracklets.sort(key=lambda tr: (tr.hit_now, tr.hits), reverse=True)
             self.tracklets = self.tracklets[:p.max_tracklets]
         by_id = {tr.ident: tr for tr in self.tracklets}
         out = []
-        for j in range(n):
+        for j in range(len(positions)):
             tr = by_id.get(ids[j])
             merit = self.merit(tr, float(scores[j])) if tr is not None else -1.0
             if merit >= 0 and p.candidate_weight > 0:
@@ -238,6 +167,111 @@ class TrackletAssociator:
             out.append((ids[j], motion[j], merit))
         return out
 
+    def _match(self, t: float, positions: np.ndarray, scores: np.ndarray,
+               blind: Callable[[float, float], bool] | None) -> tuple[list[int], list[float]]:
+        """Greedy matching by normalised cost inside the gates; each matched tracklet is
+        extended. Returns per candidate (the tracklet ident it went to or -1, its distance
+        from that tracklet's prediction or nan)."""
+        n = len(positions)
+        assigned = [-1] * n
+        motion = [math.nan] * n
+        if not (self.tracklets and n):
+            return assigned, motion
+        d, gates, cost = self._match_costs(t, positions)
+        if self.params.followed_swap_margin < 1.0:
+            self._favour_shuttle_like(d, gates, cost, scores)
+        if self.params.blind_gate > 0 and blind is not None and self.selected is not None:
+            self._narrow_blind_gate(gates, t, blind)
+        order = np.argsort(cost, axis=None)
+        # Only pairs inside the tracklet's gate can be taken: drop the others before the
+        # Python loop (it used to visit all tracklets × candidates, ~800 pairs a frame, to
+        # take a dozen), keeping the cost order; stop once either side is used up.
+        in_gate = (d <= gates[:, None]).ravel()[order]
+        used_t = set()
+        used_c = set()
+        n_tracklets = len(self.tracklets)
+        for flat in order[in_gate].tolist():
+            i, j = divmod(flat, n)
+            if i in used_t or j in used_c:
+                continue
+            used_t.add(i)
+            used_c.add(j)
+            assigned[j] = self.tracklets[i].ident
+            motion[j] = float(d[i, j])
+            self._extend(self.tracklets[i], t, positions[j], scores[j], float(d[i, j]))
+            if len(used_t) == n_tracklets or len(used_c) == n:
+                break
+        return assigned, motion
+
+    def _favour_shuttle_like(self, d: np.ndarray, gates: np.ndarray, cost: np.ndarray,
+                             scores: np.ndarray) -> None:
+        """``followed_swap_margin``: after a hit the nearest blob to the followed path is often
+        the racket or the hand that struck (larger, less white: a low quality) while the
+        shuttle leaves on a path of its own inside the same gate: the followed tracklet takes
+        the blob that looks far more like a shuttle (its cost is lowered in place)."""
+        p = self.params
+        for i, tr in enumerate(self.tracklets):
+            if tr.ident != self.selected:
+                continue
+            if tr.quality < p.followed_swap_track_quality:
+                return
+            inside = np.flatnonzero(d[i] <= gates[i])
+            if len(inside) < 2:
+                return
+            nearest = inside[np.argmin(cost[i, inside])]
+            best = inside[np.argmax(scores[inside])]
+            if scores[best] - scores[nearest] >= p.followed_swap_margin:
+                cost[i, best] = cost[i, nearest] - 1e-3
+            return
+
+    def _narrow_blind_gate(self, gates: np.ndarray, t: float, blind: Callable[[float, float], bool]) -> None:
+        """``blind_gate``: the followed shuttle predicted where the detector is blind (a light, a
+        white line) cannot show there: a blob far from the prediction is something else (a
+        hand, a racket) that would take the track over; the track coasts instead (its gate is
+        narrowed in place)."""
+        p = self.params
+        for i, tr in enumerate(self.tracklets):
+            if (tr.ident == self.selected and tr.velocity_known and tr.hits >= p.min_hits
+                    and blind(*tr.predict(t))):
+                gates[i] = min(gates[i], p.blind_gate)
+                return
+
+    def _drop_lost(self, t: float, blind: Callable[[float, float], bool] | None) -> None:
+        """Count a miss for every tracklet not hit this frame and drop the lost ones; the
+        followed one dropped becomes the ghost a candidate may still inherit from."""
+        kept = []
+        for tr in self.tracklets:
+            if not tr.hit_now:
+                tr.misses += 1
+            if tr.misses <= self.params.max_misses or self._coasts(tr, t, blind):
+                kept.append(tr)
+            elif tr.ident == self.selected:
+                self._ghost = tr
+        self.tracklets = kept
+        if self._ghost is not None and t - self._ghost.t > self.motion.lost_after:
+            self._ghost = None
+
+    def _start_new(self, t: float, positions: np.ndarray, scores: np.ndarray,
+                   assigned: list[int]) -> list[int]:
+        """Each candidate's tracklet ident: its match, or a new tracklet (the followed one's
+        heir inherits its history, ``_heir``)."""
+        heir = self._heir(t, positions, assigned, scores)
+        ids = []
+        for j in range(len(positions)):
+            if assigned[j] >= 0:
+                ids.append(assigned[j])
+            elif j == heir:
+                ids.append(self._inherit(t, positions[j], float(scores[j])))
+            else:
+                tr = Tracklet(self._next_id, float(positions[j, 0]), float(positions[j, 1]), t,
+                              float(positions[j, 0]), float(positions[j, 1]),
+                              quality=float(scores[j]))
+                tr.recent.append((tr.x, tr.y))
+                self._next_id += 1
+                self.tracklets.append(tr)
+                ids.append(tr.ident)
+        return ids
+
     def _coasts(self, tr: Tracklet, t: float, blind) -> bool:
         """The followed, confirmed tracklet is predicted inside a blind spot: keep it."""
         return (blind is not None and tr.ident == self.selected and not tr.hit_now
@@ -247,7 +281,7 @@ class TrackletAssociator:
     def coasting(self, t: float, blind: Callable[[float, float], bool] | None
                  ) -> tuple[Tracklet, float] | None:
         """(followed tracklet, merit) when it was missed this frame inside a blind spot."""
-        tr = self._followed()
+        tr = self.followed
         if tr is None or tr not in self.tracklets or not self._coasts(tr, t, blind):
             return None
         p = self.params
@@ -257,13 +291,29 @@ class TrackletAssociator:
                  - tr.residual / max(p.residual_scale, 1e-6) + p.hysteresis)
         return tr, max(merit, 0.0)
 
-    def _followed(self) -> Tracklet | None:
+    @property
+    def followed(self) -> Tracklet | None:
+        """The followed tracklet: alive, or its ghost while a candidate may still inherit its
+        history (``motion.lost_after``); None when nothing is followed."""
         for tr in self.tracklets:
             if tr.ident == self.selected:
                 return tr
         if self._ghost is not None and self._ghost.ident == self.selected:
             return self._ghost
         return None
+
+    def tracklet(self, ident: int) -> Tracklet | None:
+        """The live tracklet ``ident`` (a candidate's ``tracklet`` field), or None."""
+        for tr in self.tracklets:
+            if tr.ident == ident:
+                return tr
+        return None
+
+    @property
+    def next_ident(self) -> int:
+        """The ident the next new tracklet will get: every tracklet born from now on has an
+        ident at least this."""
+        return self._next_id
 
     def _heir(self, t: float, positions: np.ndarray, assigned: list[int],
               scores: np.ndarray) -> int | None:
@@ -273,7 +323,7 @@ class TrackletAssociator:
         nearest free candidate close to where it was inherits its history instead of
         waiting ``min_hits`` frames to be confirmed again.
         """
-        old = self._followed()
+        old = self.followed
         if old is None or old.hit_now or not len(positions) or self.params.rebirth_radius <= 0:
             return None
         # The radius grows with the frames the followed tracklet has been missing.
@@ -287,7 +337,7 @@ class TrackletAssociator:
         return best
 
     def _inherit(self, t: float, pos: np.ndarray, score: float) -> int:
-        old = self._followed()
+        old = self.followed
         tr = Tracklet(self._next_id, float(pos[0]), float(pos[1]), t, old.start_x, old.start_y,
                       hits=old.hits, quality=0.5 * (old.quality + score), travel=old.travel)
         tr.recent.extend(old.recent)

@@ -1,93 +1,73 @@
-"""One camera's shuttle detector: mask → contours → the paper's four filters → association.
+"""One camera's shuttle detector: the per-camera stages in order, for one frame at a time.
 
-Why this file exists: it is the per-camera half of the pipeline (GUIDE §1). It keeps every
-candidate with the measurement of each filter and the name of the filter that rejected it, so
-the tuning view can show *why* a blob is not the shuttle, and it follows the shuttle over
-frames rather than the last thing that moved.
+Why this file exists: it is the per-camera half of the pipeline. It keeps every candidate with
+the measurement of each filter and the name of the filter that rejected it, so the tuning view
+can show *why* a blob is not the shuttle, and it follows the shuttle over frames rather than the
+last thing that moved. The stages live in ``core/detect/``; ``CameraDetector`` runs them:
 
-The chain per frame (coarse to fine, GUIDE §4):
-1. grey image at the processing scale → :class:`BackgroundModel` → binary mask (default: the
-   pixels *brighter* than a running average: a white shuttle in a dark hall; lights ignored);
-2. external contours; filter 1 (contour length) and filter 2 (shortest side of the tilted
-   rectangle) at the processing scale, converted to full-resolution pixels;
-3. the ``association.max_measured`` most promising blobs (near a live tracklet first, then the
-   strongest brightening) get a small full-resolution window: filter 3 (whiteness, saturation,
-   contrast above the local background), appearance features and a sub-pixel head position;
-   the features give each candidate a quality in [0, 1] (the learned classifier of
-   ``core/classifier.py``, or a hand-made contrast + size score);
-4. filter 4, multi-frame (``core/association.py``): candidates are joined into tracklets with
-   a speed-aware gate; only candidates on a confirmed, travelling, smooth tracklet of good
-   mean quality pass, scored by the tracklet's merit;
-5. the best surviving candidate by score is the detection (the tracker may override this with
-   a stereo-consistent choice, ``choose`` / ``commit``);
-6. when the followed shuttle leaves no blob because it crosses a spot where the mask is blind
-   (a light, a white line: ``binarize.max_background``), its track's prediction stands in for
-   up to ``motion.coast_blind`` frames, flagged ``Candidate.predicted`` and never triangulated.
+1. segmentation (``detect/segmentation.py``): grey image at the processing scale →
+   :class:`BackgroundModel` → binary mask (default: the pixels *brighter* than a running
+   average: a white shuttle in a dark hall; lights ignored) → external contours; in a window
+   around the followed shuttle when windowed tracking is on (``core/window.py``);
+2. candidates (``detect/candidates.py``): filter 1 (contour length) and filter 2 (shortest
+   side of the tilted rectangle) at the processing scale, converted to full-resolution pixels;
+   the ``association.max_measured`` most promising blobs go on; parts split off long blobs;
+3. measurement and scoring (``detect/measure.py``, ``detect/scoring.py``): a small
+   full-resolution window per blob: filter 3 (whiteness, saturation, contrast above the local
+   background), appearance features and a sub-pixel head position; the features give each
+   candidate a quality in [0, 1] (the learned classifier of ``core/classifier.py``, or a
+   hand-made contrast + size score);
+4. tracklets (``detect/tracklets.py``, ``core/association.py``): filter 4, multi-frame:
+   candidates are joined into tracklets with a speed-aware gate; only candidates on a
+   confirmed, travelling, smooth tracklet of good mean quality pass, scored by the tracklet's
+   merit; the followed shuttle crossing a blind spot (a light, a white line:
+   ``binarize.max_background``) is stood in for by its track's prediction for up to
+   ``motion.coast_blind`` frames, flagged ``Candidate.predicted`` and never triangulated;
+5. readout: the best surviving candidate by score is the detection (the tracker may override
+   this with a stereo-consistent choice, ``choose`` / ``commit``), moved forward to the cork
+   (``lead_to_head``).
 
 Latency: none (causal); a flight costs its first ``association.min_hits`` frames.
-
-Speed (issue #7): both cameras run this in two threads, and only OpenCV calls and numpy
-operations on large arrays release the GIL, so per-blob and per-contour Python is kept out of
-the hot path — contour measurements are gathered in lists and decided for all contours at
-once, the ranking's window maxima come from one gather, the measured windows share one canvas
-(``measure_blobs``), the classifier scores all blobs in one call. Every value is the one the
-plain per-blob code gave (tests/test_detector_fast_paths.py).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections import deque
-from typing import NamedTuple
 
-import cv2
 import numpy as np
 
 from .association import TrackletAssociator
-from .background import BackgroundModel, median_float32
-from .classifier import load_classifier
+from .background import BackgroundModel
+from .detect.candidates import (MAX_COLOUR_CHECKS, ContourShapes, MergedBlobSplitter, measure_contours,
+                                rank_for_measuring, shape_filters, shape_rejects, too_large)
+from .detect.measure import (FEATURE_NAMES, PATCH_CELLS, PATCH_HALF, PATCH_NAMES,  # noqa: F401
+                             BlobMeasurements, measure_blobs, patch_features)
+from .detect.diagnostics import DetectionDiagnostics, ScoreReport, ShapeReport
+from .detect.scoring import BlobScorer, ScoredBlobs, ScoreFunction, ShapedBlob, score_blobs
+from .detect.segmentation import ModelGrey, Segmented, external_contours, model_scale  # noqa: F401
+from .detect.tracklets import TrackletStage
 from .params import TrackerParams
+from .types import REJECT_MOTION, REJECT_SCORE, REJECT_WHITENESS, CameraResult, Candidate
 from .window import WindowTracker
-from .types import (REJECT_LENGTH, REJECT_MOTION, REJECT_SCORE, REJECT_SHORT_SIDE,
-                    REJECT_WHITENESS, CameraResult, Candidate, make_candidate)
 
-# At most this many blobs per frame get the (more expensive) full-resolution colour check;
-# beyond it the largest blobs are dropped first (players, not shuttles).
-MAX_COLOUR_CHECKS = 64
 # px at 1280 px width: the half-size of the box around a held shuttle thresholded lower in the
 # next frame (``protect_report``); a shuttle lying on the floor is ≈ 6–10 px long there.
 PROTECT_RADIUS = 8.0
-# Margin (full-res px) around a blob's box for the sub-pixel refinement window.
-REFINE_MARGIN = 5
-_GROW = np.ones((3, 3), np.uint8)
 # px: a held-back candidate's track must have moved at least this in its last step for the other
 # camera to vouch for it (``vouchable``): its smoothed velocity remembers older motion.
 VOUCH_MIN_STEP = 1.0
-# Frames of a tracklet's blob areas remembered for ``colour.edge_exit``.
-EDGE_AREA_FRAMES = 8
-# Appearance features measured in the full-resolution window (order matters: the classifier).
-APPEARANCE_NAMES = ("contrast", "background", "log_bright_area", "spill", "whiteness",
-                    "saturation", "log_mask_area", "peak_saturation", "window_std")
-N_APPEARANCE = len(APPEARANCE_NAMES)
-# Shape features from the contour, then the appearance features: the classifier's input.
-FEATURE_NAMES = ("log_length", "log_short_side", "log_area", "aspect") + APPEARANCE_NAMES
-# A classifier may also read the blob's look itself: the grey patch around its centroid
-# (``PATCH_HALF`` px either side at 1280 px width, scaled with the frame), averaged down to
-# PATCH_CELLS × PATCH_CELLS and normalised (``patch_features``), after FEATURE_NAMES.
-PATCH_HALF = 8
-PATCH_CELLS = 8
-PATCH_NAMES = tuple(f"patch_{r}{c}" for r in range(PATCH_CELLS) for c in range(PATCH_CELLS))
 
 
-class Segmented(NamedTuple):
-    """What ``CameraDetector.segment`` hands to ``candidates_from`` for one frame."""
+@dataclasses.dataclass(slots=True)
+class _FrameMemory:
+    """What the detector remembers from the frames it has seen: a fresh one on ``reset``."""
 
-    gray: np.ndarray          # the model's grey image (the window's, when windowed)
-    mask: np.ndarray          # foreground mask at the processing scale
-    contours: tuple           # the mask's external contours
-    window: tuple | None      # the window (full-resolution x0, y0, x1, y1), or None: whole frame
-    windowed: bool
+    # plan_window's choice for the coming frame: (its time, the window or None)
+    planned: tuple[float, tuple[int, int, int, int] | None] | None = None
+    # the last frame's measured blob positions (the still-blob rule of the scoring stage)
+    previous_positions: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 2)))
+    splitter: MergedBlobSplitter = dataclasses.field(default_factory=MergedBlobSplitter)
 
 
 class CameraDetector:
@@ -97,37 +77,28 @@ class CameraDetector:
         self.params = params or TrackerParams()
         self._background = BackgroundModel(self.params.background, self.params.binarize)
         self._associator = TrackletAssociator(self.params.motion, self.params.association)
-        self._tracklet_of: dict[int, int] = {}   # id(candidate) → tracklet ident, this frame
-        self._widths: dict[int, deque] = {}      # tracklet ident → its blobs' recent short sides
-        self._areas: dict[int, deque] = {}       # tracklet ident → its blobs' recent areas (edge_exit)
+        self._window = WindowTracker(self.params)   # windowed tracking (``window.enabled``)
+        self._scorer = BlobScorer(self.params)
+        self._grey = ModelGrey()
         self.last_features: list = []   # (x, y, features, rejected_by) of the last frame's blobs
         # The last frame's measured blobs as the classifier saw them: positions (N, 2) and feature
         # rows (N, F), the patch included when the classifier reads it (core/adaptation.py).
         self.last_scored: tuple[np.ndarray, np.ndarray] = (np.zeros((0, 2)), np.zeros((0, 0)))
-        self._classifier = None
-        self._load_classifier()
-        self._previous_positions = np.zeros((0, 2))
-        self._small: np.ndarray | None = None   # the frame at the processing scale (buffer)
-        self._gray: np.ndarray | None = None
         self._mask_scale = 0.0   # mask px per full-resolution px (0: no frame yet)
         self._last_mask: np.ndarray | None = None
         self._large_boxes = np.zeros((0, 4), np.int64)   # full-res boxes of blobs too large (filters 1, 2)
-        self._window = WindowTracker(self.params)   # windowed tracking (``window.enabled``)
-        self._planned: tuple[float, tuple[int, int, int, int] | None] | None = None   # plan_window
         # Set by the stereo tracker while it holds a landed shuttle for this camera: the frame is
         # processed whole, since the window follows the association's track (after a rally, a
         # player walking past) and the lying shuttle outside it would have no candidate.
         self.keep_whole = False
-        # The last frame's grey image where it was made (its window, or the whole frame), that
-        # part's model-pixel origin and the whole model's shape (split_min_length).
-        self._previous_gray: tuple[np.ndarray, int, int, tuple[int, int]] | None = None
         self.last_split = 0   # candidates split off merged blobs in the last frame
-        # ``association.exit_margin``: (time the shuttle left the picture, first tracklet ident
-        # born after that, {ident: hits} of the tracklets alive then) while it is out, else
-        # None; the tracklets that could supply the detection in the last frame.
-        self._outside: tuple[float, int, dict[int, int]] | None = None
-        self._eligible: set[int] = set()
-        self._left_picture = -1   # the tracklet that left the picture this frame (-1: none)
+        self.last_diagnostics: DetectionDiagnostics | None = None   # the last frame, stage by stage
+        self._fresh_state()
+
+    def _fresh_state(self) -> None:
+        """The state learnt from frames, as before the first frame."""
+        self._memory = _FrameMemory()
+        self._tracklets = TrackletStage(self._associator, self.params)
 
     # ---- configuration ---------------------------------------------------------------------
     def set_params(self, params: TrackerParams) -> None:
@@ -135,47 +106,44 @@ class CameraDetector:
         self._background.set_params(params.background, params.binarize)
         self._associator.set_params(params.motion, params.association)
         self._window.set_params(params)
-        self._load_classifier()
+        self._scorer.set_params(params)
+        self._tracklets.params = params
 
     def reset(self) -> None:
         self._background.reset()
         self._window.reset()
-        self._planned = None
         self._associator.reset()
-        self._tracklet_of = {}
-        self._widths = {}
-        self._areas = {}
-        self._previous_gray = None
-        self._previous_positions = np.zeros((0, 2))
-        self._outside = None
-        self._eligible = set()
+        self._fresh_state()
+
+    @property
+    def associator(self) -> TrackletAssociator:
+        """This camera's image tracklets (filter 4): a candidate's ``tracklet`` field names one."""
+        return self._associator
+
+    @property
+    def window_tracker(self) -> WindowTracker:
+        """Where this camera's windows go (``window.enabled``) and how many frames were windowed."""
+        return self._window
 
     @property
     def tracking(self) -> bool:
         return self._associator.selected is not None
 
-    def _load_classifier(self) -> None:
-        cp = self.params.classifier
-        if not cp.enabled:
-            self._classifier = None
-        elif self._classifier is None or self._classifier.name != cp.model:
-            self._classifier = load_classifier(cp.model)
-        # A classifier trained with the patch features reads them after FEATURE_NAMES.
-        self._needs_patches = (self._classifier is not None
-                               and len(self._classifier.feature_names) > len(FEATURE_NAMES))
-
     @property
     def classifier(self):
         """The classifier scoring candidates (None: the hand-made score)."""
-        return self._classifier
+        return self._scorer.classifier
 
     def use_classifier(self, classifier) -> None:
         """Score candidates with this classifier object instead of the preset's file (until the
         next ``set_params``): a leave-one-clip-out study trains one per left-out clip
         (``benchmarks/train_classifier.py --leave-one-out``) without writing ``resources/``."""
-        self._classifier = classifier
-        self._needs_patches = (classifier is not None
-                               and len(classifier.feature_names) > len(FEATURE_NAMES))
+        self._scorer.use_classifier(classifier)
+
+    def use_score(self, score: ScoreFunction | None) -> None:
+        """Score the measured blobs with ``score(xs, ys, lengths, contrasts, features)`` instead
+        of the classifier (None: back to it): a study's oracle scores them from the labels."""
+        self._scorer.use_score(score)
 
     # ---- the whole chain for one camera (CLI `detect`) --------------------------------------
     def process(self, frame_bgr: np.ndarray, t: float, keep_mask: bool = True) -> CameraResult:
@@ -194,7 +162,7 @@ class CameraDetector:
         window = (self._window.plan(self._associator, t, w, h, model_scale(p.background, w),
                                     self.keep_whole)
                   if p.window.enabled else None)
-        self._planned = (t, window)
+        self._memory.planned = (t, window)
         return window is not None
 
     def set_window_phase(self, phase: float) -> None:
@@ -222,7 +190,7 @@ class CameraDetector:
         scale = model_scale(p.background, w)
         # Windowed tracking (core/window.py): only around the followed shuttle's prediction,
         # as chosen by ``plan_window`` for this frame, or now.
-        planned, self._planned = self._planned, None
+        planned, self._memory.planned = self._memory.planned, None
         if planned is not None and planned[0] == t:
             window = planned[1]
         else:
@@ -230,438 +198,92 @@ class CameraDetector:
                       if p.window.enabled else None)
         windowed = None if window is None else self._window.model_mask(frame_bgr, scale, window,
                                                                        self._background)
-        if windowed is None:
-            if window is not None:
-                window = None
-                self._window.note(None)
-            gray = self._model_grey(frame_bgr, scale)
-            self._window.before_whole(self._background)
-            mask = self._background.apply(gray)
-            contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-        else:
-            gray, mask, contours = windowed
-        return Segmented(gray, mask, contours, window, windowed is not None)
+        if windowed is not None:
+            return Segmented(*windowed, window, True)
+        if window is not None:
+            self._window.note(None)
+        gray = self._grey(frame_bgr, scale)
+        self._window.before_whole(self._background)
+        mask = self._background.apply(gray)
+        return Segmented(gray, mask, external_contours(mask), None, False)
 
     def candidates_from(self, frame_bgr: np.ndarray, t: float, segmented: Segmented,
                         keep_mask: bool = True) -> CameraResult:
-        """The measuring half of ``find_candidates``: filters 1–4 on ``segment``'s contours."""
-        p = self.params
+        """The measuring half of ``find_candidates``: filters 1–4 on ``segment``'s contours,
+        stage after stage (shapes → measurement and score → tracklets)."""
         h, w = frame_bgr.shape[:2]
-        gray, mask, contours, window = segmented.gray, segmented.mask, segmented.contours, segmented.window
-        sx = w / mask.shape[1]
-        sy = h / mask.shape[0]
+        mask = segmented.mask
+        sx, sy = w / mask.shape[1], h / mask.shape[0]
         self._mask_scale = mask.shape[1] / w
-
-        # Filters 1 and 2 (contour length, short side of the tilted rectangle). OpenCV measures
-        # each contour; the scaling and the decisions are done for all contours at once.
-        candidates: list[Candidate] = []
-        s_mean = 0.5 * (sx + sy)
-        # (one list per measurement: a row assignment per contour costs as much as a call)
-        length_all = np.array([cv2.arcLength(c, True) for c in contours], dtype=float) * s_mean
-        short_all = np.array([min(cv2.minAreaRect(c)[1]) for c in contours], dtype=float) * s_mean
-        area_all = np.array([cv2.contourArea(c) for c in contours], dtype=float) * sx * sy
-        rects = np.array([cv2.boundingRect(c) for c in contours], dtype=float).reshape(-1, 4)
-        bx, by, bw, bh = rects[:, 0], rects[:, 1], rects[:, 2], rects[:, 3]
-        boxes_all = _scaled_boxes(rects, sx, sy)
-        length_ok = ((p.contour_length.min_length <= length_all)
-                     & (length_all <= p.contour_length.max_length))
-        short_ok = ((p.tilted_rect.min_short_side <= short_all)
-                    & (short_all <= p.tilted_rect.max_short_side))
-        cl = p.contour_length
-        if 0 < cl.guided_min_length < cl.min_length and len(contours):
-            # Guided exception to filter 1: a short blob where the followed shuttle is predicted.
-            followed = self._associator._followed()
-            if followed is not None and followed.velocity_known:
-                px, py = followed.predict(t)
-                short = (cl.guided_min_length <= length_all) & (length_all < cl.min_length)
-                near = np.hypot((bx + bw / 2) * sx - px, (by + bh / 2) * sy - py) <= cl.guided_radius * w / 1280.0
-                length_ok = length_ok | (short & near)
-        passed = length_ok & short_ok
-        # Blobs too large for a shuttle (a player, a racket and what touches them): a shuttle
-        # merged into one cannot be told apart (``is_merged``).
-        self._last_mask = mask
-        self._large_boxes = boxes_all[(length_all > p.contour_length.max_length)
-                                      | (short_all > p.tilted_rect.max_short_side)]
-        rejected = np.flatnonzero(~passed)
-        if len(rejected):
-            reasons = np.where(length_ok[rejected], REJECT_SHORT_SIDE, REJECT_LENGTH).tolist()
-            for cx, cy, length, short_side, area, reason in zip(
-                    ((bx[rejected] + bw[rejected] / 2) * sx).tolist(),
-                    ((by[rejected] + bh[rejected] / 2) * sy).tolist(),
-                    length_all[rejected].tolist(), short_all[rejected].tolist(),
-                    area_all[rejected].tolist(), reasons):
-                candidates.append(make_candidate(cx, cy, length, short_side, math.nan, area,
-                                                 math.nan, 0.0, reason))
-        kept = np.flatnonzero(passed)
-        geometric: list[tuple[int, float, float, float, tuple[int, int, int, int]]] = [
-            (k, length, short_side, area, tuple(box)) for k, (length, short_side, area, box) in enumerate(zip(
-                length_all[kept].tolist(), short_all[kept].tolist(), area_all[kept].tolist(),
-                boxes_all[kept].tolist()))]
-
-        limit = min(int(p.association.max_measured), MAX_COLOUR_CHECKS)
-        if len(geometric) > limit:
-            # Cheap ranking at the processing scale: blobs near a live tracklet first, then
-            # the strongest brightening; only the best get the full-resolution measurement.
-            diff = self._background.last_difference
-            live = self._associator.live_predictions(t)
-            boxes = boxes_all[kept]
-            centre_x = boxes[:, 0] + boxes[:, 2] / 2
-            centre_y = boxes[:, 1] + boxes[:, 3] / 2
-            if len(live):
-                near = (np.hypot(live[None, :, 0] - centre_x[:, None],
-                                 live[None, :, 1] - centre_y[:, None])
-                        <= live[None, :, 2]).any(axis=1)
-            else:
-                near = np.zeros(len(geometric), dtype=bool)
-            if diff is not None:
-                # Brightening, plus plain brightness: a shuttle held still before the serve
-                # fades into the average but stays the brightest thing around. Each box's
-                # window at the processing scale, maxima of all windows in one gather.
-                x0 = (boxes[:, 0] / sx).astype(np.int64)
-                y0 = (boxes[:, 1] / sy).astype(np.int64)
-                win_w = np.minimum(np.maximum((boxes[:, 2] / sx).astype(np.int64), 1), mask.shape[1] - x0)
-                win_h = np.minimum(np.maximum((boxes[:, 3] / sy).astype(np.int64), 1), mask.shape[0] - y0)
-                diff_max, gray_max = _window_maxima((diff, gray), x0, y0, win_w, win_h,
-                                                    self._background.last_unlit)
-                strength = diff_max.astype(np.float64) + 0.5 * gray_max.astype(np.float64)
-            else:
-                strength = -area_all[kept]   # MOG2 gives no strength: smaller blobs first
-            # Near first, then strongest; ties keep the contour order (a stable sort).
-            order = np.lexsort((-strength, ~near)).tolist()
-            for i in order[limit:]:
-                _, length, short_side, area, box = geometric[i]
-                candidates.append(make_candidate(box[0] + box[2] / 2, box[1] + box[3] / 2, length,
-                                                 short_side, math.nan, area, math.nan, 0.0,
-                                                 REJECT_WHITENESS))
-            geometric = [geometric[i] for i in order[:limit]]
-
-        # Filter 3 and the appearance features of all the frame's blobs at once; the
-        # classifier then scores them in one call too.
-        measured = []
-        pos_x, pos_y, whiteness_all, saturation_all, appearance_all = measure_blobs(
-            frame_bgr, mask, [g[4] for g in geometric], sx, sy, p.colour.head_fraction)
-        if segmented.windowed:
-            # The window's corners are multiples of ALIGN px: exact model pixels.
-            fresh = tuple(int(round(v * self._mask_scale)) for v in window)
-        else:
-            fresh = (0, 0, mask.shape[1], mask.shape[0])
-        split = self._split_merged(gray, mask, contours, length_all, t, w, sx, sy, fresh)
-        self.last_split = len(split[1]) if split is not None else 0
-        if split is not None:
-            # Parts split off merged blobs, measured on their own pixels (``_split_merged``).
-            core_mask, parts = split
-            more = measure_blobs(frame_bgr, core_mask, [g[4] for g in parts], sx, sy, p.colour.head_fraction)
-            pos_x, pos_y, whiteness_all, saturation_all, appearance_all = (
-                np.concatenate([a, b]) for a, b in zip(
-                    (pos_x, pos_y, whiteness_all, saturation_all, appearance_all), more))
-            geometric = geometric + parts
-        features = np.empty((len(geometric), len(FEATURE_NAMES)))
-        features[:, 4:] = appearance_all
-        for row, ((_, length, short_side, area, _box), x, y, whiteness, saturation, contrast) in enumerate(zip(
-                geometric, pos_x.tolist(), pos_y.tolist(), whiteness_all.tolist(),
-                saturation_all.tolist(), features[:, 4].tolist())):
-            reason = None
-            if (whiteness < p.colour.min_whiteness or saturation > p.colour.max_saturation
-                    or contrast < p.colour.min_contrast):
-                reason = REJECT_WHITENESS
-            elif p.motion.min_displacement > 0 and self._is_stationary(x, y):
-                reason = REJECT_MOTION
-            long_side = max(length / 2.0 - short_side, short_side)
-            feats = features[row]
-            feats[:4] = (math.log1p(length), math.log1p(short_side), math.log1p(area),
-                         long_side / max(short_side, 1e-3))
-            measured.append([x, y, length, short_side, whiteness, area, 0.0, reason, feats])
-        if measured:
-            if self._needs_patches:
-                features = np.hstack([features, patch_features(
-                    frame_bgr, np.array([m[0] for m in measured]), np.array([m[1] for m in measured]))])
-            qualities = self._qualities(np.array([m[2] for m in measured]), features[:, 4], features)
-            for m, quality in zip(measured, qualities.tolist()):
-                m[6] = quality
-                if m[7] is None and quality < p.association.min_quality:
-                    m[7] = REJECT_SCORE
-        self._previous_positions = np.asarray([(m[0], m[1]) for m in measured],
-                                              dtype=float).reshape(-1, 2)
-        # The same positions array, no second copy on the per-frame path.
-        self.last_scored = (self._previous_positions, features)
-
-        # Filter 4, multi-frame: only candidates on a confirmed, travelling, smooth tracklet
-        # pass (the speed-aware gate lives in the associator).
-        self.last_features = [(m[0], m[1], m[8], m[7]) for m in measured]
-        live = [m for m in measured if m[7] is None]
-        positions = np.asarray([(m[0], m[1]) for m in live], dtype=float).reshape(-1, 2)
-        qualities = np.asarray([m[6] for m in live], dtype=float)
-        ms_x, ms_y = 1.0 / sx, 1.0 / sy
+        rejected, blobs, shapes, shape_counts = self._shape_stage(segmented, t, w, sx, sy)
+        scored = self._score_stage(frame_bgr, segmented, blobs, shapes, t, w, sx, sy)
         blind = None
-        if p.motion.coast_blind > 0:
+        if self.params.motion.coast_blind > 0:
+            ms_x, ms_y = 1.0 / sx, 1.0 / sy
+
             def blind(x: float, y: float) -> bool:
                 return self._background.is_blind(x * ms_x, y * ms_y)
-        links = self._associator.update(t, positions, qualities, blind)
-        self._left_picture = -1
-        if p.association.exit_margin > 0:
-            links = self._out_of_picture(t, w, h, links)
-        self._tracklet_of = {}
-        width_frames = int(p.colour.head_lead_width_frames)
-        edge_exit = p.colour.edge_exit > 0
-        k = 0
-        # Candidates the association refused, by index, while none passed: ``_accept_lone``.
-        lone = p.association.lone_quality < 1.0
-        refused: list[int] | None = [] if lone else None
-        for m in measured:
-            x, y, length, short_side, whiteness, area, quality, reason, _ = m
-            motion, score, ident = math.nan, quality, None
-            if reason is None:
-                ident, motion, merit = links[k]
-                k += 1
-                if merit < 0:
-                    reason = REJECT_MOTION
-                    if refused is not None and quality >= p.association.lone_quality:
-                        refused.append(len(candidates))
-                else:
-                    score = merit
-                    refused = None
-            c = make_candidate(x, y, length, short_side, whiteness, area, motion, score, reason,
-                               tracklet=-1 if ident is None else ident)
-            if ident is not None:
-                self._tracklet_of[id(c)] = ident
-                if width_frames > 1:
-                    widths = self._widths.get(ident)
-                    if widths is None or widths.maxlen != width_frames:
-                        widths = self._widths[ident] = deque(widths or (), maxlen=width_frames)
-                    widths.append(short_side)
-                if edge_exit:
-                    areas = self._areas.get(ident)
-                    if areas is None:
-                        areas = self._areas[ident] = deque(maxlen=EDGE_AREA_FRAMES)
-                    areas.append(area)
-            candidates.append(c)
-        if width_frames > 1 and len(self._widths) > 2 * len(self._associator.tracklets) + 16:
-            alive = {tr.ident for tr in self._associator.tracklets}
-            self._widths = {k: v for k, v in self._widths.items() if k in alive}
-        if edge_exit and len(self._areas) > 2 * len(self._associator.tracklets) + 16:
-            alive = {tr.ident for tr in self._associator.tracklets}
-            self._areas = {k: v for k, v in self._areas.items() if k in alive}
-        # The followed shuttle crossing a light or a white line leaves no blob: its track's
-        # prediction stands in (flagged, never triangulated) until it shows again.
-        coast = self._associator.coasting(t, blind) if self._outside is None else None
-        if coast is not None:
-            tr, merit = coast
-            px, py = tr.predict(t)
-            c = Candidate(px, py, math.nan, math.nan, math.nan, math.nan, 0.0, merit, None,
-                          predicted=True, tracklet=tr.ident)
-            self._tracklet_of[id(c)] = tr.ident
-            candidates.append(c)
-        elif refused and self._outside is None:
-            self._accept_lone(candidates, refused)
-        return CameraResult(detection=None, candidates=tuple(candidates),
+        linked, tracklet_report = self._tracklets.link(t, scored, w, h, blind)
+        reasons = scored.rejected_by
+        self.last_diagnostics = DetectionDiagnostics(
+            segmented.windowed, ShapeReport(*shape_counts, self.last_split),
+            ScoreReport(len(reasons), reasons.count(REJECT_WHITENESS), reasons.count(REJECT_MOTION),
+                        reasons.count(REJECT_SCORE)),
+            tracklet_report)
+        window = segmented.window
+        return CameraResult(detection=None, candidates=tuple(rejected + linked),
                             mask=mask if keep_mask else None,
                             mask_scale=mask.shape[1] / w, image_size=(w, h),
                             window=None if window is None else tuple(int(v) for v in window),
-                            left_picture=self._left_picture)
+                            left_picture=self._tracklets.exit_hold.left_picture)
 
-    def _accept_lone(self, candidates: list, refused: list[int]) -> None:
-        """No candidate lies on a confirmed, travelling tracklet: the most shuttle-like one the
-        association refused (``refused``: indices into ``candidates``, each of quality ≥
-        ``association.lone_quality``) passes after all, scored by its own quality.
+    def _shape_stage(self, segmented: Segmented, t: float, w: int, sx: float, sy: float
+                     ) -> tuple[list[Candidate], list[ShapedBlob], ContourShapes, tuple[int, int, int, int]]:
+        """Filters 1 and 2 on the contours, then at most ``association.max_measured`` blobs for
+        the full-resolution look: (the candidates rejected on the way, the blobs that go on,
+        every contour's shape, the counts of ``ShapeReport`` but the split parts)."""
+        p = self.params
+        mask = segmented.mask
+        shapes = measure_contours(segmented.contours, sx, sy)
+        length_ok, short_ok = shape_filters(shapes, p, self._associator.followed, t, w)
+        self._last_mask = mask
+        self._large_boxes = too_large(shapes, p)
+        rejected, blobs = shape_rejects(shapes, length_ok, short_ok)
+        limit = min(int(p.association.max_measured), MAX_COLOUR_CHECKS)
+        dropped = []
+        if len(blobs) > limit:
+            bg = self._background
+            blobs, dropped = rank_for_measuring(blobs, limit, self._associator.live_predictions(t),
+                                                bg.last_difference, segmented.gray, bg.last_unlit,
+                                                shapes, mask.shape)
+            rejected += dropped
+        counts = (len(shapes.length), int(np.count_nonzero(~length_ok)),
+                  int(np.count_nonzero(length_ok & ~short_ok)), len(dropped))
+        return rejected, blobs, shapes, counts
 
-        The shuttle held for the serve, or lying after a rally, never travels, and TV labels
-        mark it visible; with nothing else to report, a blob the classifier is sure of is more
-        often that shuttle than anything (``lone_quality`` in params.py). Not while the shuttle
-        is out of the picture (``_out_of_picture`` holds every candidate back then) nor while the
-        followed track coasts through a blind spot.
-        """
-        best = max(refused, key=lambda i: candidates[i].score)
-        c = candidates[best]
-        accepted = dataclasses.replace(c, rejected_by=None)
-        ident = self._tracklet_of.pop(id(c), None)
-        if ident is not None:
-            self._tracklet_of[id(accepted)] = ident
-        candidates[best] = accepted
-
-    def _out_of_picture(self, t: float, w: int, h: int,
-                        links: list[tuple[int, float, float]]) -> list[tuple[int, float, float]]:
-        """Hold every report back while the shuttle is out of the picture (``exit_margin``).
-
-        A track that could supply the detection last frame, seen within the margin of the top
-        edge while rising and now missing with its prediction above the image, is the shuttle
-        leaving the picture (on TV: a clear or a lob; players and rackets cross the other
-        edges, not this one). Out there it cannot be seen, so whatever the association offers
-        meanwhile (a player in white, a shoe, a logo) is not the shuttle; it can only come back
-        across an edge. So until a
-        track that has come within ``entry_margin`` of an edge since the exit may supply the
-        detection (the shuttle coming back in; its first frames back may be missed, so its
-        track can start some way inside; ``_came_in``), or ``exit_timeout`` has passed (a new
-        shuttle brought into play), every candidate is held back (``merit`` -1). Any point of a
-        track born after the exit counts, not only its first: a young clutter track's wide gate
-        (its velocity barely known) can take the returning shuttle's first blob over (1_02_01
-        111 with filter 1 at 18 px: a track born at (992, 173) took the shuttle at (847, 6), and
-        its first point held it back for 17 frames). The hold starts only while the followed
-        track is not seen in the frame.
-        """
-        a, ap = self._associator, self.params.association
-        margin = ap.exit_margin * w / 1280.0
-        entry = max(ap.entry_margin, ap.exit_margin) * w / 1280.0
-        # The followed track seen in this frame is the shuttle in the picture: another track
-        # leaving through the top is clutter (bwf_00001 242 with the speed gate gain at 0.75:
-        # a track at the top edge that could have supplied the detection left while the
-        # followed shuttle flew on below, and the shuttle was held back for 3 s).
-        followed_here = any(tr.ident == a.selected and tr.hit_now for tr in a.tracklets)
-        for tr in a.tracklets:
-            # Through the top edge only: players, rackets and shoes cross the side and bottom
-            # edges of a TV picture, never its top (they stand on the court below it).
-            if (not tr.hit_now and tr.misses == 1 and tr.ident in self._eligible and not followed_here
-                    and tr.velocity_known and tr.vy < 0 and tr.y + 0.5 < margin):
-                if tr.predict(t)[1] < -0.5:
-                    # The followed shuttle is the one that left: no clutter keeps the hysteresis.
-                    self._outside = (t, a._next_id, {other.ident: other.hits for other in a.tracklets})
-                    a.select(tr.ident)
-                    self._left_picture = tr.ident
-                    break
-        self._eligible = {ident for ident, _, merit in links if merit >= 0}
-        if self._outside is None:
-            return links
-        t_exit, first, hits_then = self._outside
-        if t - t_exit > ap.exit_timeout:
-            self._outside = None
-            return links
-        by_id = {tr.ident: tr for tr in a.tracklets}
-        out, entered = [], False
-        for ident, motion, merit in links:
-            tr = by_id.get(ident)
-            if merit >= 0 and not (tr is not None and self._came_in(tr, first, hits_then, w, h, entry)):
-                merit = -1.0
-            entered = entered or merit >= 0
-            out.append((ident, motion, merit))
-        if entered:
-            self._outside = None
-        return out
-
-    @staticmethod
-    def _came_in(tr, first: int, hits_then: dict[int, int], w: int, h: int, entry: float) -> bool:
-        """Has tracklet ``tr`` been within ``entry`` px of an edge since the shuttle left?
-
-        A track born after the exit (ident ≥ ``first``): any of its points. An older one: only
-        the points it gained since (its hits then, ``hits_then``), for an old clutter track
-        (a player's, a line's) can take the returning shuttle's blob into its gate (bwf_00001
-        90 with the gate slack at 30 px: a track that had sat at (733, 317) for 52 frames).
-        """
-        points = list(tr.recent)
-        if tr.ident < first:
-            gained = tr.hits - hits_then.get(tr.ident, tr.hits)
-            points = points[len(points) - gained:] if gained > 0 else []
-        return any(_near_edge(x, y, w, h, entry) for x, y in points)
-
-    def _split_merged(self, gray: np.ndarray, mask: np.ndarray, contours, length_all: np.ndarray,
-                      t: float, w: int, sx: float, sy: float, fresh: tuple[int, int, int, int]):
-        """(mask of the parts, parts as (index, length, short side, area, box)) split off the
-        frame's long blobs (``contour_length.split_min_length``), or None.
-
-        A shuttle touching a racket, an arm, or the ghost a racket leaves on a lit line merges
-        with it into one blob that filters 1 and 2 reject or that scores as a poor shuttle; the
-        tracker then loses the shuttle or follows the racket. The shuttle moves by about its
-        own size a frame, so the pixels of a long blob that brightened by ``split_threshold``
-        since the previous frame (processing scale) hold it: each compact group of them (grown
-        by a pixel like the mask, and within filters 1 and 2) inside the followed tracklet's
-        gate becomes a candidate of its own, measured on its own pixels. ``fresh`` (model px
-        x0, y0, x1, y1) is the part of ``gray`` made this frame (the window, when windowed);
-        a blob is split only where the previous frame's grey image was made too (windows
-        overlap while they follow the shuttle: rally_11-48-00 left 483–492, coarse, a shuttle
-        merged with a player for 10 frames). Only around a track seen lately
-        (``split_max_misses``): the grown gate of one that lost its blob behind a player holds
-        brightening parts of the player, split off in both cameras alike.
-        """
-        cl = self.params.contour_length
-        prev, self._previous_gray = self._previous_gray, None
-        if cl.split_min_length <= 0:
-            return None
-        fx0, fy0, fx1, fy1 = fresh
-        self._previous_gray = (gray[fy0:fy1, fx0:fx1].copy(), fx0, fy0, gray.shape)
-        if prev is None or prev[3] != gray.shape:
-            return None
-        prev_gray, px0, py0, _ = prev
-        ph, pw = prev_gray.shape
-        # Only where the followed shuttle may be (its tracklet's gate around its prediction):
-        # elsewhere a moving hand or racket edge split off a player would start tracks of its own.
-        followed = self._associator._followed()
-        if followed is None or not followed.velocity_known:
-            return None
-        if followed.misses > cl.split_max_misses:
-            # A track that lost its blob a while ago: its gate has grown, and what brightens
-            # in it then is more often part of a player than the shuttle (hidden
-            # behind the player).
-            return None
-        px, py = followed.predict(t)
-        radius = self._associator.gate(followed, max(t - followed.t, 1e-3))
-        big = np.flatnonzero(length_all >= cl.split_min_length * w / 1280.0)
-        if not len(big):
-            return None
-        s_mean = 0.5 * (sx + sy)
-        tr = self.params.tilted_rect
-        core_mask = None
-        parts = []
-        h_m, w_m = mask.shape[:2]
-        for k in big.tolist():
-            x0, y0, bw, bh = cv2.boundingRect(contours[k])
-            if not (x0 * sx - radius <= px <= (x0 + bw) * sx + radius
-                    and y0 * sy - radius <= py <= (y0 + bh) * sy + radius):
-                continue
-            if not (px0 <= x0 and py0 <= y0 and x0 + bw <= px0 + pw and y0 + bh <= py0 + ph):
-                continue   # the previous frame's grey image was not made here
-            blob = np.zeros((bh, bw), np.uint8)
-            cv2.drawContours(blob, contours, k, 255, -1, offset=(-x0, -y0))
-            rise = cv2.subtract(gray[y0:y0 + bh, x0:x0 + bw],
-                                prev_gray[y0 - py0:y0 - py0 + bh, x0 - px0:x0 - px0 + bw])
-            core = cv2.compare(rise, float(cl.split_threshold), cv2.CMP_GT)
-            cv2.bitwise_and(core, blob, dst=core)
-            if not cv2.countNonZero(core):
-                continue
-            core = cv2.dilate(core, _GROW)
-            cv2.bitwise_and(core, blob, dst=core)
-            found, _ = cv2.findContours(core, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-            for c in found:
-                length = cv2.arcLength(c, True) * s_mean
-                short_side = min(cv2.minAreaRect(c)[1]) * s_mean
-                if not (cl.min_length <= length <= min(cl.max_length, 0.5 * length_all[k])
-                        and tr.min_short_side <= short_side <= tr.max_short_side):
-                    continue
-                cx, cy, cw, ch = cv2.boundingRect(c)
-                if math.hypot((x0 + cx + cw / 2) * sx - px, (y0 + cy + ch / 2) * sy - py) > radius:
-                    continue
-                if core_mask is None:
-                    core_mask = np.zeros((h_m, w_m), np.uint8)
-                cv2.drawContours(core_mask, [c], 0, 255, -1, offset=(x0, y0))
-                box = _scaled_boxes(np.array([[cx + x0, cy + y0, cw, ch]], dtype=float), sx, sy)[0]
-                parts.append((k, length, short_side, cv2.contourArea(c) * sx * sy, tuple(box.tolist())))
-        if not parts:
-            return None
-        return core_mask, parts
-
-    def _model_grey(self, frame_bgr: np.ndarray, scale: float) -> np.ndarray:
-        """The grey image the background model reads: the frame at ``scale`` (INTER_AREA).
-
-        Reading the colour frame is most of the cost (9.4 MB at 2048×1536: close to a copy of
-        it), so at a quarter scale only every other row is read: OpenCV's 2×2 area fast path
-        on the row-strided view (a valid array with twice the row step) averages rows 4k and
-        4k + 2 and two columns, the grey image is made there, and an exact 2:1 linear step
-        (the mean of pixel pairs) halves it across. Each model pixel is the mean of 8 of its
-        16 full-resolution pixels: a shuttle two rows tall or more always shows in it.
-        """
-        h, w = frame_bgr.shape[:2]
-        if scale >= 1.0:
-            return cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY)
-        size = (max(1, round(w * scale)), max(1, round(h * scale)))
-        quarter = scale == 0.25 and w % 4 == 0 and h % 4 == 0
-        first = (w // 2, h // 4) if quarter else size
-        if self._small is None or self._small.shape[:2] != (first[1], first[0]):
-            # Reused every frame (the grey image is read only within this call).
-            self._small = np.empty((first[1], first[0], 3), np.uint8)
-            self._gray = np.empty((first[1], first[0]), np.uint8)
-        source = frame_bgr[::2] if quarter else frame_bgr
-        small = cv2.resize(source, first, dst=self._small, interpolation=cv2.INTER_AREA)
-        gray = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY, dst=self._gray)
-        if quarter:
-            gray = cv2.resize(gray, size, interpolation=cv2.INTER_LINEAR)
-        return gray
+    def _score_stage(self, frame_bgr: np.ndarray, segmented: Segmented, blobs: list[ShapedBlob],
+                     shapes: ContourShapes, t: float, w: int, sx: float, sy: float) -> ScoredBlobs:
+        """Filter 3, the features and the score of the blobs, and of the parts split off long
+        blobs (measured on their own pixels)."""
+        p = self.params
+        head = p.colour.head_fraction
+        measured = measure_blobs(frame_bgr, segmented.mask, [b.box for b in blobs], sx, sy, head)
+        split = self._memory.splitter.split(p, self._associator, segmented.gray, segmented.mask,
+                                            segmented.contours, shapes, t, w,
+                                            segmented.fresh_part(self._mask_scale))
+        self.last_split = len(split[1]) if split is not None else 0
+        if split is not None:
+            core_mask, parts = split
+            more = measure_blobs(frame_bgr, core_mask, [b.box for b in parts], sx, sy, head)
+            measured = BlobMeasurements.concatenate(measured, more)
+            blobs = blobs + parts
+        scored = score_blobs(p, self._scorer, frame_bgr, blobs, measured, self._memory.previous_positions)
+        positions = scored.positions
+        self._memory.previous_positions = positions
+        # The same positions array, no second copy on the per-frame path.
+        self.last_scored = (positions, scored.features)
+        self.last_features = list(zip(scored.x, scored.y, scored.shape_features, scored.rejected_by))
+        return scored
 
     def is_blind(self, x: float, y: float) -> bool:
         """True when a shuttle at full-resolution (x, y) cannot show in this camera's mask."""
@@ -688,11 +310,8 @@ class CameraDetector:
 
     def tracklet_hits(self, candidate: Candidate) -> int:
         """Frames the candidate's tracklet has been seen (0 when it is on none)."""
-        ident = self._tracklet_of.get(id(candidate))
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                return tr.hits
-        return 0
+        tr = self._associator.tracklet(candidate.tracklet)
+        return 0 if tr is None else tr.hits
 
     def vouchable(self, candidate: Candidate, min_quality: float) -> tuple[float, float] | None:
         """Image velocity (px/s) of a candidate the association held back (filter 4: its tracklet
@@ -705,14 +324,11 @@ class CameraDetector:
         """
         if candidate.rejected_by != REJECT_MOTION or candidate.predicted:
             return None
-        ident = self._tracklet_of.get(id(candidate))
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                if (tr.hit_now and tr.velocity_known and tr.quality >= min_quality
-                        and len(tr.recent) >= 2
-                        and math.hypot(tr.x - tr.recent[-2][0], tr.y - tr.recent[-2][1]) >= VOUCH_MIN_STEP):
-                    return tr.vx, tr.vy
-                return None
+        tr = self._associator.tracklet(candidate.tracklet)
+        if (tr is not None and tr.hit_now and tr.velocity_known and tr.quality >= min_quality
+                and len(tr.recent) >= 2
+                and math.hypot(tr.x - tr.recent[-2][0], tr.y - tr.recent[-2][1]) >= VOUCH_MIN_STEP):
+            return tr.vx, tr.vy
         return None
 
     def first_sighting(self, candidate: Candidate, min_quality: float) -> bool:
@@ -720,36 +336,26 @@ class CameraDetector:
         least ``min_quality`` by its looks: the other camera may vouch for it by position alone."""
         if candidate.rejected_by != REJECT_MOTION or candidate.predicted or candidate.score < min_quality:
             return False
-        ident = self._tracklet_of.get(id(candidate))
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                return tr.hit_now and tr.hits == 1
-        return False
+        tr = self._associator.tracklet(candidate.tracklet)
+        return tr is not None and tr.hit_now and tr.hits == 1
 
     def vouch(self, candidate: Candidate, score: float) -> Candidate:
         """The held-back candidate let through with ``score`` (it keeps its tracklet)."""
-        passed = dataclasses.replace(candidate, rejected_by=None, score=score)
-        ident = self._tracklet_of.get(id(candidate))
-        if ident is not None:
-            self._tracklet_of[id(passed)] = ident
-        return passed
+        return dataclasses.replace(candidate, rejected_by=None, score=score)
 
     def tracklet_velocity(self, candidate: Candidate) -> tuple[float, float] | None:
         """Image velocity (px/s) of the candidate's tracklet, or None when not yet known."""
-        ident = self._tracklet_of.get(id(candidate))
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                return (tr.vx, tr.vy) if tr.velocity_known else None
-        return None
+        tr = self._associator.tracklet(candidate.tracklet)
+        return (tr.vx, tr.vy) if tr is not None and tr.velocity_known else None
 
-    def _velocity_of(self, ident: int | None) -> tuple[float, float] | None:
+    def _velocity_of(self, ident: int) -> tuple[float, float] | None:
         """Image velocity (px/s) of the tracklet ``ident`` (or of the followed one's ghost)."""
-        if ident is None:
+        if ident < 0:
             return None
-        for tr in self._associator.tracklets:
-            if tr.ident == ident:
-                return (tr.vx, tr.vy) if tr.velocity_known else None
-        ghost = self._associator._followed()
+        tr = self._associator.tracklet(ident)
+        if tr is not None:
+            return (tr.vx, tr.vy) if tr.velocity_known else None
+        ghost = self._associator.followed
         if ghost is not None and ghost.ident == ident and ghost.velocity_known:
             return ghost.vx, ghost.vy
         return None
@@ -771,8 +377,7 @@ class CameraDetector:
         if chosen is not None and chosen.predicted:
             # A coasting prediction (no blob) at the edge its track leaves through: the blob is
             # missing because the shuttle has left the image, not because it is hidden.
-            ident = self._tracklet_of.get(id(chosen), chosen.tracklet if chosen.tracklet >= 0 else None)
-            velocity = self._velocity_of(ident)
+            velocity = self._velocity_of(chosen.tracklet)
             if (c.edge_exit > 0 and w > 0 and velocity is not None
                     and _leaving_edge(chosen.x, chosen.y, velocity, w, h, c.edge_exit * w / 1280.0)):
                 return result, None
@@ -787,7 +392,7 @@ class CameraDetector:
         speed = math.hypot(*velocity)
         if c.head_lead > 0 and speed >= c.head_lead_min_speed:
             width = chosen.short_side
-            widths = self._widths.get(self._tracklet_of.get(id(chosen)))
+            widths = self._tracklets.looks.widths(chosen.tracklet)
             if c.head_lead_width_frames > 1 and widths:
                 # A shuttle merged with a racket or an arm: the blob is wider than the shuttle,
                 # whose own width shows in the tracklet's recent frames.
@@ -804,16 +409,13 @@ class CameraDetector:
             # A shuttle clipped by the edge it is leaving through: its visible part's bright
             # centroid stays inside while the cork is already out (``colour.edge_exit``). The
             # cork leads, so it is out once the blob has lost a good part of its usual area.
-            areas = self._areas.get(self._tracklet_of.get(id(chosen)))
+            areas = self._tracklets.looks.areas(chosen.tracklet)
             if areas is not None and len(areas) >= 3:
                 usual = float(np.median(list(areas)[:-1]))
                 if chosen.area < c.edge_exit_area * usual:
                     return result, None
         if moved is chosen:
             return result, chosen
-        ident = self._tracklet_of.get(id(chosen))
-        if ident is not None:
-            self._tracklet_of[id(moved)] = ident
         candidates = tuple(moved if cand is chosen else cand for cand in result.candidates)
         return dataclasses.replace(result, candidates=candidates), moved
 
@@ -830,7 +432,7 @@ class CameraDetector:
         """Follow the chosen candidate's tracklet (hysteresis in the next frames' choice)."""
         if detection is None:
             return  # the followed tracklet keeps its bonus while it coasts
-        self._associator.select(self._tracklet_of.get(id(detection)))
+        self._associator.select(detection.tracklet if detection.tracklet >= 0 else None)
 
     def protect_report(self, report: Candidate | None, width: int) -> None:
         """The next frame's mask keeps the pixels around ``report`` from a lower threshold
@@ -855,37 +457,6 @@ class CameraDetector:
             cands.append(c)
         return dataclasses.replace(result, detection=chosen, candidates=tuple(cands))
 
-    # ---- measurements ----------------------------------------------------------------------
-    def _qualities(self, lengths: np.ndarray, contrasts: np.ndarray,
-                   features: np.ndarray) -> np.ndarray:
-        """Shape/contrast scores of lone candidates in [0, 1] (the soft side of filters 1 and 3).
-
-        With the learned classifier enabled this is its probability that each blob is the
-        shuttle; otherwise a hand-made blend of contrast and size.
-        """
-        if self._classifier is not None:
-            return self._classifier.probability(features)
-        c = self.params.colour
-        bright = np.minimum(np.maximum(contrasts - c.min_contrast, 0.0)
-                            / max(c.contrast_reference - c.min_contrast, 1.0), 1.0)
-        size = np.minimum(lengths / max(self.params.contour_length.min_length * 2.0, 1.0), 1.0)
-        return 0.7 * bright + 0.3 * size
-
-    def _is_stationary(self, x: float, y: float) -> bool:
-        prev = self._previous_positions
-        if len(prev) == 0:
-            return False
-        d = np.hypot(prev[:, 0] - x, prev[:, 1] - y)
-        return bool(d.min() < self.params.motion.min_displacement)
-
-    @staticmethod
-    def _measure(frame: np.ndarray, mask: np.ndarray, box: tuple[int, int, int, int],
-                 sx: float, sy: float, head_fraction: float = 0.5
-                 ) -> tuple[float, float, float, float, np.ndarray]:
-        """(x, y, whiteness, saturation, appearance features) of one blob (see ``measure_blobs``)."""
-        x, y, whiteness, saturation, features = measure_blobs(frame, mask, [box], sx, sy, head_fraction)
-        return float(x[0]), float(y[0]), float(whiteness[0]), float(saturation[0]), features[0]
-
 
 def _leaving_edge(x: float, y: float, velocity: tuple[float, float], w: int, h: int,
                   margin: float) -> bool:
@@ -894,411 +465,3 @@ def _leaving_edge(x: float, y: float, velocity: tuple[float, float], w: int, h: 
     vx, vy = velocity
     return ((vx < 0 and x + 0.5 < margin) or (vx > 0 and w - 0.5 - x < margin)
             or (vy < 0 and y + 0.5 < margin) or (vy > 0 and h - 0.5 - y < margin))
-
-
-def _near_edge(x: float, y: float, w: int, h: int, margin: float) -> bool:
-    """True when (x, y) lies within ``margin`` px of any image edge."""
-    return min(x + 0.5, y + 0.5, w - 0.5 - x, h - 0.5 - y) < margin
-
-
-def model_scale(background, width: int) -> float:
-    """The scale the background model runs at for frames ``width`` px wide.
-
-    The processing scale, halved for large frames when ``coarse_from_width`` asks for it: at
-    2048×1536 a 512 px model instead of 1024 px cuts the image work ~4× and, with far fewer
-    noise contours to measure, the CPU per camera frame by ~45 % (issue #7). With the default
-    classifier (trained at half scale) it costs accuracy: on rally_11-46-04 the F1 fell from
-    96.9 % to 95.1–95.5 % (the 4× coarser mask lets dilated noise pass the length filter and
-    shifts the mask-based features). The ``coarse`` preset pairs it with a classifier trained
-    on coarse-scale candidates, windowed tracking and the landed hold's protected mask: within
-    0.2 F1 points of the default on the tuned-on rallies and 0.45 on the held-out ones
-    (eighteenth round, README Speed). It stays opt-in: presets are the operator's choice.
-    """
-    scale = float(background.processing_scale)
-    if 0 < int(background.coarse_from_width) <= width:
-        scale *= 0.5
-    return scale
-
-
-def patch_features(frame: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
-    """(N, PATCH_CELLS²) normalised grey patches around the points (xs, ys), full-res px.
-
-    Each patch is the square of ``2 × PATCH_HALF`` px (at 1280 px width and below; scaled with
-    a larger frame, the image border repeated) around the rounded point, in luma (OpenCV's BGR → grey, in
-    float), area-averaged to PATCH_CELLS × PATCH_CELLS cells, minus the patch's median cell,
-    divided by its peak above that median (at least 8 grey levels, so a flat patch stays flat).
-    The hand-made features say how bright, white and small a blob is; the patch says what shape
-    its brightness has around it — a cork with its skirt, a line, a shoe's edge, a logo's
-    letter (benchmarks/README.md, sixteenth round: the shuttle ranked first among its frame's
-    candidates in ≈ 10 % more TV frames, leave-one-clip-out).
-
-    Speed: the squares are copied one below the other into one canvas (a slice each; an
-    advanced-index gather of all of them at once took 3× longer), and the grey conversion and
-    the area averaging run once on the canvas — its patches are whole multiples of their cells'
-    height, so no cell mixes two patches.
-    """
-    xs = np.asarray(xs, dtype=float)
-    ys = np.asarray(ys, dtype=float)
-    n = len(xs)
-    if n == 0:
-        return np.zeros((0, PATCH_CELLS * PATCH_CELLS), np.float32)
-    h, w = frame.shape[:2]
-    # Never below the 1280 px square: scaled down with a small frame it shrank to the blob
-    # itself (a 6 px dot at 320 px filled its 8 px square), a look no classifier was shown.
-    half = max(PATCH_HALF, int(round(PATCH_HALF * w / 1280.0)))
-    size = 2 * half
-    canvas = np.empty((n * size, size, 3), np.uint8)
-    offsets = np.arange(-half, half)
-    for k, (x, y) in enumerate(zip(np.rint(xs).astype(np.int64).tolist(),
-                                   np.rint(ys).astype(np.int64).tolist())):
-        if half <= x <= w - half and half <= y <= h - half:
-            canvas[k * size:(k + 1) * size] = frame[y - half:y + half, x - half:x + half]
-        else:
-            rows = np.clip(y + offsets, 0, h - 1)
-            cols = np.clip(x + offsets, 0, w - 1)
-            canvas[k * size:(k + 1) * size] = frame[rows[:, None], cols[None, :]]
-    luma = cv2.cvtColor(canvas.astype(np.float32), cv2.COLOR_BGR2GRAY)
-    cells = cv2.resize(luma, (PATCH_CELLS, n * PATCH_CELLS),
-                       interpolation=cv2.INTER_AREA).reshape(n, -1)
-    median = np.median(cells, axis=1, keepdims=True)
-    peak = np.maximum(cells.max(axis=1, keepdims=True) - median, 8.0)
-    return (cells - median) / peak
-
-
-def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: float,
-                  head_fraction: float = 0.5
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(x, y, whiteness, saturation, appearance features) of blobs, in full-resolution windows.
-
-    Per blob, its window is the box grown by ``REFINE_MARGIN``. The position is the
-    intensity-weighted centroid of the blob's brightest part above the window's local
-    background (median of the window border), which locates the white cork head rather than
-    the middle of head + skirt, to a fraction of a pixel. The appearance features (see
-    ``FEATURE_NAMES``) describe how small, bright, isolated and white the blob is; the
-    candidate classifier and the hand-made score read them.
-
-    Speed: up to ``association.max_measured`` blobs per frame and camera come here. Their
-    windows are copied into one canvas, one below the other (left-aligned, a blank row between
-    two, so growing a mask by a pixel never reaches the next window), and every step runs once
-    on the canvas: per-window sums as row sums (``cv2.reduce``) added over each window's rows,
-    per-window maxima over each window's contiguous range of the flat canvas (both by
-    ``reduceat``). A few dozen calls per frame instead of ~30 per blob (each with numpy's
-    overhead and the GIL held, so the two camera threads queued on it). Padding pixels are
-    made neutral for every step (0 for counts and sums, -inf for maxima). The values are those
-    of the plain per-window numpy formulas the classifiers were trained on
-    (``tests/test_detector_fast_paths.py`` keeps them as the reference): grey is
-    ``mean(B, G, R)`` in float32, the border median is numpy's, counts and sums of integers are
-    exact; only the window's standard deviation (from the sums of g and g²) and the centroid's
-    sums are accumulated in double instead of float32 (relative differences ~1e-7).
-    """
-    n = len(boxes)
-    h, w = frame.shape[:2]
-    pos_x = np.empty(n)
-    pos_y = np.empty(n)
-    whiteness = np.zeros(n)
-    saturation = np.full(n, 255.0)
-    features = np.zeros((n, N_APPEARANCE), dtype=np.float32)
-    blobs, windows, heights, widths = [], [], [], []
-    for i, box in enumerate(boxes):
-        x0 = max(box[0] - REFINE_MARGIN, 0)
-        y0 = max(box[1] - REFINE_MARGIN, 0)
-        x1 = min(box[0] + box[2] + REFINE_MARGIN, w)
-        y1 = min(box[1] + box[3] + REFINE_MARGIN, h)
-        if x1 <= x0 or y1 <= y0:
-            pos_x[i], pos_y[i] = box[0] + box[2] / 2, box[1] + box[3] / 2
-            continue
-        blobs.append(i)
-        windows.append((x0, y0, x1, y1))
-        heights.append(y1 - y0)
-        widths.append(x1 - x0)
-    if not blobs:
-        return pos_x, pos_y, whiteness, saturation, features
-    m = len(blobs)
-    if n == 1:
-        # A windowed frame's usual case: the same canvas and arithmetic without the
-        # bookkeeping that spreads it over several windows (tests/test_detector_fast_paths.py).
-        return _measure_one(frame, mask, boxes[0], windows[0], sx, sy, head_fraction)
-    height = np.array(heights)
-    width = np.array(widths)
-    start = np.zeros(m, dtype=np.intp)
-    np.cumsum(height[:-1] + 1, out=start[1:])
-    rows, cols = int(start[-1] + height[-1] + 1), int(width.max())
-    canvas = np.zeros((rows, cols, 3), np.uint8)
-    inside = np.zeros((rows, cols), np.uint8)
-    for (x0, y0, x1, y1), r0 in zip(windows, start.tolist()):
-        r1, cw = r0 + y1 - y0, x1 - x0
-        canvas[r0:r1, :cw] = frame[y0:y1, x0:x1]
-        # The blob's pixels at full resolution: the mask window, resized (0 / 255) straight
-        # into its place on the canvas (no temporary, no second copy).
-        mx0, my0 = int(x0 / sx), int(y0 / sy)
-        mx1, my1 = max(math.ceil(x1 / sx), mx0 + 1), max(math.ceil(y1 / sy), my0 + 1)
-        mcrop = mask[my0:my1, mx0:mx1]
-        if mcrop.shape == (r1 - r0, cw):
-            inside[r0:r1, :cw] = mcrop
-        else:
-            cv2.resize(mcrop, (cw, r1 - r0), dst=inside[r0:r1, :cw], interpolation=cv2.INTER_NEAREST)
-
-    # Row bookkeeping: each window owns its rows and the blank row after it.
-    seg_rows = height + 1
-    row_width = np.repeat(width, seg_rows)
-    row_width[start + height] = 0   # the blank rows
-    padding = np.arange(cols) >= row_width[:, None]
-    local_row = np.arange(rows) - np.repeat(start, seg_rows)
-
-    def window_sum(per_row: np.ndarray) -> np.ndarray:
-        return np.add.reduceat(per_row, start)
-
-    def row_sums(image: np.ndarray, depth: int) -> np.ndarray:
-        # cv2.reduce: 3-4x faster than numpy's axis-1 sum on these narrow images
-        return cv2.reduce(image, 1, cv2.REDUCE_SUM, dtype=depth)[:, 0]
-
-    def window_max(image: np.ndarray) -> np.ndarray:
-        # A window's rows (and its blank row) are one contiguous range of the flat canvas.
-        return np.maximum.reduceat(image.ravel(), start * cols)
-
-    blue, green, red = cv2.split(canvas)
-    cmin = cv2.min(cv2.min(blue, green), red)
-    cmax = cv2.max(cv2.max(blue, green), red)
-    n_inside = window_sum(row_sums(inside, cv2.CV_32S)) // 255
-    white_sum = window_sum(row_sums(cv2.bitwise_and(cmin, inside), cv2.CV_32S))
-    sat_sum = window_sum(row_sums(cv2.bitwise_and(cv2.subtract(cmax, cmin), inside), cv2.CV_32S))
-    has_inside = n_inside > 0
-    whiteness_m = np.where(has_inside, white_sum / np.maximum(n_inside, 1), 0.0)
-    saturation_m = np.where(has_inside, sat_sum / np.maximum(n_inside, 1), 255.0)
-    whiteness[blobs] = whiteness_m
-    saturation[blobs] = saturation_m
-    # mean(B, G, R) in float32: the integer sum is exact, then one float32 division.
-    gray = cv2.add(blue, green, dtype=cv2.CV_32F)
-    cv2.add(gray, red, dst=gray, dtype=cv2.CV_32F)
-    np.divide(gray, 3, out=gray)
-
-    # Border of each window in numpy's order (top row, bottom row, left column, right column;
-    # corners twice), as flat canvas indices; then each window's median by one sort of
-    # window × 1024 + value keys (exact in double: the values are float32 below 256).
-    along_row = _ragged_arange(width)
-    row_owner = np.repeat(np.arange(m), width)
-    col_owner = np.repeat(np.arange(m), height)
-    top = start[row_owner] * cols + along_row
-    bottom = top + ((height - 1) * cols)[row_owner]
-    left = (start[col_owner] + _ragged_arange(height)) * cols
-    right = left + (width - 1)[col_owner]
-    border_owner = np.concatenate([row_owner, row_owner, col_owner, col_owner])
-    border = gray.ravel()[np.concatenate([top, bottom, left, right])]
-    border_len = 2 * (width + height)
-    keyed = np.sort(border_owner * 1024.0 + border)
-    first = np.zeros(m, dtype=np.intp)
-    np.cumsum(border_len[:-1], out=first[1:])
-    half_len = border_len // 2
-    upper = (keyed[first + half_len] - np.arange(m) * 1024.0).astype(np.float32)
-    lower = (keyed[first + half_len - 1] - np.arange(m) * 1024.0).astype(np.float32)
-    odd = border_len % 2 == 1
-    # np.median averages the two middle values in float32 (sum, then / 2).
-    background = np.where(odd, upper, (lower + upper) / np.float32(2)).astype(np.float32)
-
-    background_row = np.repeat(background, seg_rows)
-    excess = gray - background_row[:, None]
-    np.copyto(excess, -np.inf, where=padding)
-    peak = window_max(excess)
-    half_peak = np.float32(0.5) * peak
-    half_row = np.repeat(half_peak, seg_rows)
-    n_bright = window_sum(row_sums((excess > half_row[:, None]).view(np.uint8), cv2.CV_32S))
-    border_bright = (border - background[border_owner]) > half_peak[border_owner]
-    spill = np.bincount(border_owner, weights=border_bright, minlength=m) / border_len
-    peak_sat = window_max(cmax).astype(np.float64) - window_max(cmin).astype(np.float64)
-    # Standard deviation from the sums of g and g² in double (products of float32 values are
-    # exact there; padding is 0 and adds nothing).
-    n_pixels = height * width
-    mean = window_sum(row_sums(gray, cv2.CV_64F)) / n_pixels
-    mean_square = window_sum(row_sums(cv2.multiply(gray, gray, dtype=cv2.CV_64F), cv2.CV_64F)) / n_pixels
-    window_std = np.sqrt(np.maximum(mean_square - mean * mean, 0.0))
-    # One row per feature, cast to float32 as it is written (what assigning np.stack's
-    # float64 rows did, without np.stack's ~10 µs of Python wrappers).
-    appearance = np.empty((N_APPEARANCE, m), np.float32)
-    for row, values in enumerate((peak, background, np.log1p(n_bright), spill, whiteness_m,
-                                  saturation_m, np.log1p(n_inside), peak_sat, window_std)):
-        appearance[row] = values
-    features[blobs] = appearance.T
-
-    # The position is measured on the blob's own pixels only (its mask, grown by one
-    # full-resolution pixel for the blur fringe): a light or a court line inside the window is
-    # brighter than the shuttle and used to drag the centroid towards itself. Off the support
-    # the excess counts as 0 (so a blob's peak is at least 0); padding stays -inf or 0.
-    # (the excess where the grown mask is set, +0.0 elsewhere, as np.where(support, excess, 0)
-    # gave: a masked AND of the float image with itself into zeros — a masked OpenCV call
-    # leaves dst untouched where the mask is 0 —, 4x faster than the comparison and np.where)
-    blob_excess = cv2.bitwise_and(excess, excess, dst=np.zeros_like(excess),
-                                  mask=cv2.dilate(inside, _GROW))
-    blob_peak = np.maximum(window_max(blob_excess), 0)
-    # No support, or nothing on it above the background: the whole window's excess instead.
-    whole = blob_peak <= 0
-    if whole.any():
-        whole_rows = np.repeat(whole, seg_rows)
-        blob_excess[whole_rows] = np.maximum(excess[whole_rows], 0)
-        blob_peak = np.where(whole, peak, blob_peak)
-    # Keep the part of the blob above ``head_fraction`` of its peak: the cork is whiter than
-    # the feathers (0 = the whole blob's intensity centroid). The cut is rounded to float32
-    # as numpy rounded ``float32 array - Python float``.
-    cut = (head_fraction * blob_peak.astype(np.float64)).astype(np.float32)
-    weights = blob_excess - np.repeat(cut, seg_rows)[:, None]
-    np.maximum(weights, 0, out=weights)
-    row_weight = row_sums(weights, cv2.CV_64F)
-    total = window_sum(row_weight)
-    # OpenCV's convention: integer coordinates are pixel centres (as projectPoints gives).
-    sum_x = window_sum(weights @ np.arange(cols, dtype=np.float64))
-    sum_y = window_sum(row_weight * local_row)
-    origin_x = np.array([win[0] for win in windows], dtype=float)
-    origin_y = np.array([win[1] for win in windows], dtype=float)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        pos_x[blobs] = sum_x / total + origin_x
-        pos_y[blobs] = sum_y / total + origin_y
-    # Rare cases, window by window: nothing brighter than the border (the mask's centroid),
-    # or no weight above the cut (the whole blob's intensity centroid).
-    for k in np.flatnonzero((peak <= 0) | (total <= 0)).tolist():
-        i, (x0, y0, x1, y1), r0 = blobs[k], windows[k], int(start[k])
-        rows_k = slice(r0, r0 + int(height[k]))
-        cols_k = slice(0, int(width[k]))
-        if peak[k] <= 0:
-            ys, xs = np.nonzero(inside[rows_k, cols_k])
-            if len(xs) == 0:
-                box = boxes[i]
-                pos_x[i], pos_y[i] = box[0] + box[2] / 2, box[1] + box[3] / 2
-            else:
-                pos_x[i], pos_y[i] = x0 + xs.mean(), y0 + ys.mean()
-            continue
-        fallback = np.maximum(blob_excess[rows_k, cols_k], 0).astype(np.float64)
-        ys, xs = np.mgrid[0:fallback.shape[0], 0:fallback.shape[1]]
-        pos_x[i] = (fallback * xs).sum() / fallback.sum() + x0
-        pos_y[i] = (fallback * ys).sum() / fallback.sum() + y0
-    return pos_x, pos_y, whiteness, saturation, features
-
-
-def _measure_one(frame: np.ndarray, mask: np.ndarray, box, window: tuple[int, int, int, int],
-                 sx: float, sy: float, head_fraction: float
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``measure_blobs`` of a single blob: the canvas of one window (its rows, then the blank
-    row), every sum, maximum and median taken as there, but on whole arrays and scalars instead
-    of through the per-window index bookkeeping (≈ 40 fewer numpy calls; with the GIL held
-    those calls were most of a windowed frame's measure). Same values bit for bit: the float
-    sums go through the same ``cv2.reduce`` rows and ``np.add.reduceat`` over the same
-    (blank-row-terminated) vectors, maxima and integer counts are exact, and the border median
-    is the same order statistic (``median_float32``)."""
-    x0, y0, x1, y1 = window
-    height, width = y1 - y0, x1 - x0
-    rows = height + 1
-    canvas = np.zeros((rows, width, 3), np.uint8)
-    canvas[:height] = frame[y0:y1, x0:x1]
-    inside = np.zeros((rows, width), np.uint8)
-    mx0, my0 = int(x0 / sx), int(y0 / sy)
-    mx1, my1 = max(math.ceil(x1 / sx), mx0 + 1), max(math.ceil(y1 / sy), my0 + 1)
-    mcrop = mask[my0:my1, mx0:mx1]
-    if mcrop.shape == (height, width):
-        inside[:height] = mcrop
-    else:
-        cv2.resize(mcrop, (width, height), dst=inside[:height], interpolation=cv2.INTER_NEAREST)
-
-    blue, green, red = cv2.split(canvas)
-    cmin = cv2.min(cv2.min(blue, green), red)
-    cmax = cv2.max(cv2.max(blue, green), red)
-    # Integer counts and sums: exact however they are added.
-    n_inside = int(cv2.countNonZero(inside))
-    if n_inside:
-        whiteness = int(cv2.sumElems(cv2.bitwise_and(cmin, inside))[0]) / n_inside
-        saturation = int(cv2.sumElems(cv2.bitwise_and(cv2.subtract(cmax, cmin), inside))[0]) / n_inside
-    else:
-        whiteness, saturation = 0.0, 255.0
-    gray = cv2.add(blue, green, dtype=cv2.CV_32F)
-    cv2.add(gray, red, dst=gray, dtype=cv2.CV_32F)
-    np.divide(gray, 3, out=gray)
-
-    # The border in numpy's order (top row, bottom row, left column, right column).
-    border = np.concatenate((gray[0], gray[height - 1], gray[:height, 0], gray[:height, width - 1]))
-    background = np.float32(median_float32(border))
-    excess = gray - background
-    excess[height] = -np.inf                 # the blank row, padding as on the shared canvas
-    peak = excess.max()
-    half_peak = np.float32(0.5) * peak
-    n_bright = int(np.count_nonzero(excess > half_peak))
-    spill = int(np.count_nonzero((border - background) > half_peak)) / border.size
-    peak_sat = float(cmax.max()) - float(cmin.max())
-    n_pixels = height * width
-    start = _FIRST_ROW
-    mean = np.add.reduceat(cv2.reduce(gray, 1, cv2.REDUCE_SUM, dtype=cv2.CV_64F)[:, 0], start) / n_pixels
-    mean_square = np.add.reduceat(cv2.reduce(cv2.multiply(gray, gray, dtype=cv2.CV_64F), 1, cv2.REDUCE_SUM,
-                                             dtype=cv2.CV_64F)[:, 0], start) / n_pixels
-    window_std = math.sqrt(max(float(mean_square[0]) - float(mean[0]) * float(mean[0]), 0.0))
-    features = np.array([[peak, background, math.log1p(n_bright), spill, whiteness, saturation,
-                          math.log1p(n_inside), peak_sat, window_std]], dtype=np.float32)
-
-    blob_excess = cv2.bitwise_and(excess, excess, dst=np.zeros_like(excess),   # (as in measure_blobs)
-                                  mask=cv2.dilate(inside, _GROW))
-    blob_peak = max(blob_excess.max(), 0)
-    if blob_peak <= 0:
-        blob_excess = np.maximum(excess, 0)
-        blob_peak = peak
-    cut = np.float32(head_fraction * float(blob_peak))
-    weights = blob_excess - cut
-    np.maximum(weights, 0, out=weights)
-    row_weight = cv2.reduce(weights, 1, cv2.REDUCE_SUM, dtype=cv2.CV_64F)[:, 0]
-    total = float(np.add.reduceat(row_weight, start)[0])
-    if peak <= 0:
-        ys, xs = np.nonzero(inside[:height])
-        if len(xs) == 0:
-            x, y = box[0] + box[2] / 2, box[1] + box[3] / 2
-        else:
-            x, y = x0 + xs.mean(), y0 + ys.mean()
-    elif total <= 0:
-        fallback = np.maximum(blob_excess[:height], 0).astype(np.float64)
-        ys, xs = np.mgrid[0:fallback.shape[0], 0:fallback.shape[1]]
-        x = (fallback * xs).sum() / fallback.sum() + x0
-        y = (fallback * ys).sum() / fallback.sum() + y0
-    else:
-        sum_x = float(np.add.reduceat(weights @ np.arange(width, dtype=np.float64), start)[0])
-        sum_y = float(np.add.reduceat(row_weight * np.arange(rows), start)[0])
-        x, y = sum_x / total + x0, sum_y / total + y0
-    return (np.array([x]), np.array([y]), np.array([whiteness]), np.array([saturation]), features)
-
-
-_FIRST_ROW = np.zeros(1, dtype=np.intp)
-
-
-def _window_maxima(images: tuple[np.ndarray, ...], x0: np.ndarray, y0: np.ndarray,
-                   width: np.ndarray, height: np.ndarray,
-                   counts_where: np.ndarray | None = None) -> list[np.ndarray]:
-    """Maximum of each image in each window (all non-empty, inside the images), one gather each.
-
-    The images have the same size, so they share the windows' pixel indices (computed once).
-    ``counts_where``: an image of that size, 0 where the *first* image is to be taken as 0.
-    """
-    counts = height * width
-    local = _ragged_arange(counts)
-    row_width = np.repeat(width, counts)
-    rows = local // row_width
-    flat = ((np.repeat(y0, counts) + rows) * images[0].shape[1] + np.repeat(x0, counts)
-            + local - rows * row_width)
-    starts = np.cumsum(counts) - counts
-    maxima = []
-    for k, image in enumerate(images):
-        values = image.ravel()[flat]
-        if k == 0 and counts_where is not None:
-            values = np.where(counts_where.ravel()[flat] != 0, values, values.dtype.type(0))
-        maxima.append(np.maximum.reduceat(values, starts))
-    return maxima
-
-
-def _scaled_boxes(rects: np.ndarray, sx: float, sy: float) -> np.ndarray:
-    """(N, 4) float boxes (x, y, w, h) at the mask scale → full-resolution int64 boxes.
-
-    Origin rounded down, size up: ``floor(x·sx), floor(y·sy), ceil(w·sx), ceil(h·sy)``, in
-    four operations on the whole array (it was four per column and a stack).
-    """
-    scaled = rects * np.array([sx, sy, sx, sy])
-    np.floor(scaled[:, :2], out=scaled[:, :2])
-    np.ceil(scaled[:, 2:], out=scaled[:, 2:])
-    return scaled.astype(np.int64)
-
-
-def _ragged_arange(lengths: np.ndarray) -> np.ndarray:
-    """``np.concatenate([np.arange(k) for k in lengths])`` in three vector operations."""
-    total = int(lengths.sum())
-    offsets = np.repeat(np.cumsum(lengths) - lengths, lengths)
-    return np.arange(total) - offsets

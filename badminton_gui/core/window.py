@@ -74,7 +74,7 @@ def supported(params: TrackerParams, width: int, height: int, scale: float) -> b
 
 def crop_grey(frame_bgr: np.ndarray, scale: float, window: tuple[int, int, int, int]) -> np.ndarray:
     """The model's grey image of a window (full-resolution corners, multiples of ``ALIGN``):
-    the pixels ``CameraDetector._model_grey`` makes there from the whole frame."""
+    the pixels ``detect.segmentation.ModelGrey`` makes there from the whole frame."""
     x0, y0, x1, y1 = window
     crop = frame_bgr[y0:y1, x0:x1]
     if scale >= 1.0:

@@ -1,0 +1,165 @@
+"""Candidate scoring: how shuttle-like each measured blob looks, and the one-frame rules that
+reject it before the tracklets see it.
+
+Why this file exists: after filters 1 and 2 and the full-resolution measurement, each blob gets
+its verdict from filter 3 (whiteness, saturation, contrast above the local background), the
+paper's one-frame motion rule (a blob where a blob was last frame is still clutter), and a
+quality in [0, 1] — the learned classifier's probability (``core/classifier.py``) or a
+hand-made contrast + size score — below which it is rejected by its score. What comes out,
+``ScoredBlobs``, is what the tracklets stage (``detect/tracklets.py``) links over frames.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+from ..classifier import load_classifier
+from ..params import TrackerParams
+from ..types import REJECT_MOTION, REJECT_SCORE, REJECT_WHITENESS
+from .measure import FEATURE_NAMES, BlobMeasurements, patch_features
+
+# (x, y, lengths, contrasts, features) of a frame's measured blobs → their qualities in [0, 1]:
+# a score used instead of the classifier or the hand-made one (``BlobScorer.use_score``).
+ScoreFunction = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
+class ShapedBlob(NamedTuple):
+    """A blob that passed filters 1 and 2, measured at the processing scale (a named tuple: one
+    is made per blob of every frame, at half a dataclass's cost)."""
+
+    contour: int                        # its contour's index in the frame (a part split off: the whole's)
+    length: float                       # contour length, full-resolution px
+    short_side: float                   # shortest side of the tilted rectangle, full-resolution px
+    area: float                         # contour area, full-resolution px²
+    box: tuple[int, int, int, int]      # full-resolution bounding box (x, y, w, h)
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class ScoredBlobs:
+    """A frame's measured blobs with their verdicts, one entry per blob in every column."""
+
+    x: list[float]
+    y: list[float]
+    length: list[float]
+    short_side: list[float]
+    whiteness: list[float]
+    area: list[float]
+    quality: list[float]                 # the score in [0, 1]
+    rejected_by: list[str | None]        # filter 3, the still-blob rule or the score; None: on to filter 4
+    shape_features: np.ndarray           # (N, len(FEATURE_NAMES)) shape and appearance features
+    features: np.ndarray                 # (N, F) the rows the classifier read (the patch too, when it reads it)
+
+    @property
+    def positions(self) -> np.ndarray:
+        """(N, 2) positions, full-resolution px."""
+        return np.asarray(list(zip(self.x, self.y)), dtype=float).reshape(-1, 2)
+
+
+class BlobScorer:
+    """Scores blobs: the learned classifier of the parameters (or one given), or the hand-made
+    blend of contrast and size, or a score function installed for a study (``use_score``)."""
+
+    def __init__(self, params: TrackerParams) -> None:
+        self.params = params
+        self.classifier = None
+        self._score: ScoreFunction | None = None
+        self.set_params(params)
+
+    def set_params(self, params: TrackerParams) -> None:
+        self.params = params
+        cp = params.classifier
+        if not cp.enabled:
+            self.classifier = None
+        elif self.classifier is None or self.classifier.name != cp.model:
+            self.classifier = load_classifier(cp.model)
+
+    def use_classifier(self, classifier) -> None:
+        self.classifier = classifier
+
+    def use_score(self, score: ScoreFunction | None) -> None:
+        """Score with ``score`` instead (None: back to the classifier or the hand-made score)."""
+        self._score = score
+
+    @property
+    def needs_patches(self) -> bool:
+        """A classifier trained with the patch features reads them after FEATURE_NAMES."""
+        return self.classifier is not None and len(self.classifier.feature_names) > len(FEATURE_NAMES)
+
+    def qualities(self, xs: np.ndarray, ys: np.ndarray, lengths: np.ndarray, contrasts: np.ndarray,
+                  features: np.ndarray) -> np.ndarray:
+        """Shape/contrast scores of lone candidates in [0, 1] (the soft side of filters 1 and 3).
+
+        With the learned classifier enabled this is its probability that each blob is the
+        shuttle; otherwise a hand-made blend of contrast and size.
+        """
+        if self._score is not None:
+            return self._score(xs, ys, lengths, contrasts, features)
+        if self.classifier is not None:
+            return self.classifier.probability(features)
+        c = self.params.colour
+        bright = np.minimum(np.maximum(contrasts - c.min_contrast, 0.0)
+                            / max(c.contrast_reference - c.min_contrast, 1.0), 1.0)
+        size = np.minimum(lengths / max(self.params.contour_length.min_length * 2.0, 1.0), 1.0)
+        return 0.7 * bright + 0.3 * size
+
+
+def is_still(previous: np.ndarray, x: float, y: float, min_displacement: float) -> bool:
+    """A blob within ``min_displacement`` px of one of the previous frame's blobs."""
+    if len(previous) == 0:
+        return False
+    d = np.hypot(previous[:, 0] - x, previous[:, 1] - y)
+    return bool(d.min() < min_displacement)
+
+
+def judge_blobs(params: TrackerParams, blobs: list[ShapedBlob], m: BlobMeasurements,
+                previous: np.ndarray) -> tuple[list[list], np.ndarray]:
+    """Filter 3 and the still-blob rule per blob, and the shape + appearance features:
+    ([x, y, length, short_side, whiteness, area, reason] per blob, features (N, FEATURE_NAMES)).
+    ``previous``: the previous frame's measured positions."""
+    p = params
+    features = np.empty((len(blobs), len(FEATURE_NAMES)))
+    features[:, 4:] = m.appearance
+    judged = []
+    for row, (blob, x, y, whiteness, saturation, contrast) in enumerate(zip(
+            blobs, m.x.tolist(), m.y.tolist(), m.whiteness.tolist(),
+            m.saturation.tolist(), features[:, 4].tolist())):
+        length, short_side, area = blob.length, blob.short_side, blob.area
+        reason = None
+        if (whiteness < p.colour.min_whiteness or saturation > p.colour.max_saturation
+                or contrast < p.colour.min_contrast):
+            reason = REJECT_WHITENESS
+        elif p.motion.min_displacement > 0 and is_still(previous, x, y, p.motion.min_displacement):
+            reason = REJECT_MOTION
+        long_side = max(length / 2.0 - short_side, short_side)
+        features[row, :4] = (math.log1p(length), math.log1p(short_side), math.log1p(area),
+                             long_side / max(short_side, 1e-3))
+        judged.append([x, y, length, short_side, whiteness, area, reason])
+    return judged, features
+
+
+def score_blobs(params: TrackerParams, scorer: BlobScorer, frame_bgr: np.ndarray,
+                blobs: list[ShapedBlob], m: BlobMeasurements, previous: np.ndarray) -> ScoredBlobs:
+    """The verdicts of a frame's measured blobs (``judge_blobs``), then their qualities in one
+    call; a blob not rejected yet whose quality is below ``association.min_quality`` is
+    rejected by its score."""
+    judged, shape_features = judge_blobs(params, blobs, m, previous)
+    features = shape_features
+    qualities: list[float] = []
+    reasons = [j[6] for j in judged]
+    if judged:
+        xs = np.array([j[0] for j in judged])
+        ys = np.array([j[1] for j in judged])
+        if scorer.needs_patches:
+            features = np.hstack([shape_features, patch_features(frame_bgr, xs, ys)])
+        qualities = scorer.qualities(xs, ys, np.array([j[2] for j in judged]), shape_features[:, 4],
+                                     features).tolist()
+        min_quality = params.association.min_quality
+        reasons = [REJECT_SCORE if reason is None and q < min_quality else reason
+                   for reason, q in zip(reasons, qualities)]
+    return ScoredBlobs([j[0] for j in judged], [j[1] for j in judged], [j[2] for j in judged],
+                       [j[3] for j in judged], [j[4] for j in judged], [j[5] for j in judged],
+                       qualities, reasons, shape_features, features)
