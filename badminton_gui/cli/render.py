@@ -50,7 +50,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                                                                 "as a share of the video's (e.g. 0.5)")
     size.add_argument("--width", type=int, default=None, help="width of each camera's picture (px)")
     p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
-    p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=run)
 
 
