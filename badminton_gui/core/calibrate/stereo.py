@@ -10,7 +10,7 @@ the wizard only renders it. It holds
   with a progress callback and a cancel flag checked between stages,
 * :func:`solve_court_pose`: the left camera's pose in the court frame from clicked points.
 
-Board detection and per-view checks live in ``calib_board``, coverage in ``calib_coverage``.
+Board detection and per-view checks live in ``board``, coverage in ``coverage``.
 """
 
 from __future__ import annotations
@@ -22,10 +22,10 @@ from typing import Callable, Sequence
 import cv2
 import numpy as np
 
-from .calib_board import (BoardDetection, BoardSpec, QualityLimits, check_view,  # noqa: F401
+from .board import (BoardDetection, BoardSpec, QualityLimits, check_view,  # noqa: F401
                           detect_board, to_gray, charuco_available, BoardError)
-from .calib_coverage import Coverage, coverage, detection_params, novelty
-from .rig import StereoRig
+from .coverage import Coverage, coverage, detection_params, novelty
+from ..rig import StereoRig
 
 ProgressCallback = Callable[[float, str], None]
 CancelFlag = Callable[[], bool]
@@ -163,7 +163,7 @@ class CaptureGate:
 
     def coverage(self) -> tuple[Coverage, Coverage]:
         """Coverage bars (left, right) of the captured views."""
-        from .calib_coverage import ViewParams
+        from .coverage import ViewParams
         left = [ViewParams(*p[:4]) for p in self.captured_params]
         right = [ViewParams(*p[4:]) for p in self.captured_params]
         return coverage(left), coverage(right)
@@ -534,7 +534,7 @@ class CourtClicks:
                      "far back corner left", "far back corner right")
 
     def __init__(self, order: Sequence[str] = DEFAULT_ORDER) -> None:
-        from .court import court_keypoints
+        from ..court import court_keypoints
         self.keypoints = court_keypoints()
         unknown = [n for n in order if n not in self.keypoints]
         if unknown:

@@ -33,7 +33,7 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from .rig import StereoRig
+from ..rig import StereoRig
 
 # The fewest pairs a refit looks at, and the share of the image's width and height the agreeing
 # pairs must span in both cameras (``refine_relative_pose``'s defaults; the GUI's refine dialog

@@ -1,0 +1,7 @@
+"""The calibration stage: from chessboard views to a rig file, and refining a rig afterwards.
+
+``board`` (the target, detecting it in one image, per-view checks) → ``coverage`` (how much of
+the pose space the captured views span) → ``folders`` (two image folders → stereo views) →
+``stereo`` (the solve, its figures, the court pose, the rectified preview). ``refine`` refits
+a rig's relative pose from the shuttle's own pairs after a rally (self-calibration).
+"""
