@@ -22,8 +22,8 @@ from badminton_gui.core.calibrate.board import (BoardDetection, BoardSpec, Board
 from badminton_gui.core.calibrate.coverage import coverage, novelty, view_params
 from badminton_gui.core.calibrate.stereo import (CalibrationCancelled, CalibrationError,
                                             CaptureGate, SolveOptions, StereoView,
-                                            epipolar_grade, pair_detections, solve_court_pose,
-                                            solve_court_pose_detailed, solve_stereo)
+                                            epipolar_grade, pair_detections, solve_stereo)
+from badminton_gui.core.calibrate.court_pose import solve_court_pose, solve_court_pose_detailed
 from badminton_gui.core.court import court_keypoints
 from badminton_gui.core.rig import StereoRig
 from badminton_gui.io.synthetic_chessboard import (SyntheticChessboardSource,
@@ -464,7 +464,8 @@ def test_core_calibration_does_not_import_qt():
 
 
 def test_court_clicks_sequence_and_preview(synthetic_views):
-    from badminton_gui.core.calibrate.stereo import CourtClicks, rectified_preview
+    from badminton_gui.core.calibrate.court_pose import CourtClicks
+    from badminton_gui.core.calibrate.stereo import rectified_preview
     clicks = CourtClicks()
     first = clicks.current_name
     clicks.click(10, 20)

@@ -38,11 +38,12 @@ from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDoubleSpinBox, QF
 
 from ..core.calibrate.board import (BoardError, BoardSpec, charuco_available, detect_board,
                                 to_gray)
+from ..core.calibrate.court_pose import CourtClicks, CourtPoseResult
 from ..core.calibrate.coverage import COVERAGE_NAMES, Coverage
 from ..core.calibrate.folders import pair_image_files, views_from_pairs
 from ..core.calibrate.stereo import (EPIPOLAR_ACCEPTABLE_PX, EPIPOLAR_EXCELLENT_PX,
                                 CalibrationCancelled, CalibrationError, CalibrationResult,
-                                CaptureGate, CaptureVerdict, CourtClicks, CourtPoseResult,
+                                CaptureGate, CaptureVerdict,
                                 RejectedView, SolveOptions, StereoView, pair_detections,
                                 rectified_preview, solve_stereo)
 from ..core.court import court_lines
