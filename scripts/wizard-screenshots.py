@@ -21,7 +21,7 @@ import numpy as np
 from PySide6.QtCore import QEventLoop, QTimer
 from PySide6.QtWidgets import QApplication
 
-from badminton_gui.core.calib_board import BoardSpec
+from badminton_gui.core.calibrate.board import BoardSpec
 from badminton_gui.core.court import court_lines
 from badminton_gui.gui.calibration_wizard import CalibrationWizard
 from badminton_gui.io.synthetic_chessboard import (SyntheticChessboardSource,

@@ -1,6 +1,6 @@
 """Stereo calibration core + CLI: real OpenCV sample boards, synthetic ground truth, errors.
 
-Why this file exists: the wizard only renders ``core.calibration``; these tests pin that core
+Why this file exists: the wizard only renders ``core.calibrate.stereo``; these tests pin that core
 to OpenCV's published figures on its own sample pairs and to exact ground truth rendered
 through known cameras (GUIDE §3.8). No Qt here.
 """
@@ -17,13 +17,13 @@ import numpy as np
 import pytest
 
 from badminton_gui.cli import main as cli_main
-from badminton_gui.core.calib_board import (BoardDetection, BoardSpec, BoardError,
+from badminton_gui.core.calibrate.board import (BoardDetection, BoardSpec, BoardError,
                                             charuco_available, check_view, detect_board)
-from badminton_gui.core.calib_coverage import coverage, novelty, view_params
-from badminton_gui.core.calibration import (CalibrationCancelled, CalibrationError,
+from badminton_gui.core.calibrate.coverage import coverage, novelty, view_params
+from badminton_gui.core.calibrate.stereo import (CalibrationCancelled, CalibrationError,
                                             CaptureGate, SolveOptions, StereoView,
-                                            epipolar_grade, pair_detections, solve_court_pose,
-                                            solve_court_pose_detailed, solve_stereo)
+                                            epipolar_grade, pair_detections, solve_stereo)
+from badminton_gui.core.calibrate.court_pose import solve_court_pose, solve_court_pose_detailed
 from badminton_gui.core.court import court_keypoints
 from badminton_gui.core.rig import StereoRig
 from badminton_gui.io.synthetic_chessboard import (SyntheticChessboardSource,
@@ -90,7 +90,7 @@ def test_cli_reproduces_opencv_reference(tmp_path, capsys):
     assert "rejected views: none" in out
     rig = StereoRig.load(out_file)
     # Re-run the core to read the RMS values directly (the CLI prints the same numbers).
-    from badminton_gui.core.calib_folders import pair_image_files, views_from_pairs
+    from badminton_gui.core.calibrate.folders import pair_image_files, views_from_pairs
     pairs = pair_image_files(CHESS, CHESS, "left*", "right*")
     spec = BoardSpec(9, 6, 1.0)
     found = views_from_pairs(pairs, spec, subpix_half_window=11)
@@ -456,7 +456,7 @@ def test_charuco_detection():
 
 def test_core_calibration_does_not_import_qt():
     code = ("import sys; sys.modules['PySide6'] = None; "
-            "import badminton_gui.core.calibration, badminton_gui.core.calib_folders, "
+            "import badminton_gui.core.calibrate.stereo, badminton_gui.core.calibrate.folders, "
             "badminton_gui.io.synthetic_chessboard; print('ok')")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60)
@@ -464,7 +464,8 @@ def test_core_calibration_does_not_import_qt():
 
 
 def test_court_clicks_sequence_and_preview(synthetic_views):
-    from badminton_gui.core.calibration import CourtClicks, rectified_preview
+    from badminton_gui.core.calibrate.court_pose import CourtClicks
+    from badminton_gui.core.calibrate.stereo import rectified_preview
     clicks = CourtClicks()
     first = clicks.current_name
     clicks.click(10, 20)

@@ -19,7 +19,7 @@ import pytest
 pytest.importorskip("pytestqt")
 pytest.importorskip("PySide6")
 
-from badminton_gui.core.calib_board import BoardSpec  # noqa: E402
+from badminton_gui.core.calibrate.board import BoardSpec  # noqa: E402
 from badminton_gui.core.court import court_lines  # noqa: E402
 from badminton_gui.core.rig import StereoRig  # noqa: E402
 from badminton_gui.gui.calibration_wizard import CalibrationWizard, SolveWorker  # noqa: E402

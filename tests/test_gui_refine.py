@@ -27,7 +27,7 @@ from PySide6.QtCore import Qt  # noqa: E402
 from PySide6.QtWidgets import QFileDialog  # noqa: E402
 
 from badminton_gui.core.rig import StereoRig  # noqa: E402
-from badminton_gui.core.rig_refine import RefineCancelled, refine_relative_pose  # noqa: E402
+from badminton_gui.core.calibrate.refine import RefineCancelled, refine_relative_pose  # noqa: E402
 from badminton_gui.gui.refine_dialog import RefineCalibrationDialog  # noqa: E402
 from badminton_gui.gui.settings import load_source_spec, open_settings  # noqa: E402
 from badminton_gui.io.demo_scene import DemoScene, make_rig  # noqa: E402
@@ -228,7 +228,7 @@ def test_a_failed_save_says_why_and_loses_nothing(qtbot, tmp_path):
 
 def test_shared_pairs_hold_what_the_pair_collector_keeps():
     """SharedPairs stores the kept pairs itself (for cheap copies): they must be the collector's."""
-    from badminton_gui.core.rig_refine import PairCollector
+    from badminton_gui.core.calibrate.refine import PairCollector
     from badminton_gui.gui.refine_dialog import SharedPairs
     from tests.test_rig_refine import result
 

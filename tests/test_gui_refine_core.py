@@ -1,4 +1,4 @@
-"""The core hooks the refine dialog relies on (core/rig_refine.py), tested without Qt.
+"""The core hooks the refine dialog relies on (core/calibrate/refine.py), tested without Qt.
 
 Why this file exists: the dialog (gui/refine_dialog.py, tests/test_gui_refine.py) runs the refit on
 a worker thread with a progress bar and Cancel, and shows the collection's spread against what the
@@ -9,7 +9,7 @@ refit needs. These tests pin the small core additions it uses: ``progress`` / ``
 import numpy as np
 import pytest
 
-from badminton_gui.core.rig_refine import (DEFAULT_MIN_SPREAD, RefineCancelled, image_spread,
+from badminton_gui.core.calibrate.refine import (DEFAULT_MIN_SPREAD, RefineCancelled, image_spread,
                                            refine_relative_pose)
 from badminton_gui.io.demo_scene import make_rig
 from tests.test_rig_refine import rotated, visible_pairs

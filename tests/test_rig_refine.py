@@ -1,4 +1,4 @@
-"""Self-calibration of a rig's relative pose (core/rig_refine.py, `badminton-track refine-calib`)."""
+"""Self-calibration of a rig's relative pose (core/calibrate/refine.py, `badminton-track refine-calib`)."""
 
 import math
 from types import SimpleNamespace
@@ -9,7 +9,7 @@ import pytest
 
 from badminton_gui.cli import main
 from badminton_gui.core.rig import StereoRig
-from badminton_gui.core.rig_refine import PairCollector, refine_relative_pose
+from badminton_gui.core.calibrate.refine import PairCollector, refine_relative_pose
 from badminton_gui.io.demo_scene import make_rig
 
 

@@ -2,7 +2,7 @@
 
 Why this file exists: calibrating without a screen (or re-running a calibration on stored
 images) must give the same rig and the same figures as the wizard; both call the core
-(``core.calib_folders`` + ``core.calibration.solve_stereo``). Images are paired by sorted file
+(``core.calibrate.folders`` + ``core.calibrate.stereo.solve_stereo``). Images are paired by sorted file
 name (one folder holding both cameras' images is split by "left"/"right" in the names). The
 rig file is written with ``StereoRig.save``.
 """
@@ -13,9 +13,9 @@ import argparse
 import logging
 from pathlib import Path
 
-from ..core.calib_board import BoardError, BoardSpec
-from ..core.calib_folders import pair_image_files, views_from_pairs
-from ..core.calibration import CalibrationError, SolveOptions, solve_stereo
+from ..core.calibrate.board import BoardError, BoardSpec
+from ..core.calibrate.folders import pair_image_files, views_from_pairs
+from ..core.calibrate.stereo import CalibrationError, SolveOptions, solve_stereo
 from ..core.rig import RigError
 from .common import Progress, UserError, add_json_argument, print_json
 

@@ -4,7 +4,7 @@ Why this file exists: a rig whose two cameras were calibrated separately (the NY
 pair) can be degrees off in their relative pose, which no chessboard session fixes after the
 fact. This command tracks a recorded rally with that rig, keeps the pairs of detections that
 are the followed shuttle in both cameras (labels are never read), refits the relative pose to
-them (core/rig_refine.py) and writes the refined rig — or, when the rally cannot support a
+them (core/calibrate/refine.py) and writes the refined rig — or, when the rally cannot support a
 refit (too few flights, too little of the image covered), says why and exits non-zero.
 """
 
@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 
 from ..core.errors import TrackerInputError
-from ..core.rig_refine import PairCollector, refine_relative_pose
+from ..core.calibrate.refine import PairCollector, refine_relative_pose
 from ..core.tracker import StereoTracker, configure_opencv_threads
 from .common import (INPUT_ERRORS, Progress, UserError, add_json_argument, add_preset_argument,
                      add_video_pair_arguments, open_stereo_videos, params_from_args, print_json)

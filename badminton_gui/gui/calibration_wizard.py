@@ -9,7 +9,7 @@ every refusal is a sentence, and the rig is saved as ``calibration/rig_YYYYmmdd_
 with the full path shown and ``rigSaved(path)`` emitted so the main window can load it at once.
 
 All the judgement (is this view good, is it new, how much is covered, which views are outliers,
-the solve, the court pose) is ``core.calibration`` and friends; these pages only render it.
+the solve, the court pose) is ``core.calibrate.stereo`` and friends; these pages only render it.
 Workers hand over numpy arrays and frozen results, never widgets;
 the live view is a newest-wins mailbox polled at ~30 Hz.
 """
@@ -36,13 +36,14 @@ from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDoubleSpinBox, QF
                                QScrollArea, QSizePolicy, QSpinBox, QStackedWidget,
                                QVBoxLayout, QWidget)
 
-from ..core.calib_board import (BoardError, BoardSpec, charuco_available, detect_board,
+from ..core.calibrate.board import (BoardError, BoardSpec, charuco_available, detect_board,
                                 to_gray)
-from ..core.calib_coverage import COVERAGE_NAMES, Coverage
-from ..core.calib_folders import pair_image_files, views_from_pairs
-from ..core.calibration import (EPIPOLAR_ACCEPTABLE_PX, EPIPOLAR_EXCELLENT_PX,
+from ..core.calibrate.court_pose import CourtClicks, CourtPoseResult
+from ..core.calibrate.coverage import COVERAGE_NAMES, Coverage
+from ..core.calibrate.folders import pair_image_files, views_from_pairs
+from ..core.calibrate.stereo import (EPIPOLAR_ACCEPTABLE_PX, EPIPOLAR_EXCELLENT_PX,
                                 CalibrationCancelled, CalibrationError, CalibrationResult,
-                                CaptureGate, CaptureVerdict, CourtClicks, CourtPoseResult,
+                                CaptureGate, CaptureVerdict,
                                 RejectedView, SolveOptions, StereoView, pair_detections,
                                 rectified_preview, solve_stereo)
 from ..core.court import court_lines

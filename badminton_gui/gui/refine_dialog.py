@@ -1,7 +1,7 @@
 """Calibration ▸ Refine from tracked shuttle…: self-calibration of the rig while tracking.
 
 Why this file exists: a rig assembled from two cameras calibrated separately (the NYCU ``.cfg``
-pair is ≈ 9.5° off) is refitted from the shuttle's own pairs by ``core.rig_refine``; before this
+pair is ≈ 9.5° off) is refitted from the shuttle's own pairs by ``core.calibrate.refine``; before this
 dialog only ``badminton-track refine-calib`` could do it, on a recording. Here the operator keeps
 tracking (cameras, a video pair or the demo court) and:
 
@@ -40,7 +40,7 @@ from PySide6.QtWidgets import (QDialog, QFileDialog, QGridLayout, QGroupBox, QHB
                                QProgressBar, QPushButton, QSizePolicy, QVBoxLayout, QWidget)
 
 from ..core.rig import StereoRig
-from ..core.rig_refine import (DEFAULT_MIN_PAIRS, DEFAULT_MIN_SPREAD, PairCollector,
+from ..core.calibrate.refine import (DEFAULT_MIN_PAIRS, DEFAULT_MIN_SPREAD, PairCollector,
                                RefineCancelled, RefineReport, image_spread,
                                refine_relative_pose)
 from .calibration_wizard import write_rig

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..core.calib_board import BoardSpec
+from ..core.calibrate.board import BoardSpec
 from ..core.rig import StereoRig
 from ..core.types import StereoFrame
 

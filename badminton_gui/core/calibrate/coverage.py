@@ -22,7 +22,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .calib_board import BoardDetection, BoardSpec
+from .board import BoardDetection, BoardSpec
 
 COVERAGE_NAMES = ("X", "Y", "size", "skew")
 # Spread of each parameter that fills its bar (ROS camera_calibration's param_ranges).

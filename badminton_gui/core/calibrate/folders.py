@@ -13,8 +13,8 @@ from typing import Callable
 
 import cv2
 
-from .calib_board import BoardSpec, check_view, detect_board
-from .calibration import CalibrationCancelled, CalibrationError, RejectedView, StereoView, \
+from .board import BoardSpec, check_view, detect_board
+from .stereo import CalibrationCancelled, CalibrationError, RejectedView, StereoView, \
     pair_detections
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm", ".ppm", ".webp")

@@ -33,7 +33,7 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from .rig import StereoRig
+from ..rig import StereoRig
 
 # The fewest pairs a refit looks at, and the share of the image's width and height the agreeing
 # pairs must span in both cameras (``refine_relative_pose``'s defaults; the GUI's refine dialog
@@ -115,12 +115,7 @@ a refit. Returns the input rig unchanged (``report.accepted`` False, with the re
 
     def report(inliers: int, after: np.ndarray | None, rot: float, turn: float, ok: bool,
                reason: str) -> RefineReport:
-        b50, b90 = (np.percentile(before, [50, 90]) if n else (nan, nan))
-        a50, a90 = (np.percentile(after, [50, 90]) if after is not None and n else (nan, nan))
-        hb = float(np.median(before[split:])) if n > split else nan
-        ha = float(np.median(held_back)) if held_back is not None and len(held_back) else nan
-        return RefineReport(n, inliers, float(b50), float(a50), float(b90), float(a90), rot, turn,
-                            hb, ha, ok, reason)
+        return _report(n, split, before, after, held_back, inliers, rot, turn, ok, reason)
 
     stage(0.0, "measuring the rig's epipolar error")
     before = rig.pair_errors(pl, pr) if n else np.zeros(0)
@@ -142,12 +137,44 @@ a refit. Returns the input rig unchanged (``report.accepted`` False, with the re
     if early is not None:
         held_back = _with_pose(rig, early[1], early[2]).pair_errors(pl[split:], pr[split:])
     inliers, rot, direction, agree = fitted
-    scale = float(np.linalg.norm(rig.T))
     refined = _with_pose(rig, rot, direction)
     after = refined.pair_errors(pl, pr)
+    rotation_change, baseline_turn = _pose_change(rig, rot, direction)
+    reason = _why_not(rig, pl[agree], pr[agree], before, after, held_back, split, n,
+                      int(inliers), rotation_change, min_improvement=min_improvement,
+                      min_inlier_share=min_inlier_share, min_spread=min_spread,
+                      max_rotation_deg=max_rotation_deg)
+    if reason:
+        return rig, report(int(inliers), after, rotation_change, baseline_turn, False, reason)
+    return refined, report(int(inliers), after, rotation_change, baseline_turn, True, "")
+
+
+def _report(n: int, split: int, before: np.ndarray, after: np.ndarray | None,
+            held_back: np.ndarray | None, inliers: int, rot: float, turn: float, ok: bool,
+            reason: str) -> RefineReport:
+    """The report's figures: before/after percentiles and the held-back third's medians."""
+    nan = float("nan")
+    b50, b90 = (np.percentile(before, [50, 90]) if n else (nan, nan))
+    a50, a90 = (np.percentile(after, [50, 90]) if after is not None and n else (nan, nan))
+    hb = float(np.median(before[split:])) if n > split else nan
+    ha = float(np.median(held_back)) if held_back is not None and len(held_back) else nan
+    return RefineReport(n, inliers, float(b50), float(a50), float(b90), float(a90), rot, turn,
+                        hb, ha, ok, reason)
+
+
+def _pose_change(rig: StereoRig, rot: np.ndarray, direction: np.ndarray) -> tuple[float, float]:
+    """How far the refit turns the rig (degrees) and turns its baseline's direction (degrees)."""
+    scale = float(np.linalg.norm(rig.T))
     rotation_change = math.degrees(float(np.linalg.norm(cv2.Rodrigues(rot @ rig.R.T)[0])))
     cos_turn = float(np.dot(direction, rig.T / scale)) if scale > 0 else 1.0
-    baseline_turn = math.degrees(math.acos(max(-1.0, min(1.0, cos_turn))))
+    return rotation_change, math.degrees(math.acos(max(-1.0, min(1.0, cos_turn))))
+
+
+def _why_not(rig: StereoRig, agree_left: np.ndarray, agree_right: np.ndarray,
+             before: np.ndarray, after: np.ndarray, held_back: np.ndarray | None, split: int,
+             n: int, inliers: int, rotation_change: float, *, min_improvement: float,
+             min_inlier_share: float, min_spread: float, max_rotation_deg: float) -> str:
+    """Why the refit is refused (the first failing condition), or "" when it is accepted."""
 
     def spread(points: np.ndarray) -> float:
         return min(image_spread(points, rig.image_size))
@@ -158,7 +185,7 @@ a refit. Returns the input rig unchanged (``report.accepted`` False, with the re
                   f"less than {min_improvement:g}× better: the rig already fits")
     elif inliers < min_inlier_share * n:
         reason = f"only {inliers} of {n} pairs agree with the refit"
-    elif min(spread(pl[agree]), spread(pr[agree])) < min_spread:
+    elif min(spread(agree_left), spread(agree_right)) < min_spread:
         reason = "the pairs cover too little of the image"
     elif held_back is None or not (np.median(held_back) * min_improvement
                                    <= np.median(before[split:])):
@@ -166,9 +193,7 @@ a refit. Returns the input rig unchanged (``report.accepted`` False, with the re
                   "(too few flights, or one flight's plane leaves the fit ambiguous)")
     elif rotation_change > max_rotation_deg:
         reason = f"the refit turns the rig by {rotation_change:.1f}° (> {max_rotation_deg:g}°)"
-    if reason:
-        return rig, report(int(inliers), after, rotation_change, baseline_turn, False, reason)
-    return refined, report(int(inliers), after, rotation_change, baseline_turn, True, "")
+    return reason
 
 
 def image_spread(points, image_size: tuple[int, int]) -> tuple[float, float]:

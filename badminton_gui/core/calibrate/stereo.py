@@ -8,9 +8,10 @@ the wizard only renders it. It holds
 * :func:`solve_stereo`: per-camera ``calibrateCameraExtended`` → ``stereoCalibrateExtended``
   → outlier rejection and re-solve → ``stereoRectify`` → :class:`CalibrationResult`,
   with a progress callback and a cancel flag checked between stages,
-* :func:`solve_court_pose`: the left camera's pose in the court frame from clicked points.
+* :func:`rectified_preview`, the rectified pair with horizontal lines.
 
-Board detection and per-view checks live in ``calib_board``, coverage in ``calib_coverage``.
+Board detection and per-view checks live in ``board``, coverage in ``coverage``, the court
+pose (left camera in the court frame from clicked points) in ``court_pose``.
 """
 
 from __future__ import annotations
@@ -22,10 +23,10 @@ from typing import Callable, Sequence
 import cv2
 import numpy as np
 
-from .calib_board import (BoardDetection, BoardSpec, QualityLimits, check_view,  # noqa: F401
+from .board import (BoardDetection, BoardSpec, QualityLimits, check_view,  # noqa: F401
                           detect_board, to_gray, charuco_available, BoardError)
-from .calib_coverage import Coverage, coverage, detection_params, novelty
-from .rig import StereoRig
+from .coverage import Coverage, coverage, detection_params, novelty
+from ..rig import StereoRig
 
 ProgressCallback = Callable[[float, str], None]
 CancelFlag = Callable[[], bool]
@@ -163,7 +164,7 @@ class CaptureGate:
 
     def coverage(self) -> tuple[Coverage, Coverage]:
         """Coverage bars (left, right) of the captured views."""
-        from .calib_coverage import ViewParams
+        from .coverage import ViewParams
         left = [ViewParams(*p[:4]) for p in self.captured_params]
         right = [ViewParams(*p[4:]) for p in self.captured_params]
         return coverage(left), coverage(right)
@@ -328,6 +329,131 @@ def _epipolar_per_view(rig: StereoRig, views: Sequence[StereoView]) -> list[floa
     return out
 
 
+@dataclass(slots=True)
+class _Round:
+    """One solve of the active views: both cameras' fits and the stereo fit with them fixed."""
+    obj: list
+    img_l: list
+    img_r: list
+    left: tuple            # calibrateCameraExtended's output for the left camera
+    right: tuple           # ... and for the right one
+    fixed: tuple           # stereoCalibrateExtended with CALIB_FIX_INTRINSIC
+
+
+def _check_views(active: list[StereoView], options: SolveOptions) -> None:
+    if len(active) < options.min_views:
+        raise CalibrationError(f"only {len(active)} usable view(s); at least "
+                               f"{options.min_views} are needed: capture more board poses")
+    if len({v.view_id for v in active}) != len(active):
+        raise CalibrationError("two views share the same id")
+
+
+def _solve_round(active: list[StereoView], size, report, check_cancel, base: float,
+                 span: float) -> _Round:
+    """Each camera on its own, then the pair with those intrinsics fixed."""
+    report(base, f"calibrating the left camera ({len(active)} views)")
+    obj = [v.object_points for v in active]
+    img_l = [v.left.reshape(-1, 1, 2) for v in active]
+    img_r = [v.right.reshape(-1, 1, 2) for v in active]
+    try:
+        left = _calibrate_camera(obj, img_l, size)
+        check_cancel()
+        report(base + span * 0.3, "calibrating the right camera")
+        right = _calibrate_camera(obj, img_r, size)
+        check_cancel()
+        report(base + span * 0.6, "calibrating the stereo pair")
+        fixed = cv2.stereoCalibrateExtended(
+            obj, img_l, img_r, left[1], left[2], right[1], right[2], size, None, None,
+            flags=cv2.CALIB_FIX_INTRINSIC)
+    except cv2.error as exc:
+        raise CalibrationError("OpenCV could not solve the calibration ("
+                               f"{str(exc).strip().splitlines()[-1]}): capture more "
+                               "varied views") from None
+    return _Round(obj, img_l, img_r, left, right, fixed)
+
+
+def _outliers(active: list[StereoView], fixed, options: SolveOptions):
+    """The views to drop this round (worst first, keeping ``min_views``), with their reasons."""
+    per_view = np.asarray(fixed[11]).reshape(-1, 2)
+    rms_each = np.sqrt(0.5 * (per_view[:, 0] ** 2 + per_view[:, 1] ** 2))
+    median = float(np.median(rms_each))
+    limit = max(options.outlier_factor * median, options.outlier_min_px)
+    worst_first = np.argsort(-rms_each)
+    to_reject = [i for i in worst_first if rms_each[i] > limit]
+    room = len(active) - options.min_views
+    to_reject = to_reject[:max(room, 0)]
+    reasons = [RejectedView(
+        active[i].view_id,
+        f"reprojection error {rms_each[i]:.2f} px (left {per_view[i, 0]:.2f}, right "
+        f"{per_view[i, 1]:.2f}) > limit {limit:.2f} px = max({options.outlier_factor:g}"
+        f" × median {median:.2f}, {options.outlier_min_px:g})") for i in to_reject]
+    return to_reject, reasons
+
+
+def _solve_rejecting_outliers(views, size, options: SolveOptions, report, check_cancel):
+    """Solve, drop the outlier views, re-solve, for up to ``max_rejection_rounds`` rounds."""
+    active = list(views)
+    rejected: list[RejectedView] = []
+    _check_views(active, options)
+    rounds = options.max_rejection_rounds + 1
+    for round_index in range(rounds):
+        check_cancel()
+        solved = _solve_round(active, size, report, check_cancel, round_index / rounds * 0.8,
+                              0.8 / rounds)
+        to_reject, reasons = _outliers(active, solved.fixed, options)
+        if not to_reject or round_index == rounds - 1:
+            break
+        rejected.extend(reasons)
+        drop = set(to_reject)
+        active = [v for i, v in enumerate(active) if i not in drop]
+    return active, rejected, solved
+
+
+def _choose_intrinsics(solved: _Round, active, size, options: SolveOptions):
+    """Fixed or jointly refined intrinsics: ``(rms, m1, d1, m2, d2, R, T, per_view, mode)``.
+
+    Fixed intrinsics are the safe choice: each camera's intrinsics were fitted on all its
+    views. Refining them jointly can lower the stereo error when there are enough varied
+    views, but with few views it trades intrinsic accuracy for a smaller residual; accept
+    the refinement only when it helps and moves the focal lengths by < 2 %.
+    """
+    fixed, k1, d1, k2, d2 = solved.fixed, *solved.left[1:3], *solved.right[1:3]
+    chosen = (float(fixed[0]), k1, d1, k2, d2, fixed[5], fixed[6],
+              np.asarray(fixed[11]).reshape(-1, 2))
+    mode = "fixed (per-camera intrinsics kept)"
+    if options.intrinsics == "refine" or (options.intrinsics == "auto" and len(active) >= 10):
+        try:
+            refined = cv2.stereoCalibrateExtended(
+                solved.obj, solved.img_l, solved.img_r, k1.copy(), d1.copy(), k2.copy(),
+                d2.copy(), size, None, None, flags=cv2.CALIB_USE_INTRINSIC_GUESS)
+        except cv2.error:
+            refined = None
+        if refined is not None:
+            shift = max(abs(refined[1][0, 0] / k1[0, 0] - 1), abs(refined[3][0, 0] / k2[0, 0] - 1))
+            if options.intrinsics == "refine" or (refined[0] <= chosen[0] and shift < 0.02):
+                chosen = (float(refined[0]), *refined[1:7], np.asarray(refined[11]).reshape(-1, 2))
+                mode = (f"refined jointly ({len(active)} views; focal lengths moved "
+                        f"{shift * 100:.2f} %)")
+            else:
+                mode = (f"fixed (joint refinement gave RMS {refined[0]:.3f} px and moved focal "
+                        f"lengths {shift * 100:.2f} %: not better)")
+    elif options.intrinsics == "auto":
+        mode = f"fixed (only {len(active)} views; joint refinement needs ≥ 10)"
+    return (*chosen, mode)
+
+
+def _refuse_one_camera(tv_l, T) -> None:
+    """Identical left and right images (one camera's views given twice) solve "perfectly"
+    with T = 0 and an epipolar error of 0: refuse rather than report an excellent rig."""
+    distance = float(np.median([np.linalg.norm(t) for t in tv_l]))
+    if float(np.linalg.norm(T)) < 1e-3 * distance:
+        raise CalibrationError(
+            f"the two cameras came out at the same place (baseline "
+            f"{float(np.linalg.norm(T)):.2g} m, board {distance:.2g} m away): the left and right "
+            f"images look like the same camera's; check that the right images come from the "
+            f"right camera")
+
+
 def solve_stereo(views: Sequence[StereoView], image_size: tuple[int, int], board: BoardSpec,
                  options: SolveOptions = SolveOptions(),
                  progress: ProgressCallback | None = None,
@@ -346,95 +472,16 @@ def solve_stereo(views: Sequence[StereoView], image_size: tuple[int, int], board
             raise CalibrationCancelled("calibration cancelled")
 
     check_cancel()
-    active = list(views)
-    rejected: list[RejectedView] = []
-    if len(active) < options.min_views:
-        raise CalibrationError(f"only {len(active)} usable view(s); at least "
-                               f"{options.min_views} are needed: capture more board poses")
-    if len({v.view_id for v in active}) != len(active):
-        raise CalibrationError("two views share the same id")
+    active, rejected, solved = _solve_rejecting_outliers(views, size, options, report,
+                                                         check_cancel)
+    rms_l, _, _, rv_l, tv_l, std_l, _ = solved.left
+    rms_r, _, _, rv_r, tv_r, std_r, _ = solved.right
 
-    rounds = options.max_rejection_rounds + 1
-    for round_index in range(rounds):
-        base = round_index / rounds * 0.8
-        span = 0.8 / rounds
-        check_cancel()
-        report(base, f"calibrating the left camera ({len(active)} views)")
-        obj = [v.object_points for v in active]
-        img_l = [v.left.reshape(-1, 1, 2) for v in active]
-        img_r = [v.right.reshape(-1, 1, 2) for v in active]
-        try:
-            rms_l, k1, d1, rv_l, tv_l, std_l, _ = _calibrate_camera(obj, img_l, size)
-            check_cancel()
-            report(base + span * 0.3, "calibrating the right camera")
-            rms_r, k2, d2, rv_r, tv_r, std_r, _ = _calibrate_camera(obj, img_r, size)
-            check_cancel()
-            report(base + span * 0.6, "calibrating the stereo pair")
-            fixed = cv2.stereoCalibrateExtended(
-                obj, img_l, img_r, k1, d1, k2, d2, size, None, None,
-                flags=cv2.CALIB_FIX_INTRINSIC)
-        except cv2.error as exc:
-            raise CalibrationError("OpenCV could not solve the calibration ("
-                                   f"{str(exc).strip().splitlines()[-1]}): capture more "
-                                   "varied views") from None
-        per_view = np.asarray(fixed[11]).reshape(-1, 2)
-        rms_each = np.sqrt(0.5 * (per_view[:, 0] ** 2 + per_view[:, 1] ** 2))
-        median = float(np.median(rms_each))
-        limit = max(options.outlier_factor * median, options.outlier_min_px)
-        worst_first = np.argsort(-rms_each)
-        to_reject = [i for i in worst_first if rms_each[i] > limit]
-        room = len(active) - options.min_views
-        to_reject = to_reject[:max(room, 0)]
-        if not to_reject or round_index == rounds - 1:
-            break
-        for i in to_reject:
-            rejected.append(RejectedView(
-                active[i].view_id,
-                f"reprojection error {rms_each[i]:.2f} px (left {per_view[i, 0]:.2f}, right "
-                f"{per_view[i, 1]:.2f}) > limit {limit:.2f} px = max({options.outlier_factor:g}"
-                f" × median {median:.2f}, {options.outlier_min_px:g})"))
-        drop = set(to_reject)
-        active = [v for i, v in enumerate(active) if i not in drop]
-
-    # Fixed intrinsics are the safe choice: each camera's intrinsics were fitted on all its
-    # views. Refining them jointly can lower the stereo error when there are enough varied
-    # views, but with few views it trades intrinsic accuracy for a smaller residual; accept
-    # the refinement only when it helps and moves the focal lengths by < 2 %.
     check_cancel()
     report(0.82, "choosing between fixed and refined intrinsics")
-    rms_s, R, T = float(fixed[0]), fixed[5], fixed[6]
-    m1, dd1, m2, dd2 = k1, d1, k2, d2
-    mode = "fixed (per-camera intrinsics kept)"
-    if options.intrinsics == "refine" or (options.intrinsics == "auto" and len(active) >= 10):
-        try:
-            refined = cv2.stereoCalibrateExtended(
-                obj, img_l, img_r, k1.copy(), d1.copy(), k2.copy(), d2.copy(), size, None, None,
-                flags=cv2.CALIB_USE_INTRINSIC_GUESS)
-        except cv2.error:
-            refined = None
-        if refined is not None:
-            shift = max(abs(refined[1][0, 0] / k1[0, 0] - 1), abs(refined[3][0, 0] / k2[0, 0] - 1))
-            if options.intrinsics == "refine" or (refined[0] <= rms_s and shift < 0.02):
-                rms_s, m1, dd1, m2, dd2, R, T = (float(refined[0]), refined[1], refined[2],
-                                                 refined[3], refined[4], refined[5], refined[6])
-                per_view = np.asarray(refined[11]).reshape(-1, 2)
-                mode = (f"refined jointly ({len(active)} views; focal lengths moved "
-                        f"{shift * 100:.2f} %)")
-            else:
-                mode = (f"fixed (joint refinement gave RMS {refined[0]:.3f} px and moved focal "
-                        f"lengths {shift * 100:.2f} %: not better)")
-    elif options.intrinsics == "auto":
-        mode = f"fixed (only {len(active)} views; joint refinement needs ≥ 10)"
-
-    # Identical left and right images (one camera's views given twice) solve "perfectly"
-    # with T = 0 and an epipolar error of 0: refuse rather than report an excellent rig.
-    distance = float(np.median([np.linalg.norm(t) for t in tv_l]))
-    if float(np.linalg.norm(T)) < 1e-3 * distance:
-        raise CalibrationError(
-            f"the two cameras came out at the same place (baseline "
-            f"{float(np.linalg.norm(T)):.2g} m, board {distance:.2g} m away): the left and right "
-            f"images look like the same camera's; check that the right images come from the "
-            f"right camera")
+    rms_s, m1, dd1, m2, dd2, R, T, per_view, mode = _choose_intrinsics(solved, active, size,
+                                                                       options)
+    _refuse_one_camera(tv_l, T)
 
     check_cancel()
     report(0.88, "rectifying")
@@ -461,126 +508,6 @@ def solve_stereo(views: Sequence[StereoView], image_size: tuple[int, int], board
         rms_left=rms_l, rms_right=rms_r, rms_stereo=rms_s, epipolar_px=epi_mean,
         view_errors=view_errors, rejected=tuple(rejected), std_left=std_l, std_right=std_r,
         baseline_std=baseline_std, intrinsics_mode=mode)
-
-
-# ---- court pose -----------------------------------------------------------------------------
-@dataclass(frozen=True, slots=True)
-class CourtPoseResult:
-    rig: StereoRig
-    errors_px: np.ndarray      # (N,) reprojection error of each clicked point
-    rms_px: float
-
-
-def solve_court_pose_detailed(rig: StereoRig, left_image_points, court_points) -> CourtPoseResult:
-    """Left camera's pose in the court frame from ≥ 4 clicked points (distorted left pixels).
-
-    Court points are usually all on the floor (Z = 0), a plane: IPPE gives the (up to two)
-    planar solutions, the one with the smaller reprojection error and the points in front of
-    the camera wins, then Levenberg–Marquardt refines it.
-    """
-    img = np.asarray(left_image_points, np.float64).reshape(-1, 2)
-    obj = np.asarray(court_points, np.float64).reshape(-1, 3)
-    if len(img) != len(obj):
-        raise CalibrationError(f"{len(img)} image points but {len(obj)} court points")
-    if len(img) < 4:
-        raise CalibrationError(f"the court pose needs at least 4 points, got {len(img)}")
-    planar = np.ptp(obj[:, 2]) < 1e-9
-    candidates = []
-    method = cv2.SOLVEPNP_IPPE if planar else cv2.SOLVEPNP_SQPNP
-    try:
-        n, rvecs, tvecs, _ = cv2.solvePnPGeneric(obj, img, rig.M1, rig.D1, flags=method)
-    except cv2.error as exc:
-        raise CalibrationError(f"the court pose could not be solved ("
-                               f"{str(exc).strip().splitlines()[-1]}): check the clicked "
-                               f"points") from None
-    for rvec, tvec in zip(rvecs[:n], tvecs[:n]):
-        rvec, tvec = cv2.solvePnPRefineLM(obj, img, rig.M1, rig.D1, rvec.copy(), tvec.copy())
-        rot = cv2.Rodrigues(rvec)[0]
-        depth = (obj @ rot.T + tvec.reshape(3))[:, 2]
-        proj = cv2.projectPoints(obj, rvec, tvec, rig.M1, rig.D1)[0].reshape(-1, 2)
-        err = np.linalg.norm(proj - img, axis=1)
-        candidates.append((bool(np.all(depth > 0)), float(np.sqrt(np.mean(err ** 2))), rot,
-                           tvec.reshape(3), err))
-    if not candidates:
-        raise CalibrationError("the court pose could not be solved: check the clicked points")
-    candidates.sort(key=lambda c: (not c[0], c[1]))
-    in_front, rms, rot, tvec, err = candidates[0]
-    if not in_front:
-        raise CalibrationError("no court pose puts the clicked points in front of the camera: "
-                               "check that each click matches the highlighted court point")
-    # solvePnP: X_left = rot·X_court + t  →  X_court = rotᵀ·X_left − rotᵀ·t
-    r_court = rot.T
-    t_court = -rot.T @ tvec
-    return CourtPoseResult(rig.with_court_pose(r_court, t_court), err, rms)
-
-
-def solve_court_pose(rig: StereoRig, left_image_points, court_points) -> StereoRig:
-    """The rig with R_court, T_court set (X_court = R_court·X_left + T_court)."""
-    return solve_court_pose_detailed(rig, left_image_points, court_points).rig
-
-
-class CourtClicks:
-    """The court-pose step's state: which keypoint to click next, what was clicked.
-
-    The operator clicks keypoints in a fixed order and may skip those not visible; the pose
-    can be solved once 4 points are clicked. Mutable, owned by the GUI thread; the wizard draws
-    ``current_name`` highlighted on its court drawing.
-    """
-
-    DEFAULT_ORDER = ("near back corner left", "near back corner right",
-                     "near short service right", "near short service left",
-                     "near short service centre", "near back centre", "net foot left",
-                     "net foot right", "far short service left", "far short service right",
-                     "far back corner left", "far back corner right")
-
-    def __init__(self, order: Sequence[str] = DEFAULT_ORDER) -> None:
-        from .court import court_keypoints
-        self.keypoints = court_keypoints()
-        unknown = [n for n in order if n not in self.keypoints]
-        if unknown:
-            raise ValueError(f"unknown court keypoints: {', '.join(unknown)}")
-        self.order = tuple(order)
-        self.clicked: dict[str, tuple[float, float]] = {}
-        self._history: list[str] = []        # clicked or skipped names, in order
-        self._position = 0
-
-    @property
-    def current_name(self) -> str | None:
-        """The keypoint to click next, or None when the list is exhausted."""
-        return self.order[self._position] if self._position < len(self.order) else None
-
-    def click(self, x: float, y: float) -> None:
-        name = self.current_name
-        if name is None:
-            return
-        self.clicked[name] = (float(x), float(y))
-        self._history.append(name)
-        self._position += 1
-
-    def skip(self) -> None:
-        if self.current_name is not None:
-            self._history.append(self.current_name)
-            self._position += 1
-
-    def undo(self) -> None:
-        if self._history:
-            name = self._history.pop()
-            self.clicked.pop(name, None)
-            self._position -= 1
-
-    @property
-    def ready(self) -> bool:
-        return len(self.clicked) >= 4
-
-    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        names = [n for n in self.order if n in self.clicked]
-        return (np.array([self.clicked[n] for n in names], np.float64).reshape(-1, 2),
-                np.array([self.keypoints[n] for n in names], np.float64).reshape(-1, 3))
-
-    def solve(self, rig: StereoRig) -> CourtPoseResult:
-        image_points, court_points = self.arrays()
-        return solve_court_pose_detailed(rig, image_points, court_points)
-
 
 def rectified_preview(result: CalibrationResult, left: np.ndarray, right: np.ndarray,
                       line_step: int = 32) -> np.ndarray | None:
