@@ -111,7 +111,7 @@ def test_epipolar_median_kept_sorted_is_numpys_median_of_the_samples():
 def _propagate_plain(state, k, duration, h_max=0.01):
     """The drag model's propagation as a plain loop (trajectory._propagate before its steps
     were kept): the reference."""
-    from badminton_gui.core.trajectory import _rk4, _step_size
+    from badminton_gui.core.flight.trajectory import _rk4, _step_size
 
     if duration == 0.0:
         return state
@@ -128,7 +128,7 @@ def _propagate_plain(state, k, duration, h_max=0.01):
 def test_propagate_with_kept_steps_is_the_plain_loop_bit_for_bit():
     """Repeated calls from the same states (longer, shorter, backwards, exactly a step, zero,
     tiny), more start states than the cache keeps, and NaN: the same tuples as the plain loop."""
-    from badminton_gui.core import trajectory
+    from badminton_gui.core.flight import trajectory
 
     rng = np.random.default_rng(11)
     starts = [tuple(float(v) for v in np.concatenate([rng.uniform(-5, 5, 2), rng.uniform(0, 4, 1),

@@ -52,9 +52,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import court, physics
-from .params import TrajectoryParams
-from .types import FlightInfo, LandingPrediction
+from .. import court, physics
+from ..params import TrajectoryParams
+from ..types import FlightInfo, LandingPrediction
 
 NO_COURT_POSE = "no court pose: calibrate the court pose to get landing predictions"
 CONFIRM_POINTS = 4          # consecutive agreeing points that start a flight
