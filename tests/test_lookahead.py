@@ -11,7 +11,7 @@ from badminton_gui.cli import main
 from badminton_gui.core.lookahead import (CONFIRM_GATE_M, CONFIRM_HOLD_S, CameraLookahead, DelayedReadout,
                                          StereoLookahead)
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.core.flight.trajectory import position_on_path
+from badminton_gui.core.flight.shot_filter import position_on_path
 from badminton_gui.core.types import (REJECT_MOTION, REJECT_SCORE, CameraResult, Candidate, FlightInfo,
                                       TrackResult)
 from badminton_gui.io.presets import load_preset

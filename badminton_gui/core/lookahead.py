@@ -84,7 +84,7 @@ from typing import Callable
 import numpy as np
 
 from .params import TrackerParams
-from .flight.trajectory import position_on_path
+from .flight.shot_filter import position_on_path
 from .types import REJECT_SCORE, CameraResult, Candidate, TrackResult
 
 
