@@ -1,4 +1,4 @@
-"""Landing-prediction and speed accuracy of core/trajectory.py on synthetic drag-model flights.
+"""Landing-prediction and speed accuracy of core/flight/trajectory.py on synthetic drag-model flights.
 
 Why this file exists: the robot needs the landing point early and exact, and no published
 badminton system reports that error in centimetres. This benchmark flies shots with the drag
@@ -51,7 +51,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from badminton_gui.core import physics  # noqa: E402
 from badminton_gui.core.params import TrajectoryParams  # noqa: E402
-from badminton_gui.core.trajectory import Trajectory  # noqa: E402
+from badminton_gui.core.flight.trajectory import Trajectory  # noqa: E402
 
 LEAD_TIMES_MS = (600, 500, 400, 300, 200, 100)
 

@@ -13,7 +13,7 @@ import pytest
 
 from badminton_gui.core.evaluation import tolerance_px
 from badminton_gui.core.flight.sight import SightOfCamera
-from badminton_gui.core.lookahead import StereoLookahead
+from badminton_gui.core.track_lookahead import StereoLookahead
 from badminton_gui.core.params import TrackerParams
 from badminton_gui.core.tracker import StereoTracker
 from badminton_gui.core.types import StereoFrame

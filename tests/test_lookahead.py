@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from badminton_gui.cli import main
-from badminton_gui.core.lookahead import (CONFIRM_GATE_M, CONFIRM_HOLD_S, CameraLookahead, DelayedReadout,
-                                         StereoLookahead)
+from badminton_gui.core.flight.shot_filter import position_on_path
+from badminton_gui.core.lookahead import CameraLookahead
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.core.trajectory import position_on_path
+from badminton_gui.core.track_lookahead import CONFIRM_GATE_M, CONFIRM_HOLD_S, DelayedReadout, StereoLookahead
 from badminton_gui.core.types import (REJECT_MOTION, REJECT_SCORE, CameraResult, Candidate, FlightInfo,
                                       TrackResult)
 from badminton_gui.io.presets import load_preset

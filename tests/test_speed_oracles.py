@@ -109,9 +109,9 @@ def test_epipolar_median_kept_sorted_is_numpys_median_of_the_samples():
 
 
 def _propagate_plain(state, k, duration, h_max=0.01):
-    """The drag model's propagation as a plain loop (trajectory._propagate before its steps
+    """The drag model's propagation as a plain loop (shot_filter._propagate before its steps
     were kept): the reference."""
-    from badminton_gui.core.trajectory import _rk4, _step_size
+    from badminton_gui.core.flight.shot_filter import _rk4, _step_size
 
     if duration == 0.0:
         return state
@@ -128,12 +128,12 @@ def _propagate_plain(state, k, duration, h_max=0.01):
 def test_propagate_with_kept_steps_is_the_plain_loop_bit_for_bit():
     """Repeated calls from the same states (longer, shorter, backwards, exactly a step, zero,
     tiny), more start states than the cache keeps, and NaN: the same tuples as the plain loop."""
-    from badminton_gui.core import trajectory
+    from badminton_gui.core.flight import shot_filter
 
     rng = np.random.default_rng(11)
     starts = [tuple(float(v) for v in np.concatenate([rng.uniform(-5, 5, 2), rng.uniform(0, 4, 1),
                                                       rng.uniform(-60, 60, 3)]))
-              for _ in range(trajectory._CHAINS_MAX + 6)]
+              for _ in range(shot_filter._CHAINS_MAX + 6)]
     starts.append((0.0, 0.0, 1.0, float("nan"), 2.0, 3.0))
     starts.append((0.0, -0.0, 1.0, 0.0, -0.0, 0.0))
     checked = 0
@@ -146,13 +146,13 @@ def test_propagate_with_kept_steps_is_the_plain_loop_bit_for_bit():
             rng.shuffle(durations)
             for d in [float(x) for x in durations] + [0.1 * i / 8 for i in range(9)]:
                 for h_max in (0.01, 0.025):
-                    got = trajectory._propagate(state, k, d, h_max)
+                    got = shot_filter._propagate(state, k, d, h_max)
                     want = _propagate_plain(state, k, d, h_max)
                     assert len(got) == 6
                     assert all((a == b and math.copysign(1, a) == math.copysign(1, b))
                                or (math.isnan(a) and math.isnan(b)) for a, b in zip(got, want)), (n, d)
                     checked += 1
-    assert checked > 3000 and len(trajectory._CHAINS) <= trajectory._CHAINS_MAX
+    assert checked > 3000 and len(shot_filter._CHAINS) <= shot_filter._CHAINS_MAX
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 
 from badminton_gui.core import physics
+from badminton_gui.core.flight.landing import NO_COURT_POSE
+from badminton_gui.core.flight.trajectory import Trajectory
 from badminton_gui.core.params import TrajectoryParams
-from badminton_gui.core.trajectory import NO_COURT_POSE, Trajectory
 
 _spec = importlib.util.spec_from_file_location(
     "landing_benchmark", Path(__file__).resolve().parents[1] / "benchmarks" / "landing.py")
@@ -524,12 +525,12 @@ def test_a_fast_new_track_whose_first_points_scatter_by_centimetres_is_followed_
     carry ``TENTATIVE_FLOOR`` of noise on top. Here the 8 points after the hit scatter by 2 cm:
     without the floor the new shot waits for the scatter to end (117 ms after the hit, every
     seed), with it 67–125 ms (94 ms on average over 8 seeds)."""
-    from badminton_gui.core import trajectory as trajectory_module
+    from badminton_gui.core.flight import takeover as takeover_module
 
     times, truth, hit_time, _ = _clear_driven_back()
 
     def first_new_shot(floor, seed):
-        monkeypatch.setattr(trajectory_module, "TENTATIVE_FLOOR", floor)
+        monkeypatch.setattr(takeover_module, "TENTATIVE_FLOOR", floor)
         rng = np.random.default_rng(seed)
         points = truth + rng.normal(0, 0.002, truth.shape)
         after = np.flatnonzero(times > hit_time)[:8]

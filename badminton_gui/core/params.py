@@ -567,7 +567,7 @@ class StereoParams(ParamGroup):
 
 @dataclass(frozen=True, slots=True)
 class TrajectoryParams(ParamGroup):
-    """3D track keeping, shot segmentation and landing prediction (core/trajectory.py)."""
+    """3D track keeping, shot segmentation and landing prediction (core/flight/trajectory.py)."""
 
     TITLE: ClassVar[str] = "Trajectory"
     doubles: bool = flag(True, label="Doubles court", help="In/out call against the doubles lines (else singles)")

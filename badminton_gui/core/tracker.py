@@ -71,7 +71,7 @@ from .stereo.look import ImagePaths, look_on_epipolar_lines
 from .stereo.measure import measure
 from .stereo.pairing import StereoPairing
 from .stereo.vouch import StereoVouch
-from .trajectory import Trajectory
+from .flight.trajectory import Trajectory
 from .types import CameraResult, FlightInfo, StereoFrame, TrackResult
 
 

@@ -158,7 +158,7 @@ class FlightInfo:
     confirmed: tuple = ()
     # The state, (t, x, y, z, vx, vy, vz, k), of that track at this step, or of the flight when
     # it took this step's point: with the drag model, where it puts the shuttle a moment earlier
-    # (``trajectory.position_on_path``), for frames it refused just before. () otherwise.
+    # (``flight.shot_filter.position_on_path``), for frames it refused just before. () otherwise.
     confirmed_path: tuple = ()
 
 

@@ -17,7 +17,7 @@ when the GUI runs late, none with no GUI at all).
 
 The feeds may show each pair with the file commands' look-ahead readout instead of the live one
 (:meth:`TrackingWorker.set_lookahead`, Playback ▸ Look-ahead view): the worker keeps each pair's
-images until core/lookahead.py's ``DelayedReadout`` has decided its result K pairs later, then
+images until core/track_lookahead.py's ``DelayedReadout`` has decided its result K pairs later, then
 scores, trails and shows that result on that pair — a recording then shows the rows `detect` and
 `track` write (a TV clip's classifier adapted to it first, as `detect` does, as a step of
 opening it). The robot link and the result taps still get every live result at once.
@@ -55,10 +55,10 @@ from PySide6.QtCore import QObject, Signal
 from ..core.adaptation import adapt_to_recording
 from ..core.errors import TrackerInputError
 from ..core.evaluation import Label, LiveScore, Outcomes
-from ..core.lookahead import DelayedReadout
 from ..core.params import ParamError, TrackerParams
 from ..core.rig import StereoRig
 from ..core.mono import MonoTracker
+from ..core.track_lookahead import DelayedReadout
 from ..core.tracker import StereoTracker
 from ..core.types import TrackResult
 from ..io.detect_file import adaptation_asked

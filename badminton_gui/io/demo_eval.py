@@ -17,8 +17,8 @@ import cv2
 import numpy as np
 
 from ..core.evaluation import Outcomes, classify, tolerance_px
-from ..core.lookahead import StereoLookahead
 from ..core.params import TrackerParams
+from ..core.track_lookahead import StereoLookahead
 from ..core.tracker import StereoTracker
 from ..core.types import StereoFrame
 from .demo_scene import DemoScene

@@ -17,10 +17,10 @@ from pathlib import Path
 from typing import Callable
 
 from ..core.evaluation import LiveScore, Outcomes
-from ..core.lookahead import StereoLookahead
 from ..core.params import TrackerParams
 from ..core.rig import StereoRig, refine_threshold
 from ..core.errors import TrackerInputError
+from ..core.track_lookahead import StereoLookahead
 from ..core.tracker import StereoTracker
 from ..core.types import CameraResult, TrackResult
 from .labels import TRACK_COLUMNS, track_row

@@ -18,7 +18,7 @@ from ..rig import StereoRig
 from ..step import Step
 from ..stereo.cork import CorkCorrection
 from ..stereo.measure import Measurement
-from ..trajectory import Trajectory
+from .trajectory import Trajectory
 from ..types import Candidate, FlightInfo
 from .sight import PAIRED_SIGHT_NOISE, SightOfCamera
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..trajectory import Trajectory
+from .trajectory import Trajectory
 
 Guide = tuple[np.ndarray, np.ndarray]   # the flight's (position, covariance) at a time, court frame
 

@@ -20,7 +20,7 @@ import numpy as np
 from ..guided import bright_near
 from ..params import TrackerParams
 from ..rig import StereoRig
-from ..trajectory import Trajectory
+from .trajectory import Trajectory
 from ..types import CameraResult, Candidate
 from .look import MERGED_WHITE_RADIUS
 
