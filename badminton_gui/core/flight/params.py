@@ -1,7 +1,7 @@
 """The parameters of the 3D flight filter and of the look-ahead readout.
 
-Why this file exists: ``core/flight/trajectory.py`` (the drag-model flight filter, landing prediction)
-and ``core/lookahead.py`` (the readout decided a few frames later) read these groups.
+Why this file exists: ``core/flight/trajectory.py`` (the drag-model flight filter, landing
+prediction) and ``core/lookahead.py`` (the readout decided a few frames later) read these groups.
 """
 
 from __future__ import annotations
