@@ -10,7 +10,6 @@ one-sentence errors for a file that cannot be written (a full disk). No Qt here.
 
 from __future__ import annotations
 
-import csv
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,6 +21,7 @@ from ..core.params import TrackerParams
 from ..core.rig import StereoRig, refine_threshold
 from ..core.tracker import StereoTracker
 from .labels import TRACK_COLUMNS, track_row
+from .safe_write import RowFile
 from .track_log import describe_os_error
 
 
@@ -117,11 +117,11 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     n = hits3d = 0
     cancelled = False
     start = time.perf_counter()
+    rows = None
     try:
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        with out_path.open("w", newline="") as fh:
-            writer = csv.writer(fh)
-            writer.writerow(TRACK_COLUMNS)
+        # Written beside the output and renamed over it at the end: a run that fails keeps its
+        # whole rows, and a previous output is never half overwritten.
+        with RowFile(out_path, TRACK_COLUMNS) as rows:
             while max_frames is None or n < max_frames:
                 if should_stop is not None and should_stop():
                     cancelled = True
@@ -131,7 +131,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                     break
                 result = tracker.process_frame(frame, keep_masks=False)
                 for decided in map(scored, lookahead.push(result)):
-                    writer.writerow(track_row(decided))
+                    rows.write_row(track_row(decided))
                     hits3d += decided.point is not None
                 if link is not None:
                     link.send_result(result)
@@ -139,10 +139,11 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                 if progress is not None:
                     progress(n)
             for decided in map(scored, lookahead.flush()):
-                writer.writerow(track_row(decided))
+                rows.write_row(track_row(decided))
                 hits3d += decided.point is not None
     except OSError as exc:
-        raise TrackFileError(f"cannot write the track: {describe_os_error(exc, out_path)}") from None
+        kept = f"; its first {rows.rows_saved} rows are kept" if rows is not None and rows.rows_saved else ""
+        raise TrackFileError(f"cannot write the track: {describe_os_error(exc, out_path)}{kept}") from None
     finally:
         tracker.close()
     return TrackFileSummary(n, hits3d, time.perf_counter() - start, out_path, cancelled,
