@@ -142,3 +142,98 @@ def test_a_failing_loop_keeps_the_rows_written_so_far(tmp_path):
             rows.write_row([1])
             raise KeyError("decoding failed")
     assert path.read_text().splitlines() == ["Frame", "0", "1"] and _leftovers(tmp_path) == []
+
+
+# ---- the rig file ---------------------------------------------------------------------------------
+def _rig():
+    from badminton_gui.core.rig import StereoRig
+    k = np.array([[300.0, 0, 160], [0, 300.0, 120], [0, 0, 1]])
+    return StereoRig(k, np.zeros(5), k, np.zeros(5), np.eye(3), [-0.3, 0, 0], (320, 240))
+
+
+def test_a_rig_saved_through_a_symlink_keeps_the_link_and_a_failed_save_changes_nothing(tmp_path, monkeypatch):
+    from badminton_gui.core.rig import StereoRig
+    real = tmp_path / "real.yaml"
+    real.write_text("old")
+    link = tmp_path / "rig.yaml"
+    link.symlink_to("real.yaml")
+    _rig().save(link)
+    assert link.is_symlink() and StereoRig.load(real).image_size == (320, 240)
+    assert _leftovers(tmp_path) == [] and not any(p.name.endswith(".tmp.yaml") for p in tmp_path.iterdir())
+    before = real.read_bytes()
+
+    def torn(self, tmp, path):       # a FileStorage that stopped half-way (a full disk)
+        tmp.write_text("%YAML:1.0\n---\nimage_width: 320\n")
+    monkeypatch.setattr(StereoRig, "_write_file_storage", torn)
+    with pytest.raises(Exception):
+        _rig().save(link)
+    assert real.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["real.yaml", "rig.yaml"]
+
+
+# ---- the commands refuse an output that is an input -----------------------------------------------
+def _pair(folder):
+    import cv2
+    rng = np.random.default_rng(0)
+    for name in ("l.avi", "r.avi"):
+        writer = cv2.VideoWriter(str(folder / name), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, (320, 240))
+        for _ in range(5):
+            writer.write(rng.integers(20, 60, size=(240, 320, 3), dtype=np.uint8))
+        writer.release()
+    _rig().save(folder / "rig.yaml")
+    (folder / "times.csv").write_text("Frame,Timestamp\n" + "".join(f"{i},{i / 30:.6f}\n" for i in range(5)))
+
+
+@pytest.mark.parametrize("output", ["l.avi", "r.avi", "rig.yaml", "times.csv", "link.avi", "hard.avi"])
+def test_track_and_detect_refuse_to_write_over_an_input(tmp_path, capsys, output):
+    from badminton_gui.cli import main
+    _pair(tmp_path)
+    (tmp_path / "link.avi").symlink_to("l.avi")
+    os.link(tmp_path / "r.avi", tmp_path / "hard.avi")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    args = ["track", "--left", str(tmp_path / "l.avi"), "--right", str(tmp_path / "r.avi"),
+            "--calib", str(tmp_path / "rig.yaml"), "--left-times", str(tmp_path / "times.csv"),
+            "--right-times", str(tmp_path / "times.csv"), "-o", str(tmp_path / output), "--quiet"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert f"the output {tmp_path / output} is also an input" in err and err.count("\n") == 1
+    if output in ("link.avi", "hard.avi"):     # named: the file it really is
+        assert str(tmp_path / ("l.avi" if output == "link.avi" else "r.avi")) in err
+    if output.endswith(".avi"):
+        assert main(["detect", str(tmp_path / output.replace("link", "l").replace("hard", "r")),
+                     "-o", str(tmp_path / output), "--quiet"]) == 2
+        assert "is also an input" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+def test_track_writes_whole_and_leaves_no_temporary(tmp_path):
+    from badminton_gui.cli import main
+    _pair(tmp_path)
+    out = tmp_path / "track.csv"
+    out.write_text("the previous run\n")
+    assert main(["track", "--left", str(tmp_path / "l.avi"), "--right", str(tmp_path / "r.avi"),
+                 "--calib", str(tmp_path / "rig.yaml"), "-o", str(out), "--quiet"]) == 0
+    assert len(out.read_text().splitlines()) == 1 + 5 and _leftovers(tmp_path) == []
+
+
+def test_track_on_a_disk_that_fills_up_keeps_whole_rows_and_says_the_disk_is_full(tmp_path, monkeypatch):
+    from badminton_gui.io.track_file import TrackFileError, track_to_csv
+    from badminton_gui.io.video import VideoPair
+    from badminton_gui.core.params import TrackerParams
+    _pair(tmp_path)
+    monkeypatch.setattr(safe_write, "ROW_BUFFER_BYTES", 1)         # every row is its own write
+    real_init = RowFile.__init__
+
+    def filling_up(self, *args, **kwargs):
+        real_init(self, *args, **kwargs)
+        self._fh = _DiskFillsUp(self._fh, 200)                     # the header and a few rows
+    monkeypatch.setattr(RowFile, "__init__", filling_up)
+    out = tmp_path / "track.csv"
+    source = VideoPair(tmp_path / "l.avi", tmp_path / "r.avi")
+    with pytest.raises(TrackFileError, match=f"^cannot write the track: the disk is full writing {out}; "
+                                             r"its first \d+ rows are kept$"):
+        track_to_csv(source, _rig(), TrackerParams(), out)
+    source.close()
+    text = out.read_text()
+    assert text.endswith("\n") and _leftovers(tmp_path) == []
+    lines = list(csv.reader(text.splitlines()))
+    assert len(lines) >= 2 and all(len(line) == len(lines[0]) for line in lines)

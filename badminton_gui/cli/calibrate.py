@@ -16,7 +16,7 @@ from ..core.calib_board import BoardError, BoardSpec
 from ..core.calib_folders import pair_image_files, views_from_pairs
 from ..core.calibration import CalibrationError, SolveOptions, solve_stereo
 from ..core.rig import RigError
-from .common import Progress, UserError
+from .common import Progress, UserError, refuse_output_over_inputs
 
 
 def register(sub) -> None:
@@ -60,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     try:
         pairs = pair_image_files(args.left_dir, args.right_dir, args.left_glob, args.right_glob)
+        refuse_output_over_inputs(args.output, *(image for pair in pairs for image in pair))
         bar = Progress(len(pairs), "finding the board")
         if args.subpix_window is not None and not 1 <= args.subpix_window <= 50:
             raise UserError("--subpix-window must be 1..50 px")

@@ -21,6 +21,27 @@ INPUT_ERRORS = (ParamError, RigError, SourceError, FileNotFoundError, IsADirecto
                 PermissionError, ValueError)
 
 
+def refuse_output_over_inputs(output, *inputs, what: str = "output") -> None:
+    """Stop (UserError, exit 2) when ``output`` would overwrite one of ``inputs``: the same path,
+    a symlink to it or a hard link of it. Every command that writes a file calls this before it
+    reads anything; None inputs (options not given) are skipped, so pass the options as they are:
+    ``refuse_output_over_inputs(args.output, args.left, args.right, args.calib)``."""
+    from ..io.safe_write import clashing_input
+    if output is None:
+        return
+    clash = clashing_input(output, inputs)
+    if clash is not None:
+        same = "" if str(output) == clash else f" ({clash}, the same file)"
+        raise UserError(f"the {what} {output} is also an input{same}: writing it would destroy "
+                        "the input; choose another output path")
+
+
+def preset_file(args):
+    """``--preset`` when it names a file (an input that an output must not overwrite), else None."""
+    preset = getattr(args, "preset", None)
+    return preset if preset and Path(preset).is_file() else None
+
+
 def parse_size(text: str) -> tuple[int, int]:
     try:
         w, h = text.lower().split("x")

@@ -6,7 +6,7 @@ import argparse
 
 from ..io.detect_file import ADAPTING, DetectFileError, detect_to_csv
 from .common import (INPUT_ERRORS, Progress, UserError, add_lookahead_argument, add_preset_argument,
-                     params_from_args)
+                     params_from_args, preset_file, refuse_output_over_inputs)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,6 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_output_over_inputs(args.output, args.video, preset_file(args))
     params = params_from_args(args)
     bars: dict[str, Progress] = {}     # the pass shown now (the adaptation's, then the detection's)
 

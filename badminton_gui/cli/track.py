@@ -8,7 +8,8 @@ import sys
 from ..core.tracker import configure_opencv_threads
 from ..io.track_file import TrackFileError, track_to_csv
 from .common import (Progress, UserError, add_lookahead_argument, add_preset_argument,
-                     add_video_pair_arguments, open_stereo_videos, params_from_args)
+                     add_video_pair_arguments, open_stereo_videos, params_from_args,
+                     preset_file, refuse_output_over_inputs)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -30,6 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_output_over_inputs(args.output, args.left, args.right, args.calib, args.left_times,
+                              args.right_times, preset_file(args))
     params = params_from_args(args)
     rig, source, total = open_stereo_videos(args)
     link = None
