@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -40,6 +42,45 @@ def preset_file(args):
     """``--preset`` when it names a file (an input that an output must not overwrite), else None."""
     preset = getattr(args, "preset", None)
     return preset if preset and Path(preset).is_file() else None
+
+
+BAUD_RANGE = (50, 4_000_000)     # what serial adapters offer; Bluetooth SPP ignores the rate
+
+
+def baud_rate(text: str) -> int:
+    """argparse type of ``--baud``: a whole number of bits per second within BAUD_RANGE (USB
+    adapters accept non-standard rates such as 250000, so any rate in the range is taken)."""
+    try:
+        baud = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of bits per second") from None
+    if not BAUD_RANGE[0] <= baud <= BAUD_RANGE[1]:
+        raise argparse.ArgumentTypeError(f"{baud} is outside {BAUD_RANGE[0]} … {BAUD_RANGE[1]} "
+                                         "(common rates: 9600, 57600, 115200, 921600)")
+    return baud
+
+
+def seconds_or_zero(text: str) -> float:
+    """argparse type of a time limit: finite seconds ≥ 0 (0: no limit); nan, inf and negative
+    values are refused."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"{text} must be finite seconds ≥ 0 (0: no limit)")
+    return value
+
+
+def count_or_zero(text: str) -> int:
+    """argparse type of a count: a whole number ≥ 0 (0: no limit)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{value} must be ≥ 0 (0: no limit)")
+    return value
 
 
 def parse_size(text: str) -> tuple[int, int]:

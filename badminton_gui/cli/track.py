@@ -9,7 +9,7 @@ from ..core.tracker import configure_opencv_threads
 from ..io.track_file import TrackFileError, track_to_csv
 from .common import (Progress, UserError, add_lookahead_argument, add_preset_argument,
                      add_video_pair_arguments, open_stereo_videos, params_from_args,
-                     preset_file, refuse_output_over_inputs)
+                     baud_rate, preset_file, refuse_output_over_inputs)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,7 +24,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_lookahead_argument(p)
     p.add_argument("--robot", metavar="PORT", help="also stream results to the robot on this "
                    "serial port / Bluetooth port / pyserial URL")
-    p.add_argument("--baud", type=int, default=115200, help="robot link baud rate")
+    p.add_argument("--baud", type=baud_rate, default=115200, help="robot link baud rate (default 115200)")
+    p.add_argument("--robot-required", action="store_true",
+                   help="stop with exit status 2 when the --robot port cannot be opened at the start "
+                        "(default: say so on stderr, track anyway and keep retrying the port)")
     p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=run)
@@ -34,25 +37,28 @@ def run(args: argparse.Namespace) -> int:
     refuse_output_over_inputs(args.output, args.left, args.right, args.calib, args.left_times,
                               args.right_times, preset_file(args))
     params = params_from_args(args)
-    rig, source, total = open_stereo_videos(args)
-    link = None
-    if args.robot:
-        from ..io.robot_link import RobotLink
-        link = RobotLink(args.robot, args.baud)
-    configure_opencv_threads()
-    truth = _labels_in_times(args)
-    progress = Progress(total, "track")
+    link = _robot_link(args)     # before the videos' reader thread: a refused port starts nothing
+    source = None
     try:
-        summary = track_to_csv(source, rig, params, args.output, max_frames=args.max_frames, link=link,
-                               progress=None if args.quiet else progress.update, truth=truth)
-    except TrackFileError as exc:
-        raise UserError(str(exc)) from None
+        rig, source, total = open_stereo_videos(args)
+        configure_opencv_threads()
+        truth = _labels_in_times(args)
+        progress = Progress(total, "track")
+        try:
+            summary = track_to_csv(source, rig, params, args.output, max_frames=args.max_frames,
+                                   link=link, progress=None if args.quiet else progress.update,
+                                   truth=truth)
+        except TrackFileError as exc:
+            raise UserError(str(exc)) from None
+        finally:
+            if not args.quiet:
+                progress.close()
     finally:
-        source.close()
+        if source is not None:
+            source.close()
         if link is not None:
             link.close()
-        if not args.quiet:
-            progress.close()
+            _report_link(link, args.quiet)
     n, hits3d = summary.pairs, summary.points_3d
     if n == 0:
         raise UserError("the videos hold no frames")
@@ -66,6 +72,36 @@ def run(args: argparse.Namespace) -> int:
             note = summary.rig_note
             print(f"note: {note[:1].lower()}{note[1:]}", file=sys.stderr)
     return 0
+
+
+def _robot_link(args):
+    """The link to ``--robot``, or None. A port that cannot be opened is said at once, on one
+    line: tracking goes on and the link keeps retrying, or, with ``--robot-required``, exit 2."""
+    if not args.robot:
+        return None
+    from ..io.robot_link import RobotLink
+    link = RobotLink(args.robot, args.baud)
+    status = link.wait_first_attempt()
+    if status.connected:
+        return link
+    reason = status.last_error or f"{args.robot} did not open in time"
+    if args.robot_required:
+        link.close()
+        raise UserError(f"robot link: {reason} (--robot-required)")
+    print(f"robot link: {reason}; tracking anyway, retrying the port every {RobotLink.RETRY_MAX_S:g} s",
+          file=sys.stderr, flush=True)
+    return link
+
+
+def _report_link(link, quiet: bool) -> None:
+    """What the robot got, on stderr: always when nothing was sent."""
+    s = link.status()
+    if not s.messages_sent:
+        print(f"robot link: nothing was sent to {s.port}"
+              + (f" (last error: {s.last_error})" if s.last_error else ""), file=sys.stderr)
+    elif not quiet:
+        print(f"robot link: {s.messages_sent} messages sent to {s.port}, {s.messages_dropped} "
+              f"replaced by newer ones, {s.errors} errors", file=sys.stderr)
 
 
 def _labels_in_times(args):
