@@ -2,17 +2,17 @@
 
 Why this file exists: the look-ahead readout (core/lookahead.py) only reads what the online
 pipeline produced (candidates with their tracklet ids, the online choice), never feeds back into
-it. So the online results of a clip can be recorded once (pickled TrackResults / CameraResults
-without masks) and the look-ahead replayed on them for any K in seconds, giving exactly the
-output the CLI would give. ``benchmarks/lookahead_study.py`` reads these recordings.
+it. So the online results of a clip can be recorded once (TrackResults / CameraResults without
+masks, benchmarks/result_cache.py) and the look-ahead replayed on them for any K in seconds,
+giving exactly the output the CLI would give. ``benchmarks/lookahead_study.py`` reads these
+recordings, by default in the user's private cache folder (clips.py ``cache_dir``).
 
-    .venv/bin/python benchmarks/lookahead_record.py --out /tmp/la_cache [--only REGEX] [--held-out]
+    .venv/bin/python benchmarks/lookahead_record.py [--out DIR] [--only REGEX] [--held-out]
 """
 
 from __future__ import annotations
 
 import argparse
-import pickle
 import re
 import sys
 import time
@@ -23,7 +23,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from clips import broadcast_clips, nycu_cfgs, stereo_clips  # noqa: E402
+from clips import broadcast_clips, cache_dir, nycu_cfgs, stereo_clips  # noqa: E402
+from result_cache import save_results  # noqa: E402
 
 
 def _rig(tmp: Path):
@@ -37,9 +38,7 @@ def _rig(tmp: Path):
 
 
 def _save(path: Path, results) -> None:
-    tmp = path.with_suffix(".part")
-    tmp.write_bytes(pickle.dumps(results))
-    tmp.replace(path)
+    save_results(path, results)
 
 
 def _strip(res):
@@ -71,7 +70,7 @@ def job_track(name: str, out_dir: str) -> str:
         results.append(dataclasses.replace(r, left=_strip(r.left), right=_strip(r.right)))
     source.close()
     tracker.close()
-    _save(Path(out_dir) / f"{name}_track.pkl", results)
+    _save(Path(out_dir) / f"{name}_track.json.gz", results)
     return f"{name} track {len(results)} pairs {time.perf_counter() - start:.0f} s"
 
 
@@ -97,19 +96,19 @@ def job_detect(name: str, camera: str, out_dir: str, preset: str | None) -> str:
         results.append((i, v.fps, _strip(det.process(frame, i / v.fps, keep_mask=False))))
         i += 1
     v.close()
-    _save(Path(out_dir) / f"{name}_{camera}_detect.pkl", results)
+    _save(Path(out_dir) / f"{name}_{camera}_detect.json.gz", results)
     return f"{name} {camera} detect {i} frames {time.perf_counter() - start:.0f} s"
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", required=True)
+    ap.add_argument("--out", default=None, help="folder of the recordings (default: the private cache folder)")
     ap.add_argument("--only", default=None, help="regex on clip names")
     ap.add_argument("--held-out", action="store_true", help="the held-out clips instead of the tuned-on ones")
     ap.add_argument("--modes", default="track,broadcast", help="track, detect, broadcast (comma-separated)")
     ap.add_argument("--jobs", type=int, default=2)
     args = ap.parse_args()
-    out = Path(args.out)
+    out = Path(args.out) if args.out else cache_dir("lookahead")
     out.mkdir(parents=True, exist_ok=True)
     _rig(out)
     modes = set(args.modes.split(","))

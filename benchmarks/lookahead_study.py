@@ -10,13 +10,13 @@ would write, for many K and settings in seconds. Two reports:
   for good within K frames (FP1, FP2);
 * the outcomes and accuracy with the look-ahead at each K (``--frames 0 4 8 15``).
 
-    .venv/bin/python benchmarks/lookahead_study.py --cache /tmp/la_cache [--potential] [--frames 0 4 8 15]
+    .venv/bin/python benchmarks/lookahead_study.py [--cache DIR] [--potential] [--frames 0 4 8 15]
 """
 
 from __future__ import annotations
 
 import argparse
-import pickle
+import json
 import sys
 from collections import Counter
 from pathlib import Path
@@ -32,13 +32,14 @@ from badminton_gui.core.lookahead import CameraLookahead  # noqa: E402
 from badminton_gui.core.params import TrackerParams  # noqa: E402
 from badminton_gui.io.labels import read_point_labels  # noqa: E402
 from badminton_gui.io.presets import load_preset  # noqa: E402
-from clips import broadcast_clips, stereo_clips  # noqa: E402
+from clips import broadcast_clips, cache_dir, stereo_clips  # noqa: E402
+from result_cache import load_results  # noqa: E402
 
 
 def _load(path: Path):
     try:
-        return pickle.loads(path.read_bytes())
-    except (EOFError, pickle.UnpicklingError):   # being written
+        return load_results(path)
+    except (EOFError, OSError, json.JSONDecodeError):   # not a whole recording
         return []
 
 
@@ -46,7 +47,7 @@ def load_streams(cache: Path):
     """[(name, kind, camera, width, labels dict, [(frame index, t, CameraResult)], pairing)]."""
     out = []
     for c in stereo_clips():
-        path = cache / f"{c.name}_track.pkl"
+        path = cache / f"{c.name}_track.json.gz"
         if path.exists():
             results = _load(path)
             for cam, labels in (("left", c.left_labels), ("right", c.right_labels)):
@@ -55,13 +56,13 @@ def load_streams(cache: Path):
                 out.append((c.name, "stereo-track", cam, 2048, read_point_labels(labels).as_dict(),
                             stream, c.held_out))
         for cam, labels in (("left", c.left_labels), ("right", c.right_labels)):
-            path = cache / f"{c.name}_{cam}_detect.pkl"
+            path = cache / f"{c.name}_{cam}_detect.json.gz"
             if path.exists():
                 results = _load(path)
                 out.append((c.name, "stereo-detect", cam, 2048, read_point_labels(labels).as_dict(),
                             [(i, i / fps, r) for i, fps, r in results], c.held_out))
     for c in broadcast_clips():
-        path = cache / f"{c.name}_-_detect.pkl"
+        path = cache / f"{c.name}_-_detect.json.gz"
         if path.exists():
             results = _load(path)
             out.append((c.name, "broadcast", "-", 1280, read_point_labels(c.labels).as_dict(),
@@ -122,14 +123,14 @@ def potential(stream, labels, width, ks):
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--cache", required=True)
+    ap.add_argument("--cache", default=None, help="folder of the recordings (default: the private cache folder)")
     ap.add_argument("--frames", type=int, nargs="+", default=[0, 4, 8, 15])
     ap.add_argument("--potential", action="store_true")
     ap.add_argument("--set", action="append", default=[], metavar="GROUP.NAME=VALUE",
                     help="look-ahead parameter overrides, e.g. lookahead.min_support=3")
     ap.add_argument("--per-clip", action="store_true")
     args = ap.parse_args()
-    streams = load_streams(Path(args.cache))
+    streams = load_streams(Path(args.cache) if args.cache else cache_dir("lookahead"))
     if args.potential:
         for kind in ("stereo-track", "stereo-detect", "broadcast"):
             for held in (False, True):

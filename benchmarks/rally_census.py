@@ -22,8 +22,8 @@ FP2, FN, 16 px at 2048 px), and each wrong one gets a class from the labels arou
   (clutter held still, or a shuttle no label ever marks) or moving (a clutter track).
 
     .venv/bin/python benchmarks/accuracy.py --only 'rally_11-(46-04|46-22|47-02|47-21|48-00)' \\
-        --track-only --lookahead 0 --jobs 1 --keep /tmp/census
-    .venv/bin/python benchmarks/rally_census.py /tmp/census [--frames]
+        --track-only --lookahead 0 --jobs 1 --keep out/census
+    .venv/bin/python benchmarks/rally_census.py out/census [--frames]
 
 Held-out rallies are refused unless --held-out is given (they are for final measurement only).
 """
