@@ -81,7 +81,8 @@ def _robot_link(args):
         return None
     from ..io.robot_link import RobotLink
     link = RobotLink(args.robot, args.baud)
-    status = link.wait_first_attempt()
+    # A Bluetooth port may take seconds to connect: a run that cannot go without it waits longer.
+    status = link.wait_first_attempt(10.0 if args.robot_required else 2.0)
     if status.connected:
         return link
     reason = status.last_error or f"{args.robot} did not open in time"
