@@ -7,6 +7,7 @@ import csv
 import errno
 import os
 import stat
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -237,3 +238,17 @@ def test_track_on_a_disk_that_fills_up_keeps_whole_rows_and_says_the_disk_is_ful
     assert text.endswith("\n") and _leftovers(tmp_path) == []
     lines = list(csv.reader(text.splitlines()))
     assert len(lines) >= 2 and all(len(line) == len(lines[0]) for line in lines)
+
+
+def test_a_read_only_output_is_refused_not_replaced_by_the_rename(tmp_path, monkeypatch):
+    """Renaming over a file replaces it even when its owner made it read-only; the writers refuse
+    it as opening it for writing would (os.access is asked: root may write anything)."""
+    target = tmp_path / "kept.csv"
+    target.write_text("keep me")
+    monkeypatch.setattr(safe_write.os, "access", lambda path, mode: Path(path) != target)
+    with pytest.raises(PermissionError):
+        with replacing(target) as tmp:
+            tmp.write_text("new")
+    with pytest.raises(PermissionError):
+        RowFile(target, ["a"])
+    assert target.read_text() == "keep me" and _leftovers(tmp_path) == []

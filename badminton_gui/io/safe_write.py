@@ -21,6 +21,7 @@ hold for every file the program writes, and they live here so each writer does n
 from __future__ import annotations
 
 import csv
+import errno
 import io
 import os
 import stat
@@ -83,6 +84,9 @@ def _umask() -> int:
 
 
 def _temporary_beside(target: Path) -> Path:
+    # A rename would replace a file its owner made read-only: refuse it as opening it would.
+    if target.exists() and not os.access(target, os.W_OK):
+        raise PermissionError(errno.EACCES, "Permission denied", str(target))
     fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     os.close(fd)
     return Path(name)
