@@ -130,8 +130,8 @@ class RowFile:
     recording that must survive a crash of the program): the target itself is written.
     A failing write (a full disk, a removed stick) cuts the file back to its last whole row,
     puts it in place (the rows before the failure are kept; nothing is replaced when not even
-    the header was written whole), closes it and raises the ``OSError``; :attr:`rows_saved` says how many rows the file holds. Not thread-safe: one
-    writer, or the caller's lock.
+    the header was written whole), closes it and raises the ``OSError``; :attr:`rows_saved`
+    says how many rows the file holds. Not thread-safe: one writer, or the caller's lock.
     """
 
     def __init__(self, path: str | os.PathLike, header: Iterable[str] | None = None, *,
@@ -221,7 +221,7 @@ class RowFile:
         self._pending.clear()
         self._row_ends.clear()
         if self._temporary is not None:
-            if self._lines:   # not even the header is whole: leave the target as it was
+            if self._lines:   # (without a whole line, the target stays as it was)
                 try:
                     _publish(self._temporary, self._target)
                 except OSError:
