@@ -10,17 +10,35 @@ from __future__ import annotations
 
 import hashlib
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from stat import S_ISLNK
 
 import cv2
 import numpy as np
 
+from badminton_gui.io.safe_write import replacing
 from badminton_gui.io.video import frame_times
 
 DATA_DIR = Path(os.environ.get("BADMINTON_DATA",
                                Path(__file__).resolve().parents[1].parent / "shared" / "data"))
+
+def cache_dir(name: str) -> Path:
+    """A private folder for one benchmark's cache: ``$XDG_CACHE_HOME/badminton-gui/<name>``
+    (default ``~/.cache``), mode 0700 and owned by this user, shared by every checkout of the same
+    user. A cache in a fixed /tmp path could be planted by another local user; this one is
+    refused if it is a symlink, another user's, or open to others."""
+    root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "badminton-gui"
+    folder = root / name
+    folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    for path in (root, folder):
+        info = os.lstat(path)
+        if S_ISLNK(info.st_mode) or info.st_uid != os.getuid():
+            raise RuntimeError(f"benchmark cache {path} is a symlink or another user's: remove it")
+        if info.st_mode & 0o077:
+            os.chmod(path, 0o700)
+    return folder
+
 
 HELD_OUT = {"rally_11-48-10", "rally_11-49-21", "rally_11-47-41", "launcher-stereo",
             "bwf_00041", "1_06_06"}
@@ -105,13 +123,13 @@ def seek_frame_map(video: Path) -> np.ndarray:
     """For each frame index i, the sequential decode index of the frame that a seek to i returns
     (OpenCV: set CAP_PROP_POS_FRAMES to i, then grab), matched by presentation time; -1 where the
     seek returns nothing. The seeks decode from a key frame each time (≈ 100 s for 557 frames of
-    2048×1536), so the map is cached in the temp folder, keyed on the file and OpenCV's version."""
+    2048×1536), so the map is cached (``cache_dir``), keyed on the file and OpenCV's version."""
     stat = video.stat()
     key = hashlib.sha1(f"{video.resolve()}|{stat.st_size}|{stat.st_mtime_ns}|{cv2.__version__}"
                        .encode()).hexdigest()[:16]
-    cache = Path(tempfile.gettempdir()) / f"badminton-seekmap-{key}.npy"
+    cache = cache_dir("seek-maps") / f"{key}.npy"
     if cache.is_file():
-        return np.load(cache)
+        return np.load(cache, allow_pickle=False)
     times = frame_times(video)
     cap = cv2.VideoCapture(str(video))
     out = np.full(len(times), -1, dtype=int)
@@ -122,7 +140,6 @@ def seek_frame_map(video: Path) -> np.ndarray:
             if len(match) == 1:
                 out[i] = int(match[0])
     cap.release()
-    partial = cache.with_suffix(f".{os.getpid()}.npy")
-    np.save(partial, out)
-    os.replace(partial, cache)          # two jobs may build the same map at once
+    with replacing(cache) as partial, open(partial, "wb") as fh:   # two jobs may build it at once
+        np.save(fh, out)
     return out

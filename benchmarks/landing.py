@@ -30,10 +30,10 @@ before landing, pooled per frame rate; a demo rally lands about once every 10 s)
 
 Usage:  python benchmarks/landing.py [--sessions N] [--shots N] [--fps 120 60] [--sigma 0.01 0.02]
         python benchmarks/landing.py --real ../shared/data/nycu-stereo [--real-noise 0.05]
-        badminton-track demo --frames 1200 --out /tmp/demo --size 640x360 --seed 2
-        badminton-track track --left /tmp/demo/left.mp4 --right /tmp/demo/right.mp4 \
-            --calib /tmp/demo/rig.yaml -o /tmp/demo/track.csv
-        python benchmarks/landing.py --demo-track /tmp/demo
+        badminton-track demo --frames 1200 --out out/demo --size 640x360 --seed 2
+        badminton-track track --left out/demo/left.mp4 --right out/demo/right.mp4 \
+            --calib out/demo/rig.yaml -o out/demo/track.csv
+        python benchmarks/landing.py --demo-track out/demo
 """
 
 from __future__ import annotations

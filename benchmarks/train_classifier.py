@@ -43,10 +43,9 @@ from badminton_gui.core.detector import FEATURE_NAMES, PATCH_NAMES, CameraDetect
 from badminton_gui.core.evaluation import tolerance_px  # noqa: E402
 from badminton_gui.io.labels import read_point_labels, read_timestamps  # noqa: E402
 from badminton_gui.io.presets import load_preset  # noqa: E402
-from clips import DISPUTED_FRAMES, broadcast_clips, stereo_clips  # noqa: E402
+from badminton_gui.io.safe_write import replacing  # noqa: E402
+from clips import DISPUTED_FRAMES, broadcast_clips, cache_dir, stereo_clips  # noqa: E402
 
-
-CACHE_DIR = Path("/tmp/badminton_classifier_cache")
 # The TV classifier may also learn from the tuned-on clips changed the way another match's
 # camera differs (``--augment``, benchmarks/augment.py's names). Off: trained with all six
 # changes (mirror, zoom-out-0.8, zoom-in-1.25, darker-0.7, noise-6, blur-1) it held up under
@@ -56,30 +55,30 @@ BROADCAST_AUGMENT: tuple[str, ...] = ()
 
 
 def dump(job: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """(features, is_shuttle) of every measured candidate of one video (cached in /tmp); with
+    """(features, is_shuttle) of every measured candidate of one video (cached, ``cache_dir``); with
     ``patches`` the features end with the blob's grey patch (``detector.PATCH_NAMES``); with a
     change's name (benchmarks/augment.py) the video and its labels are changed first."""
     video, labels_path, preset, max_frames, patches = job[:5]
     change = job[5] if len(job) > 5 else "unchanged"
     cv2.setNumThreads(1)
-    key = CACHE_DIR / (f"{Path(video).parent.name}_{Path(video).stem}_{preset}_{max_frames}"
+    key = cache_dir("classifier-features") / (f"{Path(video).parent.name}_{Path(video).stem}_{preset}_{max_frames}"
                        f"_{_pipeline_digest(preset)}{'_patches' if patches else ''}"
                        f"{'' if change == 'unchanged' else '_' + change}.npz")
     if key.is_file():
-        data = np.load(key)
+        data = np.load(key, allow_pickle=False)
         return data["x"], data["y"]
     if video.startswith("demo:"):
         x, y = dump_demo(int(video.split(":")[1]), preset, max_frames, patches)
     else:
         x, y = dump_video(video, labels_path, preset, max_frames, patches, change)
-    CACHE_DIR.mkdir(exist_ok=True)
-    np.savez(key, x=x, y=y)
+    with replacing(key) as partial, open(partial, "wb") as fh:   # parallel jobs read it meanwhile
+        np.savez(fh, x=x, y=y)
     return x, y
 
 
 def _pipeline_digest(preset: str) -> str:
     """A short digest of what makes the candidates: the preset's values and the core's and the
-    demo court's source. The cache in /tmp is shared by every checkout on the machine; keyed on
+    demo court's source. The cache is shared by every checkout of the user (``cache_dir``); keyed on
     the preset's name alone, a detector change (or another branch) silently reused stale
     features."""
     import hashlib

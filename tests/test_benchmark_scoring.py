@@ -50,7 +50,7 @@ def test_a_label_row_whose_seek_shows_nothing_is_left_out(tmp_path, monkeypatch)
 
 
 def test_seeks_and_decoding_agree_on_a_regular_video(tmp_path, monkeypatch):
-    monkeypatch.setattr(clips.tempfile, "gettempdir", lambda: str(tmp_path))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     video = tmp_path / "regular.avi"
     writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, (64, 48))
     if not writer.isOpened():
@@ -63,6 +63,23 @@ def test_seeks_and_decoding_agree_on_a_regular_video(tmp_path, monkeypatch):
     times = frame_times(video)
     assert len(times) == 20 and np.allclose(np.diff(times), 1 / 30, atol=1e-3)
     assert np.array_equal(clips.seek_frame_map(video), np.arange(20))
-    assert list(tmp_path.glob("badminton-seekmap-*.npy"))       # cached for the next run
+    cached = list((tmp_path / "cache" / "badminton-gui" / "seek-maps").glob("*.npy"))
+    assert len(cached) == 1                                     # cached for the next run, privately
+    assert cached[0].parent.stat().st_mode & 0o077 == 0
     assert np.array_equal(clips.seek_frame_map(video), np.arange(20))
 
+
+
+def test_benchmark_caches_are_private(tmp_path, monkeypatch):
+    """A cache another local user could plant (a symlink to their folder, a folder open to
+    others) is refused or closed before anything is read from it."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    folder = clips.cache_dir("probe")
+    assert folder == tmp_path / "badminton-gui" / "probe" and folder.stat().st_mode & 0o777 == 0o700
+    folder.chmod(0o777)
+    assert clips.cache_dir("probe").stat().st_mode & 0o777 == 0o700
+    elsewhere = tmp_path / "planted"
+    elsewhere.mkdir()
+    (tmp_path / "badminton-gui" / "linked").symlink_to(elsewhere)
+    with pytest.raises(RuntimeError, match="symlink"):
+        clips.cache_dir("linked")

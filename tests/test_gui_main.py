@@ -562,8 +562,7 @@ def test_recording_the_session_and_a_disk_that_fills_up(main_window, qtbot, tmp_
     # The disk fills up while recording.
     assert window.start_recording(tmp_path / "second.csv")
     recorder = window._recorder
-    recorder._fh = _DiskFillsUp(recorder._fh, room=4000)
-    recorder._writer = csv.writer(recorder._fh)
+    recorder._fh._fh = _DiskFillsUp(recorder._fh._fh, room=4000)   # the recorder's raw file
     qtbot.waitUntil(lambda: window._recorder is None, timeout=WAIT_MS)
     assert not window.record_action.isChecked()
     assert window.banner.isVisible()

@@ -424,3 +424,170 @@ def test_robot_listen_cli_user_error_on_missing_port(capsys):
 
     assert main(["robot-listen", "/dev/this-port-does-not-exist", "--timeout", "0.1"]) == 2
     assert "cannot open" in capsys.readouterr().err
+
+
+# ---- a link that never takes the process down --------------------------------------------------
+def _reference_crc(data: bytes, crc: int = 0xFFFF) -> int:
+    """The bitwise loop of docs/robot-protocol.md, the reference the fast CRC must equal."""
+    for byte in data:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
+    return crc
+
+
+def test_the_crc_equals_the_reference_loop_on_random_data():
+    rng = np.random.default_rng(16)
+    for n in list(range(0, 40)) + [int(k) for k in rng.integers(40, 600, 300)]:
+        data = rng.integers(0, 256, n, dtype=np.uint8).tobytes()
+        assert crc16_ccitt(data) == _reference_crc(data)
+        start = int(rng.integers(0, 1 << 16))
+        assert crc16_ccitt(data, start) == _reference_crc(data, start)
+
+
+def test_a_damaged_length_holds_back_no_later_message():
+    """A header whose length field says 512 (the most the protocol allows) used to make the
+    decoder wait for 532 bytes: the next ~15 messages. A whole frame after it proves it false."""
+    good = [encode_heartbeat(i, 1.0, i, 0, 0) for i in range(3)]
+    damaged = bytearray(good[0])
+    struct.pack_into("<H", damaged, 4, 512)
+    dec = StreamDecoder()
+    assert dec.feed(bytes(damaged)) == []                 # could still be a long frame
+    got = dec.feed(good[1])
+    assert [m.seq for m in got] == [1]                     # decoded as soon as it arrived
+    assert [m.seq for m in dec.feed(good[2])] == [2]
+    # Byte by byte the same: nothing waits for the damaged frame's 512 bytes.
+    dec = StreamDecoder()
+    seqs = []
+    for byte in bytes(damaged) + b"".join(good[1:]):
+        seqs += [m.seq for m in dec.feed(bytes([byte]))]
+    assert seqs == [1, 2]
+
+
+class FakePort:
+    """A serial port for the link's tests: records writes; ``write_blocks`` holds a write until
+    it is set; ``link_closed`` is set by the test once close() returned."""
+
+    def __init__(self) -> None:
+        self.writes: list[bytes] = []
+        self.writes_after_close = 0
+        self.link_closed = threading.Event()
+        self.write_blocks: threading.Event | None = None
+        self.writing = threading.Event()
+
+    def write(self, data):
+        if self.link_closed.is_set():
+            self.writes_after_close += 1
+        self.writing.set()
+        if self.write_blocks is not None:
+            self.write_blocks.wait(30)
+        self.writes.append(bytes(data))
+        return len(data)
+
+    def close(self):
+        pass
+
+
+def test_the_back_off_holds_while_results_flow():
+    """With the port gone, results arriving must not bring the next open attempt forward (it was
+    tried again on every result: 300 attempts in 3 s)."""
+    attempts = []
+
+    def refuse(port, baud, write_timeout):
+        attempts.append(port)
+        raise OSError(2, "No such file or directory")
+
+    link = RobotLink("/dev/robot", serial_factory=refuse)
+    link.RETRY_MIN_S = link.RETRY_MAX_S = 600.0      # the next attempt is far away: only close() ends the wait
+    try:
+        assert not link.wait_first_attempt(10.0).connected
+        for i in range(3000):
+            link.send_result(make_result(i, i / 120.0))
+        assert wait_for(lambda: link.status().messages_dropped >= 2999)
+        assert link.open_attempts == 1 and len(attempts) == 1
+    finally:
+        link.close()
+    assert wait_for(lambda: not link._thread.is_alive())
+
+
+def test_close_stops_the_thread_and_nothing_is_written_after_it():
+    """A port whose every write outlasts the heartbeat period kept the thread writing heartbeats
+    after close() had given up on it."""
+    port = FakePort()
+    link = RobotLink("fake", heartbeat_s=0.01, max_rate_hz=1000.0,
+                     serial_factory=lambda *a: port)
+    port.write_blocks = threading.Event()
+    assert link.wait_first_attempt(10.0).connected
+    link.send_result(make_result(1))
+    assert port.writing.wait(10)                          # a write is stuck in the "driver"
+    closer = threading.Thread(target=link.close)
+    closer.start()
+    closer.join(30)
+    assert not closer.is_alive()                          # close() returned with the write stuck
+    port.link_closed.set()
+    port.write_blocks.set()                               # the driver lets the write go
+    assert wait_for(lambda: not link._thread.is_alive())
+    time.sleep(0.1)
+    assert port.writes_after_close == 0
+
+
+def test_close_sends_what_is_pending_then_stops():
+    port = FakePort()
+    link = RobotLink("fake", heartbeat_s=10.0, serial_factory=lambda *a: port)
+    assert link.wait_first_attempt(10.0).connected
+    link.send_result(make_result(7))
+    link.close()
+    assert not link._thread.is_alive() or wait_for(lambda: not link._thread.is_alive())
+    tracks = [m for m in StreamDecoder().feed(b"".join(port.writes)) if isinstance(m, TrackMessage)]
+    assert [m.frame_index for m in tracks] == [7]
+
+
+def test_send_result_of_anything_but_a_track_result_is_a_type_error():
+    link = RobotLink("fake", heartbeat_s=10.0, serial_factory=lambda *a: FakePort())
+    try:
+        for wrong in (None, 3, "result"):
+            with pytest.raises(TypeError, match="send_result takes a TrackResult"):
+                link.send_result(wrong)
+        assert link.status().errors == 0
+    finally:
+        link.close()
+
+
+@pytest.mark.parametrize("baud", [0, -9600, 9600.5, True])
+def test_invalid_baud_rates_are_refused(baud):
+    with pytest.raises(ValueError, match="baud"):
+        RobotLink("loop://", baud)
+
+
+def test_track_says_at_once_that_the_robot_port_cannot_be_opened(tmp_path, capsys):
+    from badminton_gui.cli import main
+    from .test_safe_write import _pair
+    _pair(tmp_path)
+    args = ["track", "--left", str(tmp_path / "l.avi"), "--right", str(tmp_path / "r.avi"),
+            "--calib", str(tmp_path / "rig.yaml"), "-o", str(tmp_path / "t.csv"), "--quiet",
+            "--robot", str(tmp_path / "no-such-port")]
+    assert main(args) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith(f"robot link: cannot open {tmp_path / 'no-such-port'}: ")
+    assert "tracking anyway" in err[0]
+    assert err[-1].startswith(f"robot link: nothing was sent to {tmp_path / 'no-such-port'}")
+    assert len((tmp_path / "t.csv").read_text().splitlines()) == 1 + 5
+    assert main(args + ["--robot-required", "-o", str(tmp_path / "t2.csv")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot open" in err and "--robot-required" in err
+    assert not (tmp_path / "t2.csv").exists()
+
+
+@pytest.mark.parametrize("argv", [["robot-listen", "loop://", "--timeout", "nan"],
+                                  ["robot-listen", "loop://", "--timeout", "inf"],
+                                  ["robot-listen", "loop://", "--timeout", "-1"],
+                                  ["robot-listen", "loop://", "--count", "-1"],
+                                  ["robot-listen", "loop://", "--baud", "0"],
+                                  ["track", "--left", "l", "--right", "r", "--calib", "c", "-o", "o",
+                                   "--robot", "/dev/null", "--baud", "0"]])
+def test_bad_robot_options_are_refused_when_parsed(argv, capsys):
+    from badminton_gui.cli import main
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    assert "Traceback" not in capsys.readouterr().err

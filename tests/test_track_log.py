@@ -72,6 +72,9 @@ class _DiskFillsUp:
     def close(self):
         self.real.close()
 
+    def __getattr__(self, name):
+        return getattr(self.real, name)
+
 
 def test_a_disk_filling_up_while_recording_ends_the_recording_not_the_tracker(tmp_path, monkeypatch):
     """``add`` runs on the tracking thread: it never raises; the recorder says the disk is full,
@@ -81,8 +84,7 @@ def test_a_disk_filling_up_while_recording_ends_the_recording_not_the_tracker(tm
     monkeypatch.setattr(track_log, "FLUSH_EVERY_S", 0.0)        # every row reaches the disk
     path = tmp_path / "session.csv"
     rec = TrackRecorder(path)
-    rec._fh = _DiskFillsUp(rec._fh, room=1500)
-    rec._writer = csv.writer(rec._fh)
+    rec._fh._fh = _DiskFillsUp(rec._fh._fh, room=1500)        # the recorder's raw file
     for r in results:
         rec.add(r)                                              # must not raise
     assert rec.error == f"the disk is full writing {path}"

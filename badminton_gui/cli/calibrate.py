@@ -17,7 +17,7 @@ from ..core.calibrate.board import BoardError, BoardSpec
 from ..core.calibrate.folders import pair_image_files, views_from_pairs
 from ..core.calibrate.stereo import CalibrationError, SolveOptions, solve_stereo
 from ..core.rig import RigError
-from .common import Progress, UserError, add_json_argument, print_json
+from .common import Progress, UserError, add_json_argument, print_json, refuse_output_over_inputs
 
 _log = logging.getLogger(__name__)
 
@@ -68,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     try:
         pairs = pair_image_files(args.left_dir, args.right_dir, args.left_glob, args.right_glob)
+        refuse_output_over_inputs(args.output, *(image for pair in pairs for image in pair))
         bar = Progress(len(pairs), "finding the board")
         if args.subpix_window is not None and not 1 <= args.subpix_window <= 50:
             raise UserError("--subpix-window must be 1..50 px")

@@ -25,6 +25,66 @@ INPUT_ERRORS = (ParamError, RigError, SourceError, FileNotFoundError, IsADirecto
                 PermissionError, ValueError)
 
 
+def refuse_output_over_inputs(output, *inputs, what: str = "output") -> None:
+    """Stop (UserError, exit 2) when ``output`` would overwrite one of ``inputs``: the same path,
+    a symlink to it or a hard link of it. Every command that writes a file calls this before it
+    reads anything; None inputs (options not given) are skipped, so pass the options as they are:
+    ``refuse_output_over_inputs(args.output, args.left, args.right, args.calib)``."""
+    from ..io.safe_write import clashing_input
+    if output is None:
+        return
+    clash = clashing_input(output, inputs)
+    if clash is not None:
+        same = "" if str(output) == clash else f" ({clash}, the same file)"
+        raise UserError(f"the {what} {output} is also an input{same}: writing it would destroy "
+                        "the input; choose another output path")
+
+
+def preset_file(args):
+    """``--preset`` when it names a file (an input that an output must not overwrite), else None."""
+    preset = getattr(args, "preset", None)
+    return preset if preset and Path(preset).is_file() else None
+
+
+BAUD_RANGE = (50, 4_000_000)     # what serial adapters offer; Bluetooth SPP ignores the rate
+
+
+def baud_rate(text: str) -> int:
+    """argparse type of ``--baud``: a whole number of bits per second within BAUD_RANGE (USB
+    adapters accept non-standard rates such as 250000, so any rate in the range is taken)."""
+    try:
+        baud = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of bits per second") from None
+    if not BAUD_RANGE[0] <= baud <= BAUD_RANGE[1]:
+        raise argparse.ArgumentTypeError(f"{baud} is outside {BAUD_RANGE[0]} … {BAUD_RANGE[1]} "
+                                         "(common rates: 9600, 57600, 115200, 921600)")
+    return baud
+
+
+def seconds_or_zero(text: str) -> float:
+    """argparse type of a time limit: finite seconds ≥ 0 (0: no limit); nan, inf and negative
+    values are refused."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"{text} must be finite seconds ≥ 0 (0: no limit)")
+    return value
+
+
+def count_or_zero(text: str) -> int:
+    """argparse type of a count: a whole number ≥ 0 (0: no limit)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{value} must be ≥ 0 (0: no limit)")
+    return value
+
+
 def parse_size(text: str) -> tuple[int, int]:
     try:
         w, h = text.lower().split("x")

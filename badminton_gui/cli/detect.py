@@ -7,7 +7,8 @@ import logging
 
 from ..io.detect_file import ADAPTING, DetectFileError, detect_to_csv
 from .common import (INPUT_ERRORS, Progress, UserError, add_json_argument, add_lookahead_argument,
-                     add_preset_argument, params_from_args, print_json)
+                     add_preset_argument, params_from_args, preset_file, print_json,
+                     refuse_output_over_inputs)
 from .csv_columns import LABEL_COLUMNS, columns_epilog
 
 _log = logging.getLogger(__name__)
@@ -32,6 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_output_over_inputs(args.output, args.video, preset_file(args))
     params = params_from_args(args)
     bars: dict[str, Progress] = {}     # the pass shown now (the adaptation's, then the detection's)
 

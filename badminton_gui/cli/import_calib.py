@@ -7,7 +7,7 @@ import argparse
 import numpy as np
 
 from ..io.nycu import rig_from_nycu
-from .common import INPUT_ERRORS, UserError
+from .common import INPUT_ERRORS, UserError, refuse_output_over_inputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -21,6 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_output_over_inputs(args.output, *args.nycu)
     try:
         rig = rig_from_nycu(*args.nycu)
         rig.save(args.output)

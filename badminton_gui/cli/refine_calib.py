@@ -16,7 +16,8 @@ from ..core.errors import TrackerInputError
 from ..core.calibrate.refine import PairCollector, refine_relative_pose
 from ..core.tracker import StereoTracker, configure_opencv_threads
 from .common import (INPUT_ERRORS, Progress, UserError, add_json_argument, add_preset_argument,
-                     add_video_pair_arguments, open_stereo_videos, params_from_args, print_json)
+                     add_video_pair_arguments, open_stereo_videos, params_from_args, preset_file,
+                     print_json, refuse_output_over_inputs)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -36,6 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_output_over_inputs(args.output, args.left, args.right, args.calib, args.left_times,
+                              args.right_times, preset_file(args))
     params = params_from_args(args)
     rig, source, total = open_stereo_videos(args)
     configure_opencv_threads()

@@ -12,7 +12,7 @@ from __future__ import annotations
 import sys
 import time
 
-from .common import UserError
+from .common import UserError, baud_rate, count_or_zero, seconds_or_zero
 
 RETRY_S = 0.5      # s between attempts to reopen a port that went away
 
@@ -25,10 +25,10 @@ def register(sub) -> None:
                     "print every decoded robot-link message, one per line. "
                     "The format is in docs/robot-protocol.md.")
     p.add_argument("port", metavar="PORT", help="serial port name or pyserial URL")
-    p.add_argument("--baud", type=int, default=115200, help="baud rate (default 115200)")
-    p.add_argument("--count", type=int, default=0, metavar="N",
+    p.add_argument("--baud", type=baud_rate, default=115200, help="baud rate (default 115200)")
+    p.add_argument("--count", type=count_or_zero, default=0, metavar="N",
                    help="stop after N messages (default: no limit)")
-    p.add_argument("--timeout", type=float, default=0.0, metavar="S",
+    p.add_argument("--timeout", type=seconds_or_zero, default=0.0, metavar="S",
                    help="stop after S seconds (default: no limit); exit status 1 if nothing was decoded")
     p.add_argument("--no-heartbeat", action="store_true", help="do not print heartbeat messages")
     p.set_defaults(func=run)
@@ -39,10 +39,6 @@ def run(args) -> int:
 
     from ..io.robot_link import HeartbeatMessage, StreamDecoder
 
-    if args.baud <= 0:
-        raise UserError(f"--baud {args.baud}: must be positive")
-    if args.count < 0 or args.timeout < 0:
-        raise UserError("--count and --timeout must not be negative")
     try:
         port = serial.serial_for_url(args.port, baudrate=args.baud, timeout=0.05)
     except (serial.SerialException, OSError, ValueError) as exc:

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import argparse
 import logging
+import sys
 
 from ..core.tracker import configure_opencv_threads
 from ..io.track_file import TrackFileError, track_to_csv
 from .common import (Progress, UserError, add_json_argument, add_lookahead_argument, add_preset_argument,
                      add_video_pair_arguments, open_stereo_videos, outcomes_json, params_from_args,
-                     print_json)
+                     baud_rate, preset_file, print_json, refuse_output_over_inputs)
 from .csv_columns import COURT_FRAME, LEFT_CAMERA_FRAME, TRACK_COLUMNS, columns_epilog
 
 _log = logging.getLogger(__name__)
@@ -29,7 +30,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_lookahead_argument(p)
     p.add_argument("--robot", metavar="PORT", help="also stream results to the robot on this "
                    "serial port / Bluetooth port / pyserial URL")
-    p.add_argument("--baud", type=int, default=115200, help="robot link baud rate")
+    p.add_argument("--baud", type=baud_rate, default=115200, help="robot link baud rate (default 115200)")
+    p.add_argument("--robot-required", action="store_true",
+                   help="stop with exit status 2 when the --robot port cannot be opened at the start "
+                        "(default: say so on stderr, track anyway and keep retrying the port)")
     p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
     add_json_argument(p, "output, pairs, points_3d, points_3d_percent, pairs_per_second, frame "
                          "('court' or 'left-camera'), rig_epipolar_px (null: not measured), rig_note "
@@ -41,27 +45,31 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_output_over_inputs(args.output, args.left, args.right, args.calib, args.left_times,
+                              args.right_times, preset_file(args))
     params = params_from_args(args)
-    rig, source, total = open_stereo_videos(args)
-    link = None
-    if args.robot:
-        from ..io.robot_link import RobotLink
-        link = RobotLink(args.robot, args.baud)
-    configure_opencv_threads()
-    truth = _labels_in_times(args)
-    progress = Progress(total, "track")
+    link = _robot_link(args)     # before the videos' reader thread: a refused port starts nothing
+    source = None
     try:
-        summary = track_to_csv(source, rig, params, args.output, max_frames=args.max_frames, link=link,
-                               progress=None if args.quiet else progress.update, truth=truth,
-                               trace=args.trace)
-    except TrackFileError as exc:
-        raise UserError(str(exc)) from None
+        rig, source, total = open_stereo_videos(args)
+        configure_opencv_threads()
+        truth = _labels_in_times(args)
+        progress = Progress(total, "track")
+        try:
+            summary = track_to_csv(source, rig, params, args.output, max_frames=args.max_frames,
+                                   link=link, progress=None if args.quiet else progress.update,
+                                   truth=truth, trace=args.trace)
+        except TrackFileError as exc:
+            raise UserError(str(exc)) from None
+        finally:
+            if not args.quiet:
+                progress.close()
     finally:
-        source.close()
+        if source is not None:
+            source.close()
         if link is not None:
             link.close()
-        if not args.quiet:
-            progress.close()
+            _report_link(link, args.quiet)
     n, hits3d = summary.pairs, summary.points_3d
     if n == 0:
         raise UserError("the videos hold no frames")
@@ -86,6 +94,37 @@ def run(args: argparse.Namespace) -> int:
         if summary.score_text:
             print(summary.score_text + " (the timestamp files' labels)")
     return 0
+
+
+def _robot_link(args):
+    """The link to ``--robot``, or None. A port that cannot be opened is said at once, on one
+    line: tracking goes on and the link keeps retrying, or, with ``--robot-required``, exit 2."""
+    if not args.robot:
+        return None
+    from ..io.robot_link import RobotLink
+    link = RobotLink(args.robot, args.baud)
+    # A Bluetooth port may take seconds to connect: a run that cannot go without it waits longer.
+    status = link.wait_first_attempt(10.0 if args.robot_required else 2.0)
+    if status.connected:
+        return link
+    reason = status.last_error or f"{args.robot} did not open in time"
+    if args.robot_required:
+        link.close()
+        raise UserError(f"robot link: {reason} (--robot-required)")
+    _log.warning("robot link: %s; tracking anyway, retrying the port every %g s", reason,
+                 RobotLink.RETRY_MAX_S)
+    return link
+
+
+def _report_link(link, quiet: bool) -> None:
+    """What the robot got, on stderr: always when nothing was sent."""
+    s = link.status()
+    if not s.messages_sent:
+        _log.warning("robot link: nothing was sent to %s%s", s.port,
+                     f" (last error: {s.last_error})" if s.last_error else "")
+    elif not quiet:
+        print(f"robot link: {s.messages_sent} messages sent to {s.port}, {s.messages_dropped} "
+              f"replaced by newer ones, {s.errors} errors", file=sys.stderr)
 
 
 def _labels_in_times(args):

@@ -15,7 +15,10 @@ only the special case of a rectified parallel rig.
 from __future__ import annotations
 
 import math
+import os
 import re
+import stat
+import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -253,10 +256,32 @@ class StereoRig:
             fs.release()
 
     def save(self, path: str | Path) -> None:
-        path = Path(path)
+        """Write the rig file; ``path`` gets the whole file or stays as it was. A symlink is
+        written through (the link kept, the file it points to replaced)."""
+        # The same rules as io/safe_write.py's ``replacing``, restated here because the core
+        # imports nothing from io: a uniquely named temporary file beside the target (its
+        # extension kept: FileStorage picks the format by it), renamed over it when complete,
+        # and removed whatever fails.
+        path = Path(os.path.realpath(path)) if os.path.islink(path) else Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        # Write to a temporary file first so a full disk never leaves half a rig behind.
-        tmp = path.with_name(path.name + ".tmp" + path.suffix)
+        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=path.parent)
+        os.close(fd)
+        tmp = Path(name)
+        try:
+            self._write_file_storage(tmp, path)
+            # FileStorage does not report a failed write (a full disk): read the file back.
+            type(self).load(tmp)
+            try:
+                mode = stat.S_IMODE(os.stat(path).st_mode)
+            except OSError:
+                mode = 0o644
+            os.chmod(tmp, mode)
+            os.replace(tmp, path)
+        finally:
+            if tmp.exists():
+                tmp.unlink()
+
+    def _write_file_storage(self, tmp: Path, path: Path) -> None:
         fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
         if not fs.isOpened():
             raise RigError(f"cannot write rig file {path}")
@@ -276,7 +301,6 @@ class StereoRig:
                 fs.write("T_court", self.T_court.reshape(3, 1))
         finally:
             fs.release()
-        tmp.replace(path)
 
     # ---- derived quantities ----------------------------------------------------------------
     @property

@@ -24,6 +24,7 @@ from ..core.lookahead import CameraLookahead
 from ..core.params import TrackerParams
 from .labels import write_point_labels
 from .prefetch import PrefetchingReader
+from .safe_write import replacing
 from .sources import SourceError
 from .track_log import describe_os_error
 from .video import VideoFile
@@ -167,8 +168,8 @@ def detect_to_csv(video: str | Path, params: TrackerParams, output: str | Path, 
     if n == 0 and not cancelled:
         raise SourceError(f"{video} holds no frames")
     try:
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        write_point_labels(out_path, range(len(visible)), visible, xy)
+        with replacing(out_path) as whole_file:   # the file appears whole, or not at all
+            write_point_labels(whole_file, range(len(visible)), visible, xy)
     except OSError as exc:
         raise DetectFileError(f"cannot write the detections: {describe_os_error(exc, out_path)}") from None
     return DetectFileSummary(

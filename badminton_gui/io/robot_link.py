@@ -15,13 +15,16 @@ tracking can never be slowed down or crashed by the link:
 * :meth:`RobotLink.status` is a frozen snapshot (port, baud, connected, counters, last error).
 
 The robot side: :class:`StreamDecoder` turns any byte stream back into messages; it resynchronises
-after garbage, lost bytes or corrupted frames and never raises on bad input.
+after garbage, lost bytes or corrupted frames (a damaged length field holds back no later message)
+and never raises on bad input.
 ``badminton-track robot-listen PORT`` prints what it decodes (cli/robot_listen.py).
 """
 
 from __future__ import annotations
 
+import binascii
 import math
+import os
 import queue
 import struct
 import threading
@@ -61,24 +64,11 @@ _CALL_NAMES = {CALL_UNKNOWN: "", CALL_IN: "in", CALL_OUT: "out"}
 def crc16_ccitt(data: bytes, crc: int = 0xFFFF) -> int:
     """CRC-16/CCITT-FALSE: polynomial 0x1021, initial 0xFFFF, no reflection, no final XOR.
 
-    Check value: ``crc16_ccitt(b"123456789") == 0x29B1``.
+    Check value: ``crc16_ccitt(b"123456789") == 0x29B1``. ``binascii.crc_hqx`` is this CRC
+    (XMODEM's, which differs only by its initial value) computed in C; the bitwise loop of
+    docs/robot-protocol.md is the reference it is tested against.
     """
-    for byte in data:
-        crc ^= byte << 8
-        for _ in range(8):
-            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
-    return crc
-
-
-# A table makes the per-message CRC ~8x cheaper than the bitwise loop above (same result).
-_CRC_TABLE = [crc16_ccitt(bytes([i]), 0) for i in range(256)]
-
-
-def _crc16_fast(data: bytes, crc: int = 0xFFFF) -> int:
-    table = _CRC_TABLE
-    for byte in data:
-        crc = ((crc << 8) & 0xFFFF) ^ table[((crc >> 8) ^ byte) & 0xFF]
-    return crc
+    return binascii.crc_hqx(data, crc)
 
 
 # ---- messages ----------------------------------------------------------------------------------
@@ -158,7 +148,7 @@ def encode_frame(msg_type: int, seq: int, timestamp: float, payload: bytes,
                  version: int = PROTOCOL_VERSION) -> bytes:
     """Sync + header + payload + CRC (CRC over everything after the sync bytes)."""
     body = _HEADER.pack(version, msg_type, len(payload), seq & 0xFFFFFFFF, timestamp) + payload
-    return SYNC + body + struct.pack("<H", _crc16_fast(body))
+    return SYNC + body + struct.pack("<H", crc16_ccitt(body))
 
 
 def _f(value) -> float:
@@ -202,7 +192,7 @@ def _renumber(frame: bytes, seq: int) -> bytes:
     """The same frame with another sequence number (and its CRC recomputed)."""
     buf = bytearray(frame)
     struct.pack_into("<I", buf, 6, seq & 0xFFFFFFFF)
-    struct.pack_into("<H", buf, len(buf) - CRC_SIZE, _crc16_fast(bytes(buf[len(SYNC):-CRC_SIZE])))
+    struct.pack_into("<H", buf, len(buf) - CRC_SIZE, crc16_ccitt(bytes(buf[len(SYNC):-CRC_SIZE])))
     return bytes(buf)
 
 
@@ -260,10 +250,18 @@ class StreamDecoder:
                 continue
             total = HEADER_SIZE + length + CRC_SIZE
             if len(buf) < total:
-                break
+                # A damaged length field (up to MAX_PAYLOAD) would make this false start wait
+                # for bytes that are the next messages; a complete frame with a good CRC
+                # further on proves the start false, so the messages behind it are not held back.
+                later = self._next_whole_frame(buf)
+                if later < 0:
+                    break
+                self.bytes_skipped += later
+                del buf[:later]
+                continue
             body = bytes(buf[len(SYNC):HEADER_SIZE + length])
             (crc,) = struct.unpack_from("<H", buf, HEADER_SIZE + length)
-            if crc != _crc16_fast(body):
+            if crc != crc16_ccitt(body):
                 self.crc_errors += 1
                 self._skip_sync(buf)
                 continue
@@ -275,6 +273,20 @@ class StreamDecoder:
             self.frames_ok += 1
             del buf[:total]
         return out
+
+    @staticmethod
+    def _next_whole_frame(buf: bytearray) -> int:
+        """Offset of the first complete, CRC-valid frame after the start of ``buf``, or -1."""
+        at = buf.find(SYNC, 1)
+        while at >= 0 and len(buf) - at >= HEADER_SIZE + CRC_SIZE:
+            (length,) = struct.unpack_from("<H", buf, at + 4)
+            end = at + HEADER_SIZE + length
+            if length <= MAX_PAYLOAD and end + CRC_SIZE <= len(buf):
+                (crc,) = struct.unpack_from("<H", buf, end)
+                if crc == crc16_ccitt(bytes(buf[at + len(SYNC):end])):
+                    return at
+            at = buf.find(SYNC, at + 1)
+        return -1
 
     def _skip_sync(self, buf: bytearray) -> None:
         """A false start: drop this sync's first byte and look for the next one."""
@@ -299,34 +311,48 @@ class LinkStatus:
 
 
 class RobotLink:
-    """Sends tracking results to a robot over a serial port, never blocking the caller."""
+    """Sends tracking results to a robot over a serial port, never blocking the caller.
+
+    ``serial_factory(port, baud, write_timeout_s)`` opens the port (default: pyserial's
+    ``serial_for_url``); tests give a fake one.
+    """
 
     RETRY_MIN_S = 0.2
     RETRY_MAX_S = 2.0
 
     def __init__(self, port: str, baud: int = 115200, max_rate_hz: float = 200.0,
-                 heartbeat_s: float = 0.5, write_timeout_s: float = 0.5) -> None:
+                 heartbeat_s: float = 0.5, write_timeout_s: float = 0.5,
+                 serial_factory=None) -> None:
         if not port:
             raise ValueError("robot link: empty port name")
-        if baud <= 0 or max_rate_hz <= 0 or heartbeat_s <= 0 or write_timeout_s <= 0:
-            raise ValueError("robot link: baud, max_rate_hz, heartbeat_s and write_timeout_s "
-                             "must be positive")
+        if isinstance(baud, bool) or int(baud) != baud or baud <= 0:
+            raise ValueError(f"robot link: baud must be a positive whole number, not {baud!r}")
+        if not all(math.isfinite(v) and v > 0 for v in (max_rate_hz, heartbeat_s, write_timeout_s)):
+            raise ValueError("robot link: max_rate_hz, heartbeat_s and write_timeout_s must be "
+                             "positive and finite")
         # A write that cannot finish in this time (robot not reading) drops the message.
         self.write_timeout_s = float(write_timeout_s)
         self.port = port
         self.baud = int(baud)
         self.min_interval = 1.0 / float(max_rate_hz)
         self.heartbeat_s = float(heartbeat_s)
+        self._serial_factory = serial_factory or _open_serial
         self._cond = threading.Condition()
         self._pending: bytes | None = None     # one-slot mailbox, newest wins
         self._last_timestamp = 0.0             # heartbeats carry the tracker clock's latest time
-        self._closing = False
+        self._closing = False                  # close() asked: send what is pending, then stop
+        # Set by close() once it gives up waiting: no write starts after it (checked under
+        # ``_write_lock``, which a write holds).
+        self._stopped = False
+        self._write_lock = threading.Lock()
+        self._first_attempt = threading.Event()   # the first open attempt is over
         self._seq = 0
         self._sent = 0
         self._dropped = 0
         self._heartbeats = 0
         self._errors = 0
         self._reconnects = 0
+        self._open_attempts = 0
         self._connected = False
         self._last_error = ""
         self._serial = None
@@ -335,7 +361,12 @@ class RobotLink:
 
     # ---- caller side (tracking thread) ------------------------------------------------------
     def send_result(self, result: TrackResult) -> None:
-        """Queue the newest result for sending; returns at once, whatever the port does."""
+        """Queue the newest result for sending; returns at once, whatever the port does.
+
+        Anything but a ``TrackResult`` (None included) is a programming error: TypeError. A
+        result whose values cannot be encoded is counted as an error and skipped."""
+        if not isinstance(result, TrackResult):
+            raise TypeError(f"send_result takes a TrackResult, not {type(result).__name__}")
         with self._cond:
             if self._closing:
                 return
@@ -351,19 +382,40 @@ class RobotLink:
                 self._dropped += 1
                 self._seq = (self._seq + 1) & 0xFFFFFFFF   # a gap in seq marks the dropped one
             self._pending = frame
-            self._cond.notify()
+            self._cond.notify_all()
 
     def status(self) -> LinkStatus:
         with self._cond:
             return LinkStatus(self.port, self.baud, self._connected, self._sent, self._dropped,
                               self._heartbeats, self._errors, self._reconnects, self._last_error)
 
-    def close(self, timeout: float = 2.0) -> None:
-        """Send what is pending if the port is up, then stop the thread and close the port."""
+    @property
+    def open_attempts(self) -> int:
+        """How many times the port was tried (the back-off's count)."""
+        with self._cond:
+            return self._open_attempts
+
+    def wait_first_attempt(self, timeout: float = 2.0) -> LinkStatus:
+        """Wait (at most ``timeout`` s) until the port has been tried once, then the status: a
+        command can say at once that the port cannot be opened."""
+        self._first_attempt.wait(timeout)
+        return self.status()
+
+    def close(self, timeout: float = 1.0) -> None:
+        """Send what is pending if the port is up, then stop the thread and close the port.
+
+        Returns within about ``timeout`` s whatever the port does; no write starts after it
+        returns (a write already under way, bounded by ``write_timeout_s``, may finish)."""
+        deadline = time.monotonic() + timeout
         with self._cond:
             self._closing = True
-            self._cond.notify()
-        self._thread.join(timeout)
+            self._cond.notify_all()
+        self._thread.join(max(0.0, deadline - time.monotonic()))
+        if self._write_lock.acquire(timeout=max(0.0, deadline - time.monotonic())):
+            self._stopped = True
+            self._write_lock.release()
+        else:
+            self._stopped = True    # a write is stuck in the driver: the next one will not start
 
     def __enter__(self) -> "RobotLink":
         return self
@@ -382,14 +434,15 @@ class RobotLink:
                     if self._closing and (self._pending is None or not self._connected):
                         return
                 if not self._connected:
-                    if self._open():
+                    opened = self._open()
+                    self._first_attempt.set()
+                    if opened:
                         retry = self.RETRY_MIN_S
                     else:
-                        self._wait_closing(retry)
+                        self._back_off(retry)
                         retry = min(retry * 2.0, self.RETRY_MAX_S)
                     continue
-                if time.monotonic() - last_heartbeat >= self.heartbeat_s:
-                    last_heartbeat = time.monotonic()
+                if time.monotonic() - last_heartbeat >= self.heartbeat_s and not self._closing:
                     with self._cond:
                         frame = encode_heartbeat(self._seq, self._last_timestamp, self._sent,
                                                  self._dropped, self._errors)
@@ -397,6 +450,9 @@ class RobotLink:
                     if self._write(frame):
                         with self._cond:
                             self._heartbeats += 1
+                    # Counted from the end of the write: a port so slow that a write outlasts
+                    # the heartbeat period still gets the results through between heartbeats.
+                    last_heartbeat = time.monotonic()
                     continue
                 # Wait for a result, or until the next heartbeat is due.
                 with self._cond:
@@ -411,7 +467,9 @@ class RobotLink:
                 # Rate limit: meanwhile newer results replace the pending one (newest wins).
                 delay = last_send + self.min_interval - time.monotonic()
                 if delay > 0.0:
-                    time.sleep(delay)
+                    with self._cond:
+                        if not self._closing:
+                            self._cond.wait(delay)
                 with self._cond:
                     frame, self._pending = self._pending, None
                     if frame is not None:
@@ -422,21 +480,29 @@ class RobotLink:
                     with self._cond:
                         self._sent += 1
         finally:
+            self._first_attempt.set()
             self._close_port()
 
-    def _wait_closing(self, seconds: float) -> None:
+    def _back_off(self, seconds: float) -> None:
+        """Wait ``seconds`` before the next open attempt; only close() cuts it short (results
+        arriving meanwhile wake the condition but do not bring the attempt forward)."""
+        deadline = time.monotonic() + seconds
         with self._cond:
-            if not self._closing:
-                self._cond.wait(seconds)
+            while not self._closing:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0.0:
+                    return
+                self._cond.wait(remaining)
 
     def _open(self) -> bool:
-        import serial   # pyserial; imported here so decoding needs no serial package
-
+        with self._cond:
+            self._open_attempts += 1
         try:
-            ser = serial.serial_for_url(self.port, baudrate=self.baud, timeout=0,
-                                        write_timeout=self.write_timeout_s)
+            ser = self._serial_factory(self.port, self.baud, self.write_timeout_s)
         except Exception as exc:  # noqa: BLE001 - a bad URL or handler must not kill the I/O thread
-            self._record_error(f"open {self.port}: {exc}")
+            # pyserial repeats the port name and errno in its text: the system's reason is enough.
+            reason = os.strerror(exc.errno) if isinstance(exc, OSError) and exc.errno else str(exc)
+            self._record_error(f"cannot open {self.port}: {reason or type(exc).__name__}")
             return False
         self._serial = ser
         with self._cond:
@@ -448,23 +514,26 @@ class RobotLink:
     def _write(self, frame: bytes) -> bool:
         import serial
 
-        ser = self._serial
-        try:
-            written = ser.write(frame)
-            if written is not None and written != len(frame):
-                raise serial.SerialTimeoutException(f"wrote {written} of {len(frame)} bytes")
-            return True
-        except (serial.SerialTimeoutException, queue.Full) as exc:
-            # The device is there but not reading (full buffer, Bluetooth stall; loop:// raises
-            # queue.Full): drop the message.
-            self._record_error(f"write timeout on {self.port}: {exc or type(exc).__name__}")
-            return False
-        except Exception as exc:  # noqa: BLE001 - any handler error must not kill the I/O thread
-            # Gone (unplugged, out of range, pty closed) or a URL handler's own error: reopen in
-            # the background.
-            self._record_error(f"write to {self.port}: {exc or type(exc).__name__}")
-            self._close_port()
-            return False
+        with self._write_lock:
+            ser = self._serial
+            if self._stopped or ser is None:
+                return False
+            try:
+                written = ser.write(frame)
+                if written is not None and written != len(frame):
+                    raise serial.SerialTimeoutException(f"wrote {written} of {len(frame)} bytes")
+                return True
+            except (serial.SerialTimeoutException, queue.Full) as exc:
+                # The device is there but not reading (full buffer, Bluetooth stall; loop://
+                # raises queue.Full): drop the message.
+                self._record_error(f"write timeout on {self.port}: {exc or type(exc).__name__}")
+                return False
+            except Exception as exc:  # noqa: BLE001 - any handler error must not kill the I/O thread
+                # Gone (unplugged, out of range, pty closed) or a URL handler's own error: reopen
+                # in the background.
+                self._record_error(f"write to {self.port}: {exc or type(exc).__name__}")
+        self._close_port()
+        return False
 
     def _record_error(self, text: str) -> None:
         with self._cond:
@@ -480,3 +549,9 @@ class RobotLink:
                 ser.close()
             except Exception as exc:  # noqa: BLE001 - closing a vanished device may fail: ignore
                 self._record_error(f"close {self.port}: {exc}")
+
+
+def _open_serial(port: str, baud: int, write_timeout_s: float):
+    import serial   # pyserial; imported here so decoding needs no serial package
+
+    return serial.serial_for_url(port, baudrate=baud, timeout=0, write_timeout=write_timeout_s)

@@ -10,7 +10,6 @@ one-sentence errors for a file that cannot be written (a full disk). No Qt here.
 
 from __future__ import annotations
 
-import csv
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,6 +23,7 @@ from ..core.track_lookahead import StereoLookahead
 from ..core.tracker import StereoTracker
 from ..core.types import CameraResult, TrackResult
 from .labels import TRACK_COLUMNS, track_row
+from .safe_write import RowFile
 from .track_log import describe_os_error
 
 
@@ -156,12 +156,11 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
         return track_row(decided, reason) + ([" ".join(decided.trace)] if trace else [])
 
     start = time.perf_counter()
+    rows = None
     try:
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        with out_path.open("w", newline="") as fh:
-            writer = csv.writer(fh)
-            writer.writerow(TRACK_COLUMNS + (("Trace",) if trace else ()))
-
+        # Written beside the output and renamed over it at the end: a run that fails keeps its
+        # whole rows, and a previous output is never half overwritten.
+        with RowFile(out_path, TRACK_COLUMNS + (("Trace",) if trace else ())) as rows:
             while max_frames is None or n < max_frames:
                 if should_stop is not None and should_stop():
                     cancelled = True
@@ -181,14 +180,15 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                     if link is not None:
                         link.send_result(result)
                 for decided in map(scored, lookahead.push(result)):
-                    writer.writerow(row(decided))
+                    rows.write_row(row(decided))
                 n += 1
                 if progress is not None:
                     progress(n)
             for decided in map(scored, lookahead.flush()):
-                writer.writerow(row(decided))
+                rows.write_row(row(decided))
     except OSError as exc:
-        raise TrackFileError(f"cannot write the track: {describe_os_error(exc, out_path)}") from None
+        kept = f"; its first {rows.rows_saved} rows are kept" if rows is not None and rows.rows_saved else ""
+        raise TrackFileError(f"cannot write the track: {describe_os_error(exc, out_path)}{kept}") from None
     finally:
         tracker.close()
     return TrackFileSummary(n, hits3d, time.perf_counter() - start, out_path, cancelled,

@@ -5,19 +5,19 @@ the robot was told — in the same columns `badminton-track track` writes, so a 
 can be read by the same tools (`badminton-track eval`, a spreadsheet). Rows come from the
 tracking thread at the tracking rate (up to 240 a second), so writing must be cheap and must
 never stop the tracker: a full disk, a vanished USB stick or a folder made read-only ends the
-*recording* with a one-sentence reason, keeps every row written until then, and leaves tracking
-alone. No Qt here: the GUI polls ``rows`` and ``error``.
+*recording* with a one-sentence reason, keeps every whole row written until then (never a torn
+last row), and leaves tracking alone. No Qt here: the GUI polls ``rows`` and ``error``.
 """
 
 from __future__ import annotations
 
-import csv
 import errno
 import threading
 import time
 from pathlib import Path
 
 from .labels import TRACK_COLUMNS, track_row
+from .safe_write import RowFile
 
 # Rows reach the disk at least this often (s): a crash or a pulled cable loses at most this much.
 FLUSH_EVERY_S = 0.5
@@ -56,9 +56,8 @@ class TrackRecorder:
         self._last_flush = time.monotonic()
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._fh = self.path.open("w", newline="")
-            self._writer = csv.writer(self._fh)
-            self._writer.writerow(TRACK_COLUMNS)
+            # The file itself, not a temporary one: a crash of the program keeps the session.
+            self._fh = RowFile(self.path, TRACK_COLUMNS, replace_at_close=False)
             self._fh.flush()
         except OSError as exc:
             raise RecordingError(f"cannot record: {describe_os_error(exc, self.path)}") from None
@@ -92,13 +91,13 @@ class TrackRecorder:
             if self._fh is None:
                 return
             try:
-                self._writer.writerow(track_row(result))
+                self._fh.write_row(track_row(result))
                 self._rows += 1
                 now = time.monotonic()
                 if now - self._last_flush >= FLUSH_EVERY_S:
                     self._last_flush = now
                     self._fh.flush()
-                    self._saved = self._rows
+                    self._saved = self._fh.rows_saved
             except OSError as exc:
                 self._fail(exc)
 
@@ -108,19 +107,16 @@ class TrackRecorder:
             if self._fh is None:
                 return
             try:
-                self._fh.flush()
                 self._fh.close()
             except OSError as exc:
                 self._fail(exc)
                 return
-            self._saved = self._rows
+            self._saved = self._fh.rows_saved
             self._fh = None
 
     def _fail(self, exc: OSError) -> None:
-        # The rows still in Python's buffer cannot be saved; closing may raise the same error.
+        # The RowFile has cut the file back to its last whole row and closed it.
         self._error = describe_os_error(exc, self.path)
         fh, self._fh = self._fh, None
-        try:
-            fh.close()
-        except OSError:
-            pass
+        self._saved = fh.rows_saved
+        fh.abort()
