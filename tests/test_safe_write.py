@@ -187,6 +187,8 @@ def _pair(folder):
 @pytest.mark.parametrize("output", ["l.avi", "r.avi", "rig.yaml", "times.csv", "link.avi", "hard.avi"])
 def test_track_and_detect_refuse_to_write_over_an_input(tmp_path, capsys, output):
     from badminton_gui.cli import main
+    tmp_path = tmp_path / "inputs"        # beside the test's log folder, which is not an input
+    tmp_path.mkdir()
     _pair(tmp_path)
     (tmp_path / "link.avi").symlink_to("l.avi")
     os.link(tmp_path / "r.avi", tmp_path / "hard.avi")

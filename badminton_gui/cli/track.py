@@ -111,8 +111,8 @@ def _robot_link(args):
     if args.robot_required:
         link.close()
         raise UserError(f"robot link: {reason} (--robot-required)")
-    _log.warning("robot link: %s; tracking anyway, retrying the port every %g s", reason,
-                 RobotLink.RETRY_MAX_S)
+    _log.error("robot link: %s; tracking anyway, retrying the port every %g s", reason,
+               RobotLink.RETRY_MAX_S)
     return link
 
 
@@ -120,8 +120,8 @@ def _report_link(link, quiet: bool) -> None:
     """What the robot got, on stderr: always when nothing was sent."""
     s = link.status()
     if not s.messages_sent:
-        _log.warning("robot link: nothing was sent to %s%s", s.port,
-                     f" (last error: {s.last_error})" if s.last_error else "")
+        _log.error("robot link: nothing was sent to %s%s", s.port,
+                   f" (last error: {s.last_error})" if s.last_error else "")
     elif not quiet:
         print(f"robot link: {s.messages_sent} messages sent to {s.port}, {s.messages_dropped} "
               f"replaced by newer ones, {s.errors} errors", file=sys.stderr)
