@@ -202,3 +202,16 @@ def test_one_video_cancel_and_bad_input(qtbot, one_video, tmp_path, monkeypatch)
     qtbot.waitUntil(lambda: not dialog.running, timeout=60_000)
     assert "bad.csv" in dialog.last_error and "clear the label file" in dialog.last_error
     assert dialog.start_button.isEnabled() and not dialog.cancel_button.isEnabled()
+
+
+def test_an_output_that_is_an_input_is_refused_before_anything_runs(qtbot, recording):
+    """Processing into the recording's own video (or rig) would destroy it: refused in a sentence."""
+    dialog = ProcessDialog(recording, TrackerParams())
+    qtbot.addWidget(dialog)
+    for target in (recording.left, recording.calib):
+        before = open(target, "rb").read()
+        dialog.output.setText(target)
+        dialog.start()
+        assert not dialog.running
+        assert "is also an input" in dialog.status.text()
+        assert open(target, "rb").read() == before

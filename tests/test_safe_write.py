@@ -254,3 +254,25 @@ def test_a_read_only_output_is_refused_not_replaced_by_the_rename(tmp_path, monk
     with pytest.raises(PermissionError):
         RowFile(target, ["a"])
     assert target.read_text() == "keep me" and _leftovers(tmp_path) == []
+
+
+def test_an_interrupted_demo_leaves_the_previous_files_and_no_temporary(tmp_path, monkeypatch):
+    """The demo's videos and truth are written beside their names and renamed when whole."""
+    from badminton_gui.cli import main
+    from badminton_gui.io import demo_scene
+    out = tmp_path / "demo"
+    assert main(["demo", "-o", str(out), "--frames", "12", "--size", "160x120", "-q"]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    read = demo_scene.DemoScene.read
+    calls = {"n": 0}
+
+    def interrupted(self):
+        calls["n"] += 1
+        if calls["n"] > 6:
+            raise KeyboardInterrupt
+        return read(self)
+    monkeypatch.setattr(demo_scene.DemoScene, "read", interrupted)
+    assert main(["demo", "-o", str(out), "--frames", "12", "--size", "160x120", "--seed", "3", "-q"]) == 130
+    after = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert after.keys() == before.keys()          # no temporary left beside them
+    assert after["left.mp4"] == before["left.mp4"] and after["truth.csv"] == before["truth.csv"]

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import cv2
 
+from ..io.safe_write import replacing
 from .common import Progress, UserError
 from .csv_columns import COURT_FRAME, LABEL_COLUMNS, TRUTH_COLUMNS, columns_epilog
 
@@ -100,10 +101,11 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _open_writer(path: Path, fps: float, size: tuple[int, int]) -> cv2.VideoWriter:
+def _open_writer(path: Path, fps: float, size: tuple[int, int], shown: Path) -> cv2.VideoWriter:
+    """A writer into ``path`` (the temporary file that becomes ``shown``)."""
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
     if not writer.isOpened():
-        raise UserError(f"cannot write the video {path} (mp4v encoder unavailable or folder "
+        raise UserError(f"cannot write the video {shown} (mp4v encoder unavailable or folder "
                         f"not writable)")
     return writer
 
@@ -130,27 +132,33 @@ def run(args: argparse.Namespace) -> int:
         scene.rig.save(out / "rig.yaml")
     except OSError as exc:
         raise UserError(f"cannot write {out / 'rig.yaml'}: {exc.strerror or exc}") from None
-    writers = [_open_writer(out / "left.mp4", args.fps, scene.image_size),
-               _open_writer(out / "right.mp4", args.fps, scene.image_size)]
     truths = []
     progress = Progress(args.frames, "demo")
+    # Each file is written beside its name and renamed when whole: an interrupted run leaves the
+    # previous demo (or nothing), never a cut-off video.
     try:
-        while (frame := scene.read()) is not None:
-            writers[0].write(frame.left)
-            writers[1].write(frame.right)
-            truths.append(scene.truth(frame.index))
-            progress.update(len(truths))
-    finally:
-        for w in writers:
-            w.release()
-        progress.close()
-        scene.close()
-    try:
-        write_truth_csv(out / "truth.csv", truths)
-        write_label_csv(out / "left_labels.csv", truths, 0)
-        write_label_csv(out / "right_labels.csv", truths, 1)
+        with (replacing(out / "left.mp4", suffix=".mp4") as left_tmp,
+              replacing(out / "right.mp4", suffix=".mp4") as right_tmp):
+            writers = [_open_writer(left_tmp, args.fps, scene.image_size, out / "left.mp4"),
+                       _open_writer(right_tmp, args.fps, scene.image_size, out / "right.mp4")]
+            try:
+                while (frame := scene.read()) is not None:
+                    writers[0].write(frame.left)
+                    writers[1].write(frame.right)
+                    truths.append(scene.truth(frame.index))
+                    progress.update(len(truths))
+            finally:
+                for w in writers:
+                    w.release()
+                progress.close()
+                scene.close()
+        with replacing(out / "truth.csv") as tmp:
+            write_truth_csv(tmp, truths)
+        for camera, name in ((0, "left_labels.csv"), (1, "right_labels.csv")):
+            with replacing(out / name) as tmp:
+                write_label_csv(tmp, truths, camera)
     except OSError as exc:
-        raise UserError(f"cannot write the truth files in {out}: {exc.strerror or exc}") from None
+        raise UserError(f"cannot write the demo in {out}: {exc.strerror or exc}") from None
     visible = sum(t.visible_left for t in truths), sum(t.visible_right for t in truths)
     print(f"wrote {len(truths)} frame pairs ({scene.image_size[0]}x{scene.image_size[1]}, "
           f"{args.fps:g} fps, {args.rig} rig, seed {args.seed}) to {out}; shuttle visible in "

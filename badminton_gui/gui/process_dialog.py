@@ -32,6 +32,7 @@ from PySide6.QtWidgets import (QComboBox, QDialog, QDialogButtonBox, QFileDialog
 from ..core.params import ParamError, TrackerParams
 from ..io.detect_file import ADAPTING, DetectFileSummary, adaptation_asked, detect_to_csv
 from ..io.labels import CsvFormatError, read_point_labels
+from ..io.safe_write import clashing_input
 from ..io.presets import list_presets, load_preset
 from ..io.sources import OpeningCancelled, SourceError
 from ..io.track_file import FILE_LOOKAHEAD, TrackFileSummary, track_to_csv
@@ -334,6 +335,13 @@ class ProcessDialog(QDialog):
             return
         if not output:
             self._finish_message("Give the output CSV file.")
+            return
+        clash = clashing_input(output, [self.spec.left, self.spec.right, self.spec.calib,
+                                        self.spec.left_times, self.spec.right_times,
+                                        self.spec.left_labels, self.spec.right_labels])
+        if clash is not None:
+            self._finish_message(f"The output {output} is also an input ({clash}): writing it would "
+                                 f"destroy the input; choose another file.")
             return
         try:
             params = self.job_params()

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..core.overlay_draw import (OverlayHistory, ShuttleStep, draw_feed, draw_plan, draw_readouts,
                                  feed_caption, plan_size)
+from .safe_write import clashing_input
 from .labels import TRACK_COLUMNS, CsvFormatError, parse_number, read_csv_rows, read_point_labels
 from .prefetch import PrefetchingReader
 from .sources import SourceError
@@ -189,10 +190,9 @@ def check_output_path(output: str | Path, inputs: Sequence[str | Path | None]) -
         raise RenderError(f"the output {out} must end in .mp4 (the clip is an MP4 file)")
     if out.is_dir():
         raise RenderError(f"the output {out} is a folder")
-    resolved = out.resolve()
-    for given in inputs:
-        if given and Path(given).resolve() == resolved:
-            raise RenderError(f"the output {out} is one of the inputs: choose another file name")
+    clash = clashing_input(out, [given or None for given in inputs])
+    if clash is not None:
+        raise RenderError(f"the output {out} is one of the inputs ({clash}): choose another file name")
     return out
 
 

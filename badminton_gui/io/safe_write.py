@@ -83,11 +83,11 @@ def _umask() -> int:
     return 0o022
 
 
-def _temporary_beside(target: Path) -> Path:
+def _temporary_beside(target: Path, suffix: str = ".tmp") -> Path:
     # A rename would replace a file its owner made read-only: refuse it as opening it would.
     if target.exists() and not os.access(target, os.W_OK):
         raise PermissionError(errno.EACCES, "Permission denied", str(target))
-    fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix, dir=target.parent)
     os.close(fd)
     return Path(name)
 
@@ -104,16 +104,17 @@ def _publish(temporary: Path, target: Path) -> None:
 
 
 @contextmanager
-def replacing(path: str | os.PathLike) -> Iterator[Path]:
+def replacing(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]:
     """``with replacing(out) as tmp: write(tmp)``: ``out`` gets the whole of ``tmp`` when the block
     ends without an exception, and is left as it was otherwise (no temporary file remains).
-    The folder of ``out`` is created if missing."""
+    The folder of ``out`` is created if missing. ``suffix``: the temporary file's ending (a video
+    writer picks its container from it: ``.mp4``)."""
     target = write_target(path)
     if _is_special(target):
         yield target
         return
     target.parent.mkdir(parents=True, exist_ok=True)
-    temporary = _temporary_beside(target)
+    temporary = _temporary_beside(target, suffix)
     try:
         yield temporary
         _publish(temporary, target)
