@@ -2,7 +2,7 @@
 
 One tuned-on NYCU camera, frames 0–700 (the pre-serve part and the first exchanges): the
 detector with the default preset must stay far above the paper's method written plainly
-(12–30 % accuracy on these rallies, GUIDE §5). The bound is loose on purpose: this guards
+(12–30 % accuracy on these rallies). The bound is loose on purpose: this guards
 against regressions, the benchmark gives the figures.
 """
 

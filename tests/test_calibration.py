@@ -2,7 +2,7 @@
 
 Why this file exists: the wizard only renders ``core.calibrate.stereo``; these tests pin that core
 to OpenCV's published figures on its own sample pairs and to exact ground truth rendered
-through known cameras (GUIDE §3.8). No Qt here.
+through known cameras. No Qt here.
 """
 
 from __future__ import annotations
@@ -80,7 +80,8 @@ def _run_cli(args, capsys):
 @needs_chess
 def test_cli_reproduces_opencv_reference(tmp_path, capsys):
     """With the sample's settings (cornerSubPix 11×11, every view kept) the figures match
-    GUIDE §5: RMS 0.41 / 0.46 / 0.45 px, fx ≈ 536, cx ≈ 342, cy ≈ 236, baseline ≈ 3.34."""
+    OpenCV's published ones: RMS 0.41 / 0.46 / 0.45 px, fx ≈ 536, cx ≈ 342, cy ≈ 236,
+    baseline ≈ 3.34."""
     out_file = tmp_path / "rig.yaml"
     code, out, err = _run_cli(
         ["calibrate", "--left-dir", str(CHESS), "--right-dir", str(CHESS),

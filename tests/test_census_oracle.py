@@ -1,9 +1,8 @@
 """The label oracle of benchmarks/broadcast_census.py: a ceiling must be the ceiling.
 
 Why this file exists: ``broadcast_census.py --oracle`` scores every candidate from the labels to
-say what a perfect classifier would leave (the thirty-second round's finding: on the TV clips the
-ceiling sits below the 90 % goal, so the next rounds go to the candidates and the data, not the
-classifier). An
+say what a perfect classifier would leave (on the TV clips that ceiling sits below the 90 % goal,
+so the gains lie in the candidates and the data, not the classifier: docs/findings.md). An
 oracle that scored the wrong rows, or that stayed installed in the detector module after its
 census, would report a ceiling that is not there — and would silently change every later run in
 the same process.

@@ -1,4 +1,4 @@
-"""The core never imports Qt (GUIDE §2): import every core module with PySide6 blocked."""
+"""The core never imports Qt (the CLI runs it headless): import every core module with PySide6 blocked."""
 
 import subprocess
 import sys

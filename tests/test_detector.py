@@ -250,8 +250,8 @@ def test_a_classifier_trained_with_patches_reads_them():
             xs = np.array([f[0] for f in det.last_features])
             ys = np.array([f[1] for f in det.last_features])
             assert np.allclose(seen[:, len(FEATURE_NAMES):], patch_features(frames[-1], xs, ys))
-    # Every shipped model reads the patch (the coarse one since the eighteenth round); a model
-    # without it (the Spy above) is still served the hand-made features alone.
+    # Every shipped model reads the patch (the coarse one too); a model without it (the Spy
+    # above) is still served the hand-made features alone.
     for model in ("candidate_classifier", "candidate_classifier_broadcast", "candidate_classifier_coarse"):
         assert load_classifier(model).feature_names == FEATURE_NAMES + PATCH_NAMES
         det = CameraDetector(_params(classifier__enabled=True, classifier__model=model))

@@ -1,4 +1,4 @@
-"""The five-outcome protocol (GUIDE §6) counted by hand on small cases."""
+"""The five-outcome protocol (core/evaluation.py) counted by hand on small cases."""
 
 import math
 

@@ -3,7 +3,7 @@
 Why this file exists: it checks the operator-visible promises: red circles where the demo's
 ground truth says the shuttle is, live parameter changes reaching the worker, failing sources
 shown as one sentence with the window still usable, the 2D fallback without OpenGL, the
-screenshot mode, and the PySide6 refcount canary of GUIDE §4.
+screenshot mode, and the PySide6 None-refcount canary.
 """
 
 from __future__ import annotations
@@ -195,7 +195,7 @@ def test_screenshot_mode_fails_when_nothing_is_tracked(tmp_path):
 
 
 def test_none_refcount_canary(qapp):
-    """PySide6 6.12.0 decremented None's refcount on every void call (GUIDE §4)."""
+    """PySide6 6.12.0 decremented None's refcount on every void call; this catches it coming back."""
     from PySide6.QtGui import QImage, QPainter, QPen
     image = QImage(8, 8, QImage.Format.Format_RGB32)
     painter = QPainter(image)
@@ -433,7 +433,7 @@ def test_ctrl_c_closes_cleanly(tmp_path):
 def test_feeds_get_frames_sized_for_a_plain_blit(main_window, qtbot):
     """The worker hands BGRA frames the size of the feed, so painting is a 1:1 copy.
 
-    This is the cheap display path (GUIDE §4): no resampling and no format conversion on the
+    This is the cheap display path: no resampling and no format conversion on the
     GUI thread. A frame of another size still shows, scaled to fit.
     """
     window = main_window()

@@ -1,13 +1,13 @@
 """Adapting the candidate classifier to the recording in front of it, from its own long tracks.
 
-Why this file exists: the TV classifier learnt the shuttle's looks from three labelled matches.
-On a match it has not seen it ranks the shuttle first less often: trained on two tuned-on clips
-and scored on the third, 74.6–77.8 % against 87.5 % on clips it saw (twenty-fourth round,
-benchmarks/README.md). What the readout follows for a long unbroken run of frames is nearly always
-the shuttle, so a first pass over a *recording* labels that recording's own candidates: in every
-frame of a run of at least ``min_run`` consecutive detections, the candidates at the detection are
-the shuttle and the frame's other candidates are not (``RunHarvest``). A new classifier is trained
-on them (``adapt_classifier``), and a second pass uses it (``adapt_to_recording``).
+Why this file exists: the TV classifier learnt the shuttle's looks from three labelled matches. On
+a match it has not seen it ranks the shuttle first less often: trained on two tuned-on clips and
+scored on the third, 74.6–77.8 % against 87.5 % on clips it saw. What the readout follows for a
+long unbroken run of frames is nearly always the shuttle, so a first pass over a *recording* labels
+that recording's own candidates: in every frame of a run of at least ``min_run`` consecutive
+detections, the candidates at the detection are the shuttle and the frame's other candidates are
+not (``RunHarvest``). A new classifier is trained on them (``adapt_classifier``), and a second pass
+uses it (``adapt_to_recording``).
 
 Training on the pseudo-labels alone would forget what the shipped classifier knew of the frames the
 runs do not cover (players, the crowd, the shuttle in the other half-court). Its training data
@@ -15,18 +15,17 @@ cannot be shipped (crops of third-party footage), so it is *rehearsed* instead: 
 vectors drawn from the shipped classifier's own standardisation (its per-feature mean and scale)
 labelled with its probabilities join the training set — pseudo-rehearsal (Robins, 1995).
 
-Measured (twenty-fifth round, benchmarks/README.md): on a TV clip the classifier has not seen
-(``benchmarks/train_classifier.py --kind broadcast --leave-one-out --seed S``, against
-``--no-adapt``) 76.09 / 79.52 / 78.48 % at seeds 0 / 1 / 2 instead of 74.64 / 75.68 / 77.75 %;
-with the shipped classifier the held-out clips 77.40 -> 80.31 %. On the three clips the shipped
-classifier was trained on it *costs* (87.53 -> 82.74 %): there the classifier knew the true
-labels, and the adaptation trades that memory for pseudo-labels. Only the broadcast preset turns
-it on (``classifier.adapt_min_run`` 25).
+What it gains and costs: on a TV clip the classifier has not seen (``benchmarks/train_classifier.py
+--kind broadcast --leave-one-out --seed S``, against ``--no-adapt``) 76.09 / 79.52 / 78.48 % at
+seeds 0 / 1 / 2 instead of 74.64 / 75.68 / 77.75 %; with the shipped classifier the held-out clips
+77.40 -> 80.31 %. On the three clips the shipped classifier was trained on it *costs* (87.53 ->
+82.74 %): there the classifier knew the true labels, and the adaptation trades that memory for
+pseudo-labels. Only the broadcast preset turns it on (``classifier.adapt_min_run`` 25).
 
 Offline only: it needs the recording twice (CLI ``detect``; broadcast_census.py, accuracy.py).
 The live readout, the GUI and the two-camera ``track`` keep the shipped classifier. On the
-two-camera rig it was measured and not used (twenty-eighth round, ``train_classifier.py --kind
-stereo --leave-one-out --scan classifier.adapt_min_run=25,60``): each camera adapted from its own
+two-camera rig it was measured and not used (``train_classifier.py --kind stereo
+--leave-one-out --scan classifier.adapt_min_run=25,60``): each camera adapted from its own
 runs, every tuned-on rally tracked with a classifier trained without it went 97.58 -> 96.08 /
 96.25 % — there the shipped classifier already ranks an unseen rally's shuttle well, and the
 pseudo-labels' mistakes cost more than they teach.
@@ -49,7 +48,7 @@ from .params import TrackerParams
 # centroid the candidate carries; at 3 px a third of the runs' frames had no positive (a trial).
 PSEUDO_LABEL_RADIUS = 8.0
 # frames: the run length when adaptation is asked for (``detect --adapt``) under a preset that has
-# it off; the broadcast preset's value, chosen leave-one-clip-out (benchmarks/README.md).
+# it off; the broadcast preset's value, chosen leave-one-clip-out (train_classifier.py).
 DEFAULT_MIN_RUN = 25
 
 
@@ -113,10 +112,10 @@ def adapt_classifier(classifier: CandidateClassifier, features: np.ndarray, labe
     The shape (members × hidden, epochs) is the shipped TV classifier's (train_classifier.py).
     More than ``max_rows`` candidates (a long recording) are subsampled to that many.
     Trained in float32 (2.4x faster than float64, ≈ 7 s for 26,000 rows; leave-one-clip-out the
-    same within the seeds' spread). The choices were trial scripts' (twenty-fifth round,
-    benchmarks/README.md; seed 0, 74.6 % unadapted): fine-tuning the shipped weights on the
-    pseudo-labels alone 75.4 %, anew on the pseudo-labels and 20,000 rehearsed vectors 78.2 %
-    (5,000: 76.5 %), anew with the true training data instead of rehearsal 79.0 %.
+    same within the seeds' spread). Why this recipe (trial scripts; seed 0, 74.6 % unadapted):
+    fine-tuning the shipped weights on the pseudo-labels alone 75.4 %, anew on the pseudo-labels
+    and 20,000 rehearsed vectors 78.2 % (5,000: 76.5 %), anew with the true training data instead
+    of rehearsal 79.0 %.
     """
     rng = np.random.default_rng(seed)
     features = np.asarray(features, float).reshape(-1, len(classifier.mean))
@@ -145,7 +144,7 @@ def adapt_to_recording(params: TrackerParams, frames: Callable[[], Iterable[tupl
     start from (None: the preset's). Returns the adapted classifier and the pass's harvest, or
     None for the classifier when adaptation is off (``classifier.adapt_min_run`` 0), the
     classifier is disabled, no run is long enough, or ``should_stop`` said so; the caller then
-    keeps the classifier it had. One round: a second, relabelling the runs with the adapted
+    keeps the classifier it had. It adapts once: a second adaptation, relabelling the runs with the adapted
     classifier and rehearsing it, undid the gain (a trial script, seed 0: 78.2 -> 74.6 %).
     """
     cp = params.classifier
@@ -153,9 +152,8 @@ def adapt_to_recording(params: TrackerParams, frames: Callable[[], Iterable[tupl
         return None, None
     # Its pseudo-labels take the lead-in that stops at any report (``lead_in_through`` off): the
     # frames the other one replaces are its least sure, and learnt from they cost more than the
-    # final readout gains (leave-one-clip-out, twenty-seventh round, benchmarks/README.md: with
-    # it here 80.46 / 79.94 % at seeds 0 / 1, without 83.26 / 84.10 %; no lead-in here at all
-    # 77.86 / 81.19 %).
+    # final readout gains (leave-one-clip-out: with it here 80.46 / 79.94 % at seeds 0 / 1,
+    # without 83.26 / 84.10 %; no lead-in here at all 77.86 / 81.19 %).
     detector = CameraDetector(params)
     # Nor does it fill gaps: a filled frame is a guess along a line, not a sure label.
     lookahead = CameraLookahead(params.with_value("lookahead.lead_in_through", False)

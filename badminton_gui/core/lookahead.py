@@ -39,7 +39,7 @@ within ``CONFIRM_GATE_M`` of that path; likewise, when the followed flight takes
 after refusing a few, those frames whose measured point lies that close to its path
 (``FlightInfo.confirmed_path``). The file readout holds its decided frames ``CONFIRM_HOLD_S``
 longer for it (NYCU rallies: a 3D point on 92.3 -> 96.8 % of the frames in flight both cameras
-report; twenty-ninth round, benchmarks/README.md).
+report).
 
 A third rule, off unless ``lookahead.lead_in_run`` is set (the broadcast preset), runs on the
 decided frames: **lead-in**. A run of that many detections on one tracklet is followed back from
@@ -61,9 +61,9 @@ are the least sure and its pseudo-labels must be sure. The lead-in
 holds the decided frames back ``lead_in_frames`` + the run's frames more, so it is off with
 ``lookahead.frames`` 0 (the live readout). Not for the two-camera tracker (its labels call the
 held shuttle not visible, and its 3D points are not re-made from a lead-in):
-:class:`StereoLookahead` turns it off. Chosen leave-one-clip-out (benchmarks/README.md): runs of
-10 frames, 12 px (twenty-sixth round); through shorter reports, runs per tracklet, not in the
-adaptation's pass, at most 10 replaced (twenty-seventh: 81.60 -> 84.03 % mean over seeds 0/1/2).
+:class:`StereoLookahead` turns it off. Chosen leave-one-clip-out: runs of 10 frames, 12 px;
+through shorter reports, runs per tracklet, not in the adaptation's pass, at most 10 replaced
+(81.60 -> 84.03 % mean over seeds 0/1/2).
 
 The lead-in stage also **fills gaps** (``lookahead.gap_fill_frames``, the broadcast preset's 6):
 as a result leaves it, a frame with no detection (or only a coasting prediction) between two
@@ -71,7 +71,7 @@ real detections at most that many frames apart takes the blob nearest the straig
 them, within ``gap_fill_radius``, whatever the filters said of it — on TV mostly a far-court
 shuttle too short for filter 1 for a frame or two, or one the association let go while another
 tracklet held the readout. Off in the adaptation's pass (a point on a line is no sure label).
-Leave-one-clip-out: 83.26 / 84.10 / 84.72 -> 83.99 / 84.82 / 84.82 % (twenty-seventh round).
+Leave-one-clip-out: 83.26 / 84.10 / 84.72 -> 83.99 / 84.82 / 84.82 % at seeds 0 / 1 / 2.
 
 Where the parts live: this module re-decides one camera's readout (:class:`CameraLookahead`);
 ``track_lookahead.py`` pairs two of them into :class:`TrackResult` rows (:class:`StereoLookahead`,

@@ -2,7 +2,7 @@
 
 Why this file exists: every 3D quantity of the product (distance, speed, landing point) comes
 from here. The rig file is OpenCV FileStorage YAML with the key names of OpenCV's stereo
-calibration sample (GUIDE §8): ``M1 D1 M2 D2 R T`` (X_right = R·X_left + T), ``image_width``,
+calibration sample: ``M1 D1 M2 D2 R T`` (X_right = R·X_left + T), ``image_width``,
 ``image_height``, optionally ``R1 R2 P1 P2 Q`` and the court pose ``R_court T_court``
 (X_court = R_court·X_left + T_court).
 

@@ -32,7 +32,7 @@ CONFIRM_HOLD_S = 0.25
 # measured just before it) takes the flight's path where its own measured point lies this close
 # to it, from CONFIRM_BEFORE_S (s) before the track's first point on. At 0.10 m one of the NYCU
 # tuned-on rallies' 65 such points was a wrong 2D pair 51 cm off; at 0.05 m, 41 points, all
-# within 9 cm of the triangulated labels (twenty-ninth round).
+# within 9 cm of the triangulated labels.
 CONFIRM_GATE_M = 0.05
 CONFIRM_BEFORE_S = 0.05
 

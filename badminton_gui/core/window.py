@@ -6,7 +6,7 @@ the whole-frame chain spends most of its CPU on the whole frame — the grey ima
 moved. While the followed tracklet is confirmed and was hit in the last frame, the shuttle can
 only be inside its motion gate around the predicted position; so there, and only there, the
 grey image is made, the background model is compared and learns, the mask is made, its
-contours found and its blobs measured (coarse-to-fine, GUIDE §4). Every ``window.full_every``
+contours found and its blobs measured (coarse-to-fine). Every ``window.full_every``
 frames, and whenever the followed tracklet is not confirmed or was missed, the whole frame is
 processed as before: a serve, the other camera's partner candidate, a new shuttle after the
 followed one is lost are found at most ``full_every − 1`` frames late.

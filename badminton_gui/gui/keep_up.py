@@ -12,8 +12,8 @@ played slow, the court views (3D, plan, side) and the readouts refresh at 4 Hz i
 the feeds stay at 30 Hz. Those views are most of what the display costs the tracker — PySide6
 keeps the GIL through Qt's painting, and the 3D view paints through software OpenGL here: the
 display-side CPU a pair shown fell 5.2 → 3.7 ms, and with the worker's two-pair camera buffer
-the pairs dropped at 2048×1536 / 119 fps fell 4.37 → 1.35 % (benchmarks/README, thirteenth
-round, ``scripts/gui-timing.py --nycu 400 --preset coarse --ab 6``; not measured apart).
+the pairs dropped at 2048×1536 / 119 fps fell 4.37 → 1.35 % (``scripts/gui-timing.py --nycu 400
+--preset coarse --ab 6``; the two changes not measured apart).
 
 Plain Python, no Qt: the window feeds it the worker's statistics and shows what it returns.
 """

@@ -14,7 +14,7 @@ One camera's video (a TV clip, *One video…*) runs the loop of `badminton-track
 (io/detect_file.py): with the broadcast preset that is two passes, the classifier adapted to the
 recording first, then the look-ahead with the lead-in from the held shuttle — the file readout,
 which the live view (frame by frame, the shipped classifier) cannot give: on the held-out TV clips
-82 against 77 % (benchmarks/README.md).
+82 against 77 %.
 """
 
 from __future__ import annotations

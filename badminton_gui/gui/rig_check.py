@@ -5,7 +5,7 @@ to what the rig achieves (``StereoTracker.epipolar_tolerance``) — so nothing l
 the 3D points, speeds and landing calls sent to the robot were off and the stereo checks let
 more clutter through. The NYCU rig imported from its ``.cfg`` files is ≈ 10° off: its pairs miss
 each other's epipolar lines by ≈ 30 px, where *Calibration ▸ Refine from tracked shuttle…*
-brings them to ≈ 1.5 px (benchmarks/README.md). The tracker measures this on the shuttle's own
+brings them to ≈ 1.5 px. The tracker measures this on the shuttle's own
 sure pairs; this turns the figure into a readout and, once per source, an advice line with the
 button that opens the refinement (the same check ROS camera_calibration shows as its epipolar
 error).

@@ -32,9 +32,9 @@ Live cameras get a grabber thread with its own buffer of ``LIVE_BUFFER_PAIRS`` p
 the oldest when full (ROS camera_calibration's ``BufferQueue``), so a slow tracker drops old
 camera frames (counted and shown) instead of falling behind, while one slow pair — the GUI
 thread holding the GIL through a paint, a whole frame among windowed ones — no longer costs a
-pair: the tracker takes it up one pair late and catches up (benchmarks/README, thirteenth
-round). File and demo sources are read in step with the tracker and paced to their fps ("as
-fast as possible" switches that off).
+pair: the tracker takes it up one pair late and catches up. File and demo sources are read in
+step with the tracker and paced to their fps ("as fast as possible"
+switches that off).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ Why this file exists: the demo court knows exactly where the shuttle is, in 3D a
 images, so it measures the whole pipeline (detection, stereo, triangulation) without labels.
 The tests run it on a few hundred frames; ``benchmarks/demo_accuracy.py`` on 1000 frames × 3
 seeds for the figures in the closing notes. ``delayed_right_errors`` plays the court to a rig
-whose right camera is not triggered with the left (``benchmarks/free_running.py``).
+whose right camera is not triggered with the left (a free-running pair).
 """
 
 from __future__ import annotations

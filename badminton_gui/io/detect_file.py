@@ -111,7 +111,7 @@ def detect_to_csv(video: str | Path, params: TrackerParams, output: str | Path, 
     """Detect the shuttle in every frame of ``video`` and write ``Frame,Visibility,X,Y`` rows.
 
     ``adapt`` (see :func:`adaptation_asked`): a first pass over the video adapts the classifier
-    to it. ``labels``: frame → (visible, x, y), to score the rows (GUIDE §6). ``progress(pass,
+    to it. ``labels``: frame → (visible, x, y), to score the rows (core/evaluation.py). ``progress(pass,
     frames done, frames in all or 0)`` is called per frame; ``should_stop()`` is asked before
     each: in the first pass it abandons the adaptation and writes nothing, in the second the
     look-ahead's pending rows are decided and written and the summary says ``cancelled``.

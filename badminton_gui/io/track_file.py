@@ -2,7 +2,7 @@
 and the GUI's *Tools ▸ Process a recording…*.
 
 Why this file exists: the command line and the desktop tool must give the same rows for the
-same recording, so they share this loop (GUIDE §2: the GUI and the CLI drive the same core).
+same recording, so they share this loop (the GUI and the CLI drive the same core).
 It adds what a long job needs in either: progress (pairs done, of how many), cancellation
 between two pairs — the rows decided so far are written and the file stays a valid CSV —, and
 one-sentence errors for a file that cannot be written (a full disk). No Qt here.
@@ -29,8 +29,8 @@ from .track_log import describe_os_error
 
 # Frames of look-ahead of the file commands (`detect`, `track`, the GUI's Process a recording): a
 # file has its future, so the readout is re-decided 4 frames later (core/lookahead.py). Chosen on
-# the tuned-on clips (benchmarks/lookahead_study.py): 4 frames beat 8 and 15, whose earlier
-# back-fills and later handovers take more wrong candidates than right ones.
+# the tuned-on clips: 4 frames beat 8 and 15, whose earlier back-fills and later handovers take
+# more wrong candidates than right ones.
 FILE_LOOKAHEAD = 4
 
 
@@ -111,7 +111,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     after every pair and ``should_stop()`` asked before each: when it says yes the look-ahead's
     pending rows are written and the summary says ``cancelled``. The source is not closed here.
     ``truth`` (io/truth.py ``LabelTruth``; default: the source's ``frame_truth``, as the GUI's
-    sources carry): the written rows are scored against it (GUIDE §6) in the summary.
+    sources carry): the written rows are scored against it (core/evaluation.py) in the summary.
     ``classifiers``: (left, right) candidate classifiers used instead of the preset's (one
     adapted to each camera's recording, or a leave-one-rally-out study's). ``trace``: a last
     column, ``Trace``, names the tracker's rules that fired on each row's step (space-separated,

@@ -419,8 +419,8 @@ def patch_features(frame: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndar
     divided by its peak above that median (at least 8 grey levels, so a flat patch stays flat).
     The hand-made features say how bright, white and small a blob is; the patch says what shape
     its brightness has around it — a cork with its skirt, a line, a shoe's edge, a logo's
-    letter (benchmarks/README.md, sixteenth round: the shuttle ranked first among its frame's
-    candidates in ≈ 10 % more TV frames, leave-one-clip-out).
+    letter (with the patch the shuttle ranked first among its frame's candidates in ≈ 10 % more
+    TV frames, leave-one-clip-out).
 
     Speed: the squares are copied one below the other into one canvas (a slice each; an
     advanced-index gather of all of them at once took 3× longer), and the grey conversion and

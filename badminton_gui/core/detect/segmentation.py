@@ -44,8 +44,8 @@ def model_scale(background, width: int) -> float:
     96.9 % to 95.1–95.5 % (the 4× coarser mask lets dilated noise pass the length filter and
     shifts the mask-based features). The ``coarse`` preset pairs it with a classifier trained
     on coarse-scale candidates, windowed tracking and the landed hold's protected mask: within
-    0.2 F1 points of the default on the tuned-on rallies and 0.45 on the held-out ones
-    (eighteenth round, README Speed). It stays opt-in: presets are the operator's choice.
+    0.2 F1 points of the default on the tuned-on rallies and 0.45 on the held-out ones.
+    It stays opt-in: presets are the operator's choice.
     """
     scale = float(background.processing_scale)
     if 0 < int(background.coarse_from_width) <= width:

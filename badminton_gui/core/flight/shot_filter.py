@@ -71,8 +71,8 @@ def _propagate(state, k, duration, h_max=0.01):
     k's, the direction's and h_max's bits) and a later call from the same state replays them:
     the flight's ``predicted`` at 17 instants in ``_continuous``, the tentative track at each
     of its points in ``_consistent``, every frame a refused track is re-tried (4–5 ms spikes in
-    play, benchmarks/README.md). Only the cut last step is integrated anew; the remaining time
-    is subtracted step by step as before, so the result is the plain loop's, bit for bit
+    play). Only the cut last step is integrated anew; the remaining time is subtracted
+    step by step as before, so the result is the plain loop's, bit for bit
     (tests/test_speed_oracles.py keeps the plain loop as the reference).
     """
     if duration == 0.0:
