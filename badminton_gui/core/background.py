@@ -2,7 +2,7 @@
 
 Why this file exists: the background model is the first and most expensive step of the chain,
 and the one whose parameters an operator tunes most. It works on a grey image at the processing
-scale (GUIDE §4: half resolution is the big speed saving; grey input costs little accuracy) and
+scale (half resolution is the big speed saving; grey input costs little accuracy) and
 returns a binary mask at that scale.
 """
 
