@@ -324,3 +324,14 @@ def test_a_pair_the_tracker_refuses_keeps_its_row_empty_and_marked(tmp_path):
     refused = rows[4]
     assert refused["withheld_reason"] == "input_refused" and refused["VisL"] == refused["VisR"] == "0"
     assert summary.pairs == 12 and "3D withheld in 1 row (1 input_refused" in summary.warning
+
+
+@pytest.mark.parametrize("command", ["track", "render", "refine-calib"])
+@pytest.mark.parametrize("value", ["-5", "0", "1.5", "many"])
+def test_max_frames_is_refused_when_parsed(command, value, capsys):
+    """--max-frames -5 once ran and then said "the videos hold no frames"."""
+    from badminton_gui.cli import main
+    with pytest.raises(SystemExit) as stop:
+        main([command, "--max-frames", value])
+    assert stop.value.code == 2
+    assert "argument --max-frames:" in capsys.readouterr().err

@@ -85,6 +85,17 @@ def count_or_zero(text: str) -> int:
     return value
 
 
+def frame_count(text: str) -> int:
+    """argparse type of ``--max-frames``: a whole number of frames, at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of frames") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{value}: give at least 1 frame (leave the option out for all)")
+    return value
+
+
 def parse_size(text: str) -> tuple[int, int]:
     try:
         w, h = text.lower().split("x")

@@ -17,7 +17,7 @@ from ..core.calibrate.refine import PairCollector, refine_relative_pose
 from ..core.tracker import StereoTracker, configure_opencv_threads
 from .common import (INPUT_ERRORS, Progress, UserError, add_json_argument, add_preset_argument,
                      add_video_pair_arguments, open_stereo_videos, params_from_args, preset_file,
-                     print_json, refuse_output_over_inputs)
+                     frame_count, print_json, refuse_output_over_inputs)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "intrinsics, baseline length and the court pose are kept).")
     add_video_pair_arguments(p, "rig file to start from (.yaml)")
     p.add_argument("-o", "--output", required=True, help="refined rig file to write (.yaml)")
-    p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
+    p.add_argument("--max-frames", type=frame_count, default=None, help="stop after this many frames")
     add_preset_argument(p)
     add_json_argument(p, "frames, pairs, inliers, before_median_px, after_median_px, "
                          "before_p90_px, after_p90_px, held_back_before_px, held_back_after_px, "

@@ -16,7 +16,7 @@ from ..io.render_video import (RENDERING, TRACKING, check_output_path, detect_fo
                                read_render_csv, render_video, track_for_render)
 from ..io.track_file import TrackFileError
 from .common import (INPUT_ERRORS, Progress, UserError, add_lookahead_argument, add_preset_argument,
-                     open_stereo_videos, params_from_args)
+                     frame_count, open_stereo_videos, params_from_args)
 
 _BAR_LABELS = {ADAPTING: "adapt", TRACKING: "track", RENDERING: "render"}
 
@@ -49,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     size.add_argument("--scale", type=float, default=None, help="size of each camera's picture, "
                                                                 "as a share of the video's (e.g. 0.5)")
     size.add_argument("--width", type=int, default=None, help="width of each camera's picture (px)")
-    p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
+    p.add_argument("--max-frames", type=frame_count, default=None, help="stop after this many frames")
     p.set_defaults(func=run)
 
 
@@ -67,8 +67,6 @@ def _cameras(args) -> tuple[int, ...]:
 
 def run(args: argparse.Namespace) -> int:
     cameras = _cameras(args)
-    if args.max_frames is not None and args.max_frames < 1:
-        raise UserError(f"--max-frames must be at least 1, got {args.max_frames}")
     inputs = [args.left, args.right, args.csv, args.calib, args.left_times, args.right_times]
     try:
         check_output_path(args.output, inputs)

@@ -10,7 +10,7 @@ from ..core.tracker import configure_opencv_threads
 from ..io.track_file import TrackFileError, track_to_csv
 from .common import (Progress, UserError, add_json_argument, add_lookahead_argument, add_preset_argument,
                      add_video_pair_arguments, open_stereo_videos, outcomes_json, params_from_args,
-                     baud_rate, preset_file, print_json, refuse_output_over_inputs)
+                     baud_rate, frame_count, preset_file, print_json, refuse_output_over_inputs)
 from .csv_columns import COURT_FRAME, LEFT_CAMERA_FRAME, TRACK_COLUMNS, columns_epilog
 
 _log = logging.getLogger(__name__)
@@ -34,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--robot-required", action="store_true",
                    help="stop with exit status 2 when the --robot port cannot be opened at the start "
                         "(default: say so on stderr, track anyway and keep retrying the port)")
-    p.add_argument("--max-frames", type=int, default=None, help="stop after this many frames")
+    p.add_argument("--max-frames", type=frame_count, default=None, help="stop after this many frames")
     add_json_argument(p, "output, pairs, points_3d, points_3d_percent, pairs_per_second, frame "
                          "('court' or 'left-camera'), rig_epipolar_px (null: not measured), rig_note "
                          "('' when the rig held), score (null without labels, else left/right with "
