@@ -25,14 +25,14 @@ import time
 from pathlib import Path
 
 from PySide6.QtCore import QObject, Qt, QThread, Signal
-from PySide6.QtWidgets import (QComboBox, QDialog, QDialogButtonBox, QFileDialog, QFormLayout,
-                               QHBoxLayout, QLabel, QLineEdit, QProgressBar, QPushButton, QSpinBox,
-                               QVBoxLayout, QWidget)
+from PySide6.QtWidgets import (QComboBox, QDialog, QFileDialog, QFormLayout, QHBoxLayout, QLabel,
+                               QLineEdit, QPushButton, QSpinBox, QWidget)
 
 from ..core.params import ParamError, TrackerParams
 from ..io.detect_file import ADAPTING, DetectFileSummary, adaptation_asked, detect_to_csv
 from ..io.labels import CsvFormatError, read_point_labels
 from ..io.safe_write import clashing_input
+from .job_dialog import JobDialogMixin
 from ..io.presets import list_presets, load_preset
 from ..io.sources import OpeningCancelled, SourceError
 from ..io.track_file import FILE_LOOKAHEAD, TrackFileSummary, track_to_csv
@@ -186,7 +186,7 @@ def _detect_summary_text(summary: DetectFileSummary) -> str:
 WINDOW_PARAMS = "the window's now (Tools ▸ Tuning)"
 
 
-class ProcessDialog(QDialog):
+class ProcessDialog(JobDialogMixin, QDialog):
     """The recording (a video pair as in *Source ▸ Stereo video pair*, or one camera's video as
     in *Source ▸ One video*), the output file, the parameters, the look-ahead, Start / Cancel, and
     the progress."""
@@ -239,26 +239,7 @@ class ProcessDialog(QDialog):
         form.addRow("Parameters", self.preset)
         form.addRow("Look-ahead", self.lookahead)
 
-        self.bar = QProgressBar()
-        self.bar.setRange(0, 1000)
-        self.bar.setValue(0)
-        self.status = QLabel("")
-        self.status.setWordWrap(True)
-        self.start_button = QPushButton("Start")
-        self.start_button.setDefault(True)
-        self.start_button.clicked.connect(self.start)
-        self.cancel_button = QPushButton("Cancel")
-        self.cancel_button.setEnabled(False)
-        self.cancel_button.clicked.connect(self.cancel)
-        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Close)
-        buttons.rejected.connect(self.reject)
-        buttons.addButton(self.start_button, QDialogButtonBox.ButtonRole.ActionRole)
-        buttons.addButton(self.cancel_button, QDialogButtonBox.ButtonRole.ActionRole)
-        lay = QVBoxLayout(self)
-        lay.addLayout(form)
-        lay.addWidget(self.bar)
-        lay.addWidget(self.status)
-        lay.addWidget(buttons)
+        self._lay_out_job_controls(form)
         self._show_recording()
 
     # ---- inputs ----------------------------------------------------------------------------
@@ -348,42 +329,10 @@ class ProcessDialog(QDialog):
         except ParamError as exc:
             self._finish_message(str(exc)[:1].upper() + str(exc)[1:])
             return
-        self.last_summary, self.last_error = None, ""
-        self.job = ProcessJob(self.spec, params, output)
-        self.thread = QThread(self)
-        self.thread.setObjectName("process-recording")
-        self.job.moveToThread(self.thread)
-        self.thread.started.connect(self.job.run)
-        self.job.progress.connect(self._on_progress)
-        self.job.done.connect(self._on_done)
-        self.bar.setValue(0)
-        self.status.setText("Opening the recording…")
-        self.start_button.setEnabled(False)
-        self.cancel_button.setEnabled(True)
-        self.thread.start()
-
-    def cancel(self) -> None:
-        if self.job is not None:
-            self.job.cancel()
-            self.status.setText("Cancelling…")
-
-    def _on_progress(self, done: int, total: int, text: str) -> None:
-        if total > 0:
-            self.bar.setValue(int(1000 * min(done / total, 1.0)))
-        self.status.setText(text)
+        self._start_job(ProcessJob(self.spec, params, output), "process-recording")
 
     def _on_done(self, summary: TrackFileSummary | None, error: str) -> None:
-        self.last_summary, self.last_error = summary, error
-        if summary is not None and not summary.cancelled:
-            self.bar.setValue(1000)
-        self._finish_message(summary_text(summary) if summary is not None
-                             else error[:1].upper() + error[1:])
-        thread, self.thread, self.job = self.thread, None, None
-        if thread is not None:
-            # ``done`` is the job's last act: its thread ends as soon as its loop sees quit().
-            thread.quit()
-            if thread.wait(5000):
-                thread.deleteLater()
+        self._end_job(summary, error, summary_text(summary) if summary is not None else "")
 
     def _finish_message(self, text: str) -> None:
         self.status.setText(text)

@@ -17,9 +17,8 @@ import time
 from pathlib import Path
 
 from PySide6.QtCore import QObject, QThread, Signal
-from PySide6.QtWidgets import (QButtonGroup, QComboBox, QDialog, QDialogButtonBox, QFileDialog,
-                               QFormLayout, QHBoxLayout, QLabel, QLineEdit, QProgressBar, QPushButton,
-                               QRadioButton, QVBoxLayout, QWidget)
+from PySide6.QtWidgets import (QButtonGroup, QComboBox, QDialog, QFileDialog, QFormLayout, QHBoxLayout,
+                               QLabel, QLineEdit, QPushButton, QRadioButton, QVBoxLayout, QWidget)
 
 from ..core.params import TrackerParams
 from ..core.rig import StereoRig
@@ -28,6 +27,7 @@ from ..io.render_video import (RENDERING, TRACKING, RenderSummary, check_output_
                                read_render_csv, render_video, track_for_render)
 from ..io.sources import OpeningCancelled
 from ..io.video import VideoFile
+from .job_dialog import JobDialogMixin
 from .settings import SourceSpec
 from .sources import SingleVideoDialog, VideoPairDialog, open_spec
 from .worker import USER_ERRORS, OpeningContext, _one_sentence
@@ -155,7 +155,7 @@ def summary_text(summary: RenderSummary) -> str:
             f"{summary.frames_per_second:.0f} frames/s → {summary.output}")
 
 
-class RenderDialog(QDialog):
+class RenderDialog(JobDialogMixin, QDialog):
     """The recording, the track (made now or a CSV), the camera(s), the size, the output clip,
     Start / Cancel and the progress."""
 
@@ -220,25 +220,7 @@ class RenderDialog(QDialog):
         form.addRow("Size", self.size)
         form.addRow("Output clip", out_row)
 
-        self.bar = QProgressBar()
-        self.bar.setRange(0, 1000)
-        self.status = QLabel("")
-        self.status.setWordWrap(True)
-        self.start_button = QPushButton("Start")
-        self.start_button.setDefault(True)
-        self.start_button.clicked.connect(self.start)
-        self.cancel_button = QPushButton("Cancel")
-        self.cancel_button.setEnabled(False)
-        self.cancel_button.clicked.connect(self.cancel)
-        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Close)
-        buttons.rejected.connect(self.reject)
-        buttons.addButton(self.start_button, QDialogButtonBox.ButtonRole.ActionRole)
-        buttons.addButton(self.cancel_button, QDialogButtonBox.ButtonRole.ActionRole)
-        lay = QVBoxLayout(self)
-        lay.addLayout(form)
-        lay.addWidget(self.bar)
-        lay.addWidget(self.status)
-        lay.addWidget(buttons)
+        self._lay_out_job_controls(form)
         self._show_recording()
 
     # ---- inputs ----------------------------------------------------------------------------
@@ -301,41 +283,11 @@ class RenderDialog(QDialog):
         if not output:
             self._finish_message("Give the output clip (.mp4).")
             return
-        self.last_summary, self.last_error = None, ""
-        self.job = RenderJob(self.spec, self.params, output, self.camera.currentData(),
-                             self.size.currentData(), csv_path)
-        self.thread = QThread(self)
-        self.thread.setObjectName("export-video")
-        self.job.moveToThread(self.thread)
-        self.thread.started.connect(self.job.run)
-        self.job.progress.connect(self._on_progress)
-        self.job.done.connect(self._on_done)
-        self.bar.setValue(0)
-        self.status.setText("Opening the recording…")
-        self.start_button.setEnabled(False)
-        self.cancel_button.setEnabled(True)
-        self.thread.start()
-
-    def cancel(self) -> None:
-        if self.job is not None:
-            self.job.cancel()
-            self.status.setText("Cancelling…")
-
-    def _on_progress(self, done: int, total: int, text: str) -> None:
-        if total > 0:
-            self.bar.setValue(int(1000 * min(done / total, 1.0)))
-        self.status.setText(text)
+        self._start_job(RenderJob(self.spec, self.params, output, self.camera.currentData(),
+                                  self.size.currentData(), csv_path), "export-video")
 
     def _on_done(self, summary: RenderSummary | None, error: str) -> None:
-        self.last_summary, self.last_error = summary, error
-        if summary is not None and not summary.cancelled:
-            self.bar.setValue(1000)
-        self._finish_message(summary_text(summary) if summary is not None else error[:1].upper() + error[1:])
-        thread, self.thread, self.job = self.thread, None, None
-        if thread is not None:
-            thread.quit()
-            if thread.wait(5000):
-                thread.deleteLater()
+        self._end_job(summary, error, summary_text(summary) if summary is not None else "")
         self.exportFinished.emit(summary, error)
 
     def _finish_message(self, text: str) -> None:
