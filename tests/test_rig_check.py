@@ -110,3 +110,19 @@ def test_a_file_tracked_with_an_off_rig_says_so_and_one_that_held_does_not(tmp_p
     assert "31 px" in off.rig_note and "refine-calib" in off.rig_note
     assert held.rig_note == "" and unknown.rig_note == ""
     assert off.rig_note in summary_text(off) and "\n" not in summary_text(held)
+
+
+def test_the_process_dialog_ends_with_tracks_closing_warning(tmp_path):
+    """What the CSV lacks (3D withheld while caught, a video cut short) is said in the dialog's
+    summary too, as ``track`` says it at the end; nothing is added when nothing is wrong."""
+    from badminton_gui.gui.process_dialog import summary_text
+    from badminton_gui.io.track_file import TrackFileSummary
+
+    clean = TrackFileSummary(900, 500, 9.0, tmp_path / "t.csv", False)
+    short = TrackFileSummary(900, 500, 9.0, tmp_path / "t.csv", False,
+                             withheld=(("caught: out of play", 12),),
+                             source_notes=("the right video ended 40 frames before the left",))
+    assert clean.warning == "" and "\n" not in summary_text(clean)
+    text = summary_text(short)
+    assert "3D withheld in 12 rows (12 caught: out of play" in text
+    assert "The right video ended 40 frames before the left" in text

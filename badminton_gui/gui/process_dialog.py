@@ -165,7 +165,10 @@ def summary_text(summary: TrackFileSummary | DetectFileSummary) -> str:
     score = summary.score_text
     if score:
         score = f"\n{score[:1].upper()}{score[1:]}."
-    return f"{head} {summary.output}{score}{note}"
+    # What the output may lack (a file cut short, 3D withheld while caught): the same sentence
+    # ``track`` ends with, so the operator is told in the dialog and not only in the log.
+    warning = f"\n{summary.warning[:1].upper()}{summary.warning[1:]}." if summary.warning else ""
+    return f"{head} {summary.output}{score}{note}{warning}"
 
 
 def _detect_summary_text(summary: DetectFileSummary) -> str:
