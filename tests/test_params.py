@@ -70,25 +70,3 @@ def test_shipped_presets_load():
         assert isinstance(load_preset(name), TrackerParams)
     with pytest.raises(ParamError, match="known presets"):
         load_preset("no-such-preset")
-
-
-def test_a_preset_saved_with_a_retired_parameter_still_loads_with_a_warning(tmp_path, caplog):
-    """Presets are saved whole, so one saved before a rule was removed names its switch: the file
-    loads, the retired value is ignored and the log says why; a misspelt name is still refused."""
-    from badminton_gui.core.params import RETIRED_PARAMETERS
-    data = TrackerParams().to_dict()
-    data["stereo"]["flight_vouch"] = True
-    data["stereo"]["pair_continuity"] = False
-    data["motion"]["base_radius"] = 33.0
-    path = tmp_path / "old.json"
-    path.write_text(json.dumps(data), encoding="utf-8")
-    with caplog.at_level("WARNING"):
-        loaded = TrackerParams.load(path)
-    assert loaded.motion.base_radius == 33.0
-    assert "stereo.flight_vouch" in RETIRED_PARAMETERS
-    assert any("stereo.flight_vouch ignored" in r.getMessage() for r in caplog.records)
-    assert any("stereo.pair_continuity ignored" in r.getMessage() for r in caplog.records)
-    data["stereo"]["flight_vouchh"] = True
-    path.write_text(json.dumps(data), encoding="utf-8")
-    with pytest.raises(ParamError, match="flight_vouchh"):
-        TrackerParams.load(path)

@@ -4,7 +4,10 @@ A shuttle point moving at a few m/s in front of the demo rig, projected into bot
 held-back candidates pass when they lie on each other's epipolar line and their tracks' image
 velocities triangulate to a moving 3D point; not when the point is at rest, when one camera's
 candidate is off the epipolar line, when its track moves another way, or when that camera
-already has a survivor of its own (it is then only a partner).
+already has a survivor of its own (it is then only a partner). And the followed 3D flight
+vouches for a pair of reports just off the epipolar gate (``StereoPairing.flight_vouched_pair``),
+and the last step's pair of tracklets continues off it while its miss changes smoothly
+(``StereoPairing.continued_pair``).
 """
 
 import dataclasses
@@ -369,3 +372,78 @@ def test_the_widened_gate_is_off_at_factor_zero():
     assert not _passed(left) and not _passed(right)
     t.close()
 
+
+# ---- the followed flight vouches for a pair just off the epipolar gate -----------------------
+def _pair_off_its_line(rig, point, off_px):
+    """Left and right candidates of a court point, ``off_px`` apart across the epipolar lines
+    (the left one half of it up, the right one half of it down: a rig whose rays miss)."""
+    (xl, yl), = rig.project(0, [point])
+    (xr, yr), = rig.project(1, [point])
+
+    def make(x, y):
+        return Candidate(x=float(x), y=float(y), length=20.0, short_side=4.0, whiteness=200.0,
+                         area=20.0, motion=1.0, score=5.0)
+    return make(xl, yl - off_px / 2), make(xr, yr + off_px / 2)
+
+
+def test_a_pair_just_off_the_epipolar_gate_is_taken_where_the_flight_puts_the_shuttle():
+    """rally_11-46-04 1244–1270: both cameras follow the shuttle, the labels' own pairs miss each
+    other's epipolar line by 117–124 px on the rough .cfg rig where the learnt gate is 113 px, and
+    the robot got no 3D point for 27 frames. Up to 1.5 × the gate, a pair whose triangulation lies
+    where the followed flight puts the shuttle (within 0.1 m + 3σ) is a pair; elsewhere, or
+    farther off the line, it is not."""
+    rig = make_rig("binocular", (1280, 720))
+    tracker = StereoTracker(rig, TrackerParams(), parallel=False)
+    try:
+        tol = tracker.epipolar_tolerance()
+        point = np.array([0.5, 2.0, 2.5])
+        near_guide = (point + 0.03, np.eye(3) * 0.02 ** 2)
+        far_guide = (point + np.array([0.0, 0.0, 0.5]), np.eye(3) * 0.02 ** 2)
+        left, right = _pair_off_its_line(rig, point, 1.2 * tol)
+        assert tracker.pairing.pair_point(left, right) == (None, None)         # off the gate
+        found, err = tracker.pairing.flight_vouched_pair(left, right, near_guide)
+        assert found is not None and tol < err <= 1.5 * tol
+        assert np.linalg.norm(rig.to_output(found)[0] - point) < 0.1
+        assert tracker.pairing.flight_vouched_pair(left, right, far_guide) == (None, None)
+        assert tracker.pairing.flight_vouched_pair(left, right, None) == (None, None)
+        tracker.params = tracker.params.with_value("stereo.flight_vouch", False)    # the rule off
+        assert tracker.pairing.flight_vouched_pair(left, right, near_guide) == (None, None)
+        tracker.params = tracker.params.with_value("stereo.flight_vouch", True)
+        left, right = _pair_off_its_line(rig, point, 2.0 * tol)
+        assert tracker.pairing.flight_vouched_pair(left, right, near_guide) == (None, None)
+    finally:
+        tracker.close()
+
+
+def test_the_last_pair_of_tracklets_continues_off_the_gate_while_its_miss_changes_smoothly():
+    """rally_11-47-02 800–860: the labelled shuttle's epipolar miss on the rough .cfg rig grew
+    6 → 151 px and back along one flight (the learnt gate ≈ 113 px) while both cameras followed
+    it, and the robot lost 50 frames of 3D points. The last step's pair of tracklets stays a pair
+    while its miss moves by ≤ 0.005 × the image width a step, up to 2 × the gate."""
+    rig = make_rig("binocular", (1280, 720))
+    tracker = StereoTracker(rig, TrackerParams(), parallel=False)
+    try:
+        tol = tracker.epipolar_tolerance()
+        point = np.array([0.5, 2.0, 2.5])
+        left, right = (dataclasses.replace(c, tracklet=k) for c, k in zip(_pair_off_its_line(rig, point, 1.6 * tol), (3, 7)))
+        err = float(rig.epipolar_errors([[left.x, left.y]], [[right.x, right.y]])[0, 0])
+        assert err > 1.5 * tol and tracker.pairing.pair_point(left, right) == (None, None)
+        assert tracker.pairing.continued_pair(left, right, 1.0) == (None, None)          # no last pair
+        tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=7), err - 4.0)  # 4 px less a step ago
+        found, got = tracker.pairing.continued_pair(left, right, 1.0)
+        assert found is not None and got == pytest.approx(err)
+        tracker.params = tracker.params.with_value("stereo.pair_continuity", False)  # the rule off
+        assert tracker.pairing.continued_pair(left, right, 1.0) == (None, None)
+        tracker.params = tracker.params.with_value("stereo.pair_continuity", True)
+        assert np.linalg.norm(rig.to_output(found)[0] - point) < 0.2           # its triangulation
+        assert tracker.pairing.continued_pair(left, right, 1.05) == (None, None)         # that pair too old
+        tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=8), err - 4.0)  # another right tracklet
+        assert tracker.pairing.continued_pair(left, right, 1.0) == (None, None)
+        tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=7), err - 12.0)  # a jump, not a drift
+        assert tracker.pairing.continued_pair(left, right, 1.0) == (None, None)
+        far_left, far_right = (dataclasses.replace(c, tracklet=k) for c, k in zip(_pair_off_its_line(rig, point, 2.2 * tol), (3, 7)))
+        far_err = float(rig.epipolar_errors([[far_left.x, far_left.y]], [[far_right.x, far_right.y]])[0, 0])
+        tracker.pairing.note_pair(0.99, left, dataclasses.replace(right, tracklet=7), far_err - 2.0)
+        assert tracker.pairing.continued_pair(far_left, far_right, 1.0) == (None, None)  # beyond 2 × the gate
+    finally:
+        tracker.close()

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import logging
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Iterator
@@ -27,18 +26,7 @@ from .flight.params import LookaheadParams, TrajectoryParams
 from .param_fields import ParamError, ParamGroup, choice, flag, param
 from .stereo.params import StereoParams
 
-# Parameters that existed once and were removed. A preset saved by an earlier version (presets are
-# saved whole) still loads: the value is ignored with a warning instead of refusing the file.
-RETIRED_PARAMETERS: dict[str, str] = {
-    "stereo.flight_vouch": "removed in 0.3.0 with its rule (pairing off the epipolar gate where "
-                           "the flight vouched): it measured no gain on held-out rallies",
-    "stereo.pair_continuity": "removed in 0.3.0 with its rule (the last pair continued off the "
-                              "epipolar gate): it measured no gain on held-out rallies",
-}
-
-_log = logging.getLogger(__name__)
-
-__all__ = ["TrackerParams", "RETIRED_PARAMETERS", "ParamError", "ParamGroup", "param", "choice", "flag", "field_info",
+__all__ = ["TrackerParams", "ParamError", "ParamGroup", "param", "choice", "flag", "field_info",
            "BackgroundParams", "BinarizeParams", "ContourLengthParams", "TiltedRectParams",
            "ColourParams", "MotionParams", "AssociationParams", "ClassifierParams", "WindowParams",
            "StereoParams", "TrajectoryParams", "LookaheadParams"]
@@ -84,8 +72,7 @@ class TrackerParams:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "TrackerParams":
-        """Build from a (possibly partial) nested dict; unknown keys are an error, retired ones
-        (``RETIRED_PARAMETERS``) are skipped with a warning."""
+        """Build from a (possibly partial) nested dict; unknown keys are an error."""
         out = cls()
         for group, values in data.items():
             if group.startswith("_"):
@@ -93,10 +80,6 @@ class TrackerParams:
             if not isinstance(values, dict) or group not in {f.name for f in fields(cls)}:
                 raise ParamError(f"unknown parameter group {group!r}")
             for name, value in values.items():
-                if f"{group}.{name}" in RETIRED_PARAMETERS:
-                    _log.warning("preset parameter %s.%s ignored: %s", group, name,
-                                 RETIRED_PARAMETERS[f"{group}.{name}"])
-                    continue
                 out = out.with_value(f"{group}.{name}", value)
         return out
 

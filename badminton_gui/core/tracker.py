@@ -194,6 +194,7 @@ class StereoTracker:
         self.look.look(step, self._previous, self.pairing.pair_point)
         look_on_epipolar_lines(step, self.rig, self.params, self.gate, self.paths, self._previous,
                                self.pairing.pair_point)
+        self.pairing.pair_off_gate(step)
         self._note_paths(step)
         self.look.exits(step, self.paths)
         self._hold_and_readout(step)

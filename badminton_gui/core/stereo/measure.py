@@ -44,6 +44,8 @@ def measure(step: Step, rig: StereoRig, params: TrackerParams, gate: EpipolarGat
     cork.note_blob(step.t, blob)
     if step.point is None:
         return Measurement(head_variance=head_var)
+    if step.epi is not None:
+        pairing.note_pair(step.t, left, right, step.epi)
     measured = tuple(float(v) for v in rig.to_output(step.point)[0])
     noise_shape = rig.noise_shape([[left.x, left.y]], [list(pairing.right_xy(right))])[0]
     if step.epi is not None:

@@ -2,12 +2,16 @@
 
 Why this file exists: the pairing stage of the tracker. Among the surviving candidates of the two
 cameras it chooses the stereo-consistent pair (epipolar gate, depth in front of both cameras,
-distance in range, each camera's own choice preferred) and triangulates it. Free-running cameras' right
-detections are first moved along their tracks to the left image's time (``stereo.align_pairs``).
+distance in range, each camera's own choice preferred), triangulates it, and takes two reports
+as a pair although they miss the gate when the followed flight puts the shuttle where they
+triangulate (``stereo.flight_vouch``) or when the same two tracks were the last step's pair and
+their miss moved little (``stereo.pair_continuity``). Free-running cameras' right detections are
+first moved along their tracks to the left image's time (``stereo.align_pairs``).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +27,13 @@ from .epipolar import EpipolarGate
 # along their tracks to the left image's time before they are paired (free-running cameras,
 # ``right_xy``); the NYCU cameras' pairs are 0.05 ms apart, launcher-stereo's up to 25 ms.
 ALIGN_MIN_LAG = 0.0005
+# A pair of reports off the epipolar gate that the followed flight vouches for (``flight_vouched_pair``):
+FLIGHT_VOUCH_GATE = 1.5      # × the epipolar gate: how far off its line it may be
+FLIGHT_VOUCH_SLACK = 0.1     # m: ... and how near the flight's prediction (+ 3σ of it) it must lie
+# The last step's pair continued off the epipolar gate (``continued_pair``):
+PAIR_CONTINUITY_AGE = 0.03   # s: the last pair at most this old (a frame or two)
+PAIR_CONTINUITY_STEP = 0.005  # × image width: its epipolar error moved by at most this since (10 px at 2048)
+PAIR_CONTINUITY_GATE = 2.0   # × the epipolar gate: and is at most this
 
 
 @dataclass(frozen=True, slots=True)
@@ -36,8 +47,18 @@ class StereoPair:
     epipolar_error: float | None = None
 
 
+@dataclass(frozen=True, slots=True)
+class _LastPair:
+    """The last measured pair: its time, the two tracklets and its epipolar error (px)."""
+
+    t: float
+    left_tracklet: int
+    right_tracklet: int
+    epipolar_error: float
+
+
 class StereoPairing:
-    """Pairs the two cameras' detections."""
+    """Pairs the two cameras' detections; remembers the last pair for ``continued_pair``."""
 
     def __init__(self, rig: StereoRig, params: TrackerParams, gate: EpipolarGate,
                  detectors: tuple[CameraDetector, CameraDetector]) -> None:
@@ -47,6 +68,7 @@ class StereoPairing:
         self.detectors = detectors
         # s: the left image's time minus the right one's in the pair being processed.
         self.right_lag = 0.0
+        self._last_pair: _LastPair | None = None
 
     def set_times(self, t_left: float, t_right: float) -> None:
         """The pair being processed was taken at these times (``right_xy`` moves by their lag)."""
@@ -137,3 +159,71 @@ class StereoPairing:
         if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
             return None, None
         return point, err
+
+    def flight_vouched_pair(self, det_left: Candidate, det_right: Candidate,
+                            guide: tuple[np.ndarray, np.ndarray] | None
+                            ) -> tuple[np.ndarray | None, float | None]:
+        """The two cameras' reports as a pair although they miss the epipolar gate by a little,
+        when the followed flight puts the shuttle where they triangulate (else (None, None);
+        ``stereo.flight_vouch``)."""
+        if (not self.params.stereo.flight_vouch or guide is None or det_left.predicted
+                or det_right.predicted):
+            return None, None
+        pl, pr = [[det_left.x, det_left.y]], [list(self.right_xy(det_right))]
+        err = float(self.rig.epipolar_errors(pl, pr)[0, 0])
+        if err > FLIGHT_VOUCH_GATE * self.gate.tolerance():
+            return None, None
+        point = self.rig.triangulate(pl, pr)[0]
+        position, covariance = guide
+        reach = FLIGHT_VOUCH_SLACK + 3.0 * math.sqrt(max(float(np.trace(covariance)) / 3.0, 0.0))
+        if float(np.linalg.norm(self.rig.to_output(point)[0] - position)) > reach:
+            return None, None
+        return point, err
+
+    def note_pair(self, t: float, det_left: Candidate, det_right: Candidate, epi: float) -> None:
+        """The step at ``t`` measured this pair (``continued_pair`` may continue it)."""
+        if det_left.tracklet >= 0 and det_right.tracklet >= 0:
+            self._last_pair = _LastPair(t, det_left.tracklet, det_right.tracklet, float(epi))
+
+    def continued_pair(self, det_left: Candidate, det_right: Candidate, t: float
+                       ) -> tuple[np.ndarray | None, float | None]:
+        """The two cameras' reports as a pair although they miss the epipolar gate, when the
+        same two tracklets were the last step's pair and their epipolar error has moved by at
+        most PAIR_CONTINUITY_STEP (× image width) since, up to PAIR_CONTINUITY_GATE × the gate
+        (else (None, None); ``stereo.pair_continuity``).
+
+        A rough rig's epipolar miss varies smoothly over the image: on rally_11-47-02 the
+        labelled shuttle's went 6 → 151 → 7 px along one flight (the learnt gate ≈ 113 px), and
+        the robot lost 50 frames of 3D points in the middle, with both cameras on the shuttle."""
+        last = self._last_pair
+        if not self.params.stereo.pair_continuity:
+            return None, None
+        if (last is None or det_left.predicted or det_right.predicted or t - last.t > PAIR_CONTINUITY_AGE
+                or (det_left.tracklet, det_right.tracklet) != (last.left_tracklet, last.right_tracklet)
+                or det_left.tracklet < 0):
+            return None, None
+        pl, pr = [[det_left.x, det_left.y]], [list(self.right_xy(det_right))]
+        err = float(self.rig.epipolar_errors(pl, pr)[0, 0])
+        if (abs(err - last.epipolar_error) > PAIR_CONTINUITY_STEP * self.rig.image_size[0]
+                or err > PAIR_CONTINUITY_GATE * self.gate.tolerance()):
+            return None, None
+        point = self.rig.triangulate(pl, pr)[0]
+        dist = float(np.linalg.norm(point))
+        sp = self.params.stereo
+        if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
+            return None, None
+        return point, err
+
+    def pair_off_gate(self, step: Step) -> None:
+        """The stage: two reports off the epipolar gate pair when the flight puts the shuttle where
+        they triangulate, or when they continue the last step's pair."""
+        left, right = step.dets
+        if step.point is not None or left is None or right is None:
+            return
+        step.point, step.epi = self.flight_vouched_pair(left, right, step.guide.get())
+        if step.point is not None:
+            step.fired("flight_vouch")
+            return
+        step.point, step.epi = self.continued_pair(left, right, step.t)
+        if step.point is not None:
+            step.fired("pair_continuity")

@@ -116,6 +116,14 @@ class StereoParams(ParamGroup):
     stereo_look_radius: float = param(8.0, 1.0, 100.0, step=0.5, unit="px", label="... within",
                                       help="How far from where the camera's image path continues (px at "
                                            "1280 px width)")
+    flight_vouch: bool = flag(True, label="Pair where the flight says",
+                              help="Two reports up to 1.5 × the epipolar tolerance off their line are still a "
+                                   "pair when the followed 3D flight puts the shuttle where they triangulate "
+                                   "(a rough rig's miss varies over the image)")
+    pair_continuity: bool = flag(True, label="... or where the last pair continues",
+                                 help="... or when the same two tracks were the last step's pair and their "
+                                      "epipolar miss moved by at most 0.5 % of the image width since, up to 2 × "
+                                      "the tolerance (rally_11-47-02: a flight whose miss went 6 → 151 → 7 px)")
     exit_margin: float = param(2.0, 0.0, 100.0, step=0.5, unit="px", label="Leaving the image within",
                                help="A detection this near the image's border is not reported when the 3D "
                                     "flight puts the shuttle just outside the image next to it (the clipped "
