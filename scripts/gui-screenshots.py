@@ -1,7 +1,8 @@
 """Screenshots of the operator's views that `badminton-gui --screenshot` cannot reach.
 
 Why this file exists: the issue asks for pictures of the tuning dialog and of the optional feed
-overlays (foreground mask, rejected candidates coloured by filter), which need menus opened.
+overlays (foreground mask, rejected candidates coloured and labelled by filter, the trace panel
+of the rules that fired), which need menus opened.
 This drives the real MainWindow on the demo court, with its own throw-away settings file, and
 saves PNGs. Run under Xvfb:
 
@@ -50,9 +51,10 @@ def main() -> int:
         return until is None
 
     def busy_frame() -> bool:
-        """Both cameras found the shuttle and some candidates were rejected: a telling picture."""
+        """Both cameras found the shuttle and some candidates were rejected, on a pair tracked
+        with the overlay on (so its trace panel is filled): a telling picture."""
         p = window.latest_packet
-        if p is None:
+        if p is None or p.diagnostics is None:
             return False
         r = p.result
         rejected = sum(c.rejected_by is not None for cam in (r.left, r.right) for c in cam.candidates)

@@ -44,6 +44,7 @@ from .court_views import CourtGLView, CourtPlanView, SideView, gl_unavailable_re
 from .feed_view import FeedView
 from .help_menu import AboutDialog, ShortcutsDialog, app_icon, log_link_html, open_log_folder
 from .keep_up import FAST_PRESET, DisplayYield, KeepUpWatch
+from .overlays import trace_lines
 from .rig_check import RigCheck, readout_text as rig_readout_text
 from .robot_panel import RobotLinkPanel
 from .sources import CameraPairDialog, SingleVideoDialog, VideoPairDialog, open_spec
@@ -584,6 +585,7 @@ class MainWindow(QMainWindow):
         self.latest_packet = None
         worker = TrackingWorker(opener, self.params, realtime=self.realtime_action.isChecked(),
                                 show_mask=self.mask_action.isChecked(),
+                                trace=self.rejected_action.isChecked(),
                                 live_buffer_pairs=self._live_buffer_pairs(),
                                 lookahead_frames=self._view_lookahead())
         thread = QThread(self)
@@ -886,11 +888,14 @@ class MainWindow(QMainWindow):
     def _overlays_changed(self) -> None:
         if self.worker is not None:
             self.worker.set_show_mask(self.mask_action.isChecked())
+            self.worker.set_trace(self.rejected_action.isChecked())
         for feed in (self.left_feed, self.right_feed):
             feed.show_rejected = self.rejected_action.isChecked()
             feed.show_window = self.rejected_action.isChecked() or self.mask_action.isChecked()
             feed.show_labels = self.labels_action.isChecked()
             feed.update()
+        if self.latest_packet is not None:
+            self._show_trace(self.latest_packet)
 
     def set_params(self, params: TrackerParams) -> None:
         """A new parameter snapshot from the tuning dialog: to the worker, and remembered."""
@@ -1198,7 +1203,19 @@ class MainWindow(QMainWindow):
         if packet.right is not None:
             self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right,
                                       packet.label_right)
+        self._show_trace(packet)
         return True
+
+    def _show_trace(self, packet: DisplayPacket) -> None:
+        """The feeds' trace panels for this packet while the rejected-candidates overlay is on
+        (the worker traces only then: ``TrackingWorker.set_trace``)."""
+        on = self.rejected_action.isChecked()
+        diagnostics = packet.diagnostics or (None, None)
+        for feed, side, diag in ((self.left_feed, "left", diagnostics[0]),
+                                 (self.right_feed, "right", diagnostics[1])):
+            if feed is self.right_feed and packet.right is None:
+                continue
+            feed.set_trace(trace_lines(packet.result.trace, side, diag) if on else ())
 
     def _slow_views(self) -> list[tuple[str, QWidget, Callable[[DisplayPacket], None]]]:
         views = []
