@@ -126,8 +126,10 @@ class FeedView(QWidget):
     def set_trace(self, lines) -> None:
         """The trace panel's lines (``overlays.trace_lines``), drawn with the rejected
         candidates; () for none."""
-        self._trace_lines = tuple(lines)
-        self.update()
+        lines = tuple(lines)
+        if lines != self._trace_lines:
+            self._trace_lines = lines
+            self.update()
 
     @property
     def trace_text(self) -> str:

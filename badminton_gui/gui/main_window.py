@@ -510,6 +510,10 @@ class MainWindow(QMainWindow):
         self.mask_action = self._action(view, "Foreground &mask", self._overlays_changed, "M", checkable=True)
         self.rejected_action = self._action(view, "&Rejected candidates", self._overlays_changed, "C",
                                             checkable=True)
+        self.rejected_action.setToolTip("Ring each candidate a filter refused in its colour and label the "
+                                        "nearest to the shuttle; a corner panel names the rules that "
+                                        "fired on the frame (as 'badminton-track track --trace') and what "
+                                        "each detector stage rejected")
         # The truth's cross (labels, the demo's shuttle): on by default, it costs nothing
         # where the source has no truth.
         self.labels_action = self._action(view, "&Truth (labels)", self._overlays_changed, "L",
