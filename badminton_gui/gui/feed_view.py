@@ -100,6 +100,8 @@ class FeedView(QWidget):
         self._label_cache: dict[tuple, QImage] = {}
         self._trace_lines: tuple[str, ...] = ()
         self._panel_cache: tuple[tuple, QImage] | None = None
+        self._labels_cache: tuple[CameraResult, tuple, list] | None = None
+        self._fonts: _SmallFonts | None = None
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
         self.setMinimumSize(240, 160)
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
@@ -356,12 +358,11 @@ class FeedView(QWidget):
                         _ring_sprite(reject_style(c.rejected_by)[0], dpr))
 
     def _paint_legend(self, p: QPainter) -> None:
-        f = QFont(self.font())
-        f.setPointSizeF(max(7.0, f.pointSizeF() * 0.85))
-        p.setFont(f)
-        fm = p.fontMetrics()
+        fonts = self._small_fonts()
+        p.setFont(fonts.small)
+        fm = fonts.metrics
         rows = list(REJECT_STYLE.values())
-        width = self._legend_width(fm)
+        width = fonts.legend_width
         height = fm.height() * len(rows) + 8
         box = QRectF(self.width() - width - 6, self.height() - height - 6, width, height)
         p.fillRect(box, QColor(0, 0, 0, 160))
@@ -374,11 +375,13 @@ class FeedView(QWidget):
                        Qt.AlignmentFlag.AlignVCenter, text)
 
     # ---- what rejected the candidates, which rules fired -------------------------------------
-    def _small_font(self, bold: bool = False) -> QFont:
-        f = QFont(self.font())
-        f.setPointSizeF(max(7.0, f.pointSizeF() * 0.85))
-        f.setBold(bold)
-        return f
+    def _small_fonts(self) -> _SmallFonts:
+        """The legend's and the labels' fonts, their metrics and the words' widths, made once per
+        widget font: making them on every paint was most of the labels' cost."""
+        key = self.font().key()
+        if self._fonts is None or self._fonts.key != key:
+            self._fonts = _SmallFonts(key, self.font())
+        return self._fonts
 
     def reject_labels(self) -> list[tuple[str, str, QRectF]]:
         """The labels the rejected-candidates overlay draws on this frame at this size: (word,
@@ -389,6 +392,19 @@ class FeedView(QWidget):
         cam = self._camera
         if cam is None or self._qimage is None:
             return []
+        r = self.image_rect()
+        fonts = self._small_fonts()
+        # The same frame painted again (paused, a resize's repaints): the same labels. The
+        # camera result by identity (its mask has no plain ``==``).
+        key = (id(cam), len(self._trail), r.x(), r.y(), r.width(), fonts.key)
+        if self._labels_cache is not None and self._labels_cache[0] is cam and self._labels_cache[1] == key:
+            return self._labels_cache[2]
+        placed = self._place_labels(cam, r, fonts)
+        self._labels_cache = (cam, key, placed)
+        return placed
+
+    def _place_labels(self, cam: CameraResult, bounds: QRectF, fonts: _SmallFonts
+                      ) -> list[tuple[str, str, QRectF]]:
         rejected = [c for c in cam.candidates if c.rejected_by is not None]
         if not rejected:
             return []
@@ -400,46 +416,49 @@ class FeedView(QWidget):
             ref = (cam.image_size[0] / 2.0, cam.image_size[1] / 2.0)
         rejected.sort(key=lambda c: (c.x - ref[0]) ** 2 + (c.y - ref[1]) ** 2)
         centres = self._to_widget(np.array([(c.x, c.y) for c in rejected], float))
-        ring = _RING_HALF_SIZE
-        rings = [QRectF(x - ring + 2, y - ring + 2, 2 * ring - 4, 2 * ring - 4) for x, y in centres.tolist()]
-        keep_clear = []
+        ring = float(_RING_HALF_SIZE)
+        # (x0, y0, x1, y1) of every ring, a little inside the sprite (its halo may be touched).
+        rings = np.hstack((centres - (ring - 2), centres + (ring - 2)))
+        taken: list[tuple[float, float, float, float]] = []     # placed labels and the red circle
         if cam.detection is not None:
             d = self.image_to_widget(cam.detection.x, cam.detection.y)
-            r = CIRCLE_RADIUS + 2.0
-            keep_clear.append(QRectF(d.x() - r, d.y() - r, 2 * r, 2 * r))
-        bounds = self.image_rect()
-        fm = QFontMetrics(self._small_font(bold=True))
+            rd = CIRCLE_RADIUS + 2.0
+            taken.append((d.x() - rd, d.y() - rd, d.x() + rd, d.y() + rd))
+        x_lo, y_lo, x_hi, y_hi = bounds.left(), bounds.top(), bounds.right(), bounds.bottom()
+        h = float(fonts.bold_metrics.height())
         placed: list[tuple[str, str, QRectF]] = []
         for i, c in enumerate(rejected):
             if len(placed) >= MAX_REJECT_LABELS:
                 break
             word = reject_short(c.rejected_by)
-            w, h = fm.horizontalAdvance(word) + 6.0, float(fm.height())
+            w = fonts.word_width(word) + 6.0
             x, y = centres[i]
-            spots = (QRectF(x + ring, y - h / 2, w, h), QRectF(x - ring - w, y - h / 2, w, h),
-                     QRectF(x - w / 2, y - ring - h, w, h), QRectF(x - w / 2, y + ring, w, h))
-            spots = [s for s in spots if bounds.contains(s)]
-            labels = [rect for _, _, rect in placed]
-            clear = [s for s in spots if not any(s.intersects(o) for o in labels + keep_clear)]
-            free = [s for s in clear if not any(s.intersects(o) for k, o in enumerate(rings) if k != i)]
-            if free or clear:
-                placed.append((word, c.rejected_by, (free or clear)[0]))
+            spots = [(x + ring, y - h / 2), (x - ring - w, y - h / 2), (x - w / 2, y - ring - h),
+                     (x - w / 2, y + ring)]
+            clear = [(sx, sy, sx + w, sy + h) for sx, sy in spots
+                     if x_lo <= sx and sx + w <= x_hi and y_lo <= sy and sy + h <= y_hi
+                     and not any(sx < t[2] and t[0] < sx + w and sy < t[3] and t[1] < sy + h for t in taken)]
+            if not clear:
+                continue
+            covers = _covers(np.array(clear), rings, i)
+            box = clear[int(np.argmin(covers))]        # the first free of rings, else the first
+            taken.append(box)
+            placed.append((word, c.rejected_by, QRectF(box[0], box[1], w, h)))
         return placed
 
     def _label_image(self, word: str, colour: QColor) -> QImage:
         """A candidate's label (its filter's word in its ring's colour on a dark box), drawn once."""
-        font = self._small_font(bold=True)
+        fonts = self._small_fonts()
         dpr = self.devicePixelRatioF()
-        key = (word, colour.name(), font.key(), dpr)
+        key = (word, colour.name(), fonts.key, dpr)
         image = self._label_cache.get(key)
         if image is None:
-            fm = QFontMetrics(font)
-            w, h = fm.horizontalAdvance(word) + 6, fm.height()
+            w, h = fonts.word_width(word) + 6, fonts.bold_metrics.height()
             image = QImage(int(np.ceil(w * dpr)), int(np.ceil(h * dpr)), QImage.Format.Format_ARGB32_Premultiplied)
             image.setDevicePixelRatio(dpr)
             image.fill(QColor(0, 0, 0, 170))
             q = QPainter(image)
-            q.setFont(font)
+            q.setFont(fonts.bold)
             q.setPen(colour)
             q.drawText(QRectF(0, 0, w, h), Qt.AlignmentFlag.AlignCenter, word)
             q.end()
@@ -455,12 +474,12 @@ class FeedView(QWidget):
     def _paint_trace(self, p: QPainter) -> None:
         """The trace panel at the bottom left, beside the legend; drawn once per text and width
         (a paused frame, a resize repaint the same panel)."""
-        font = self._small_font()
-        fm = QFontMetrics(font)
-        room = self.width() - 12 - (self._legend_width(fm) + 12 if self.show_legend else 0)
+        fonts = self._small_fonts()
+        fm = fonts.metrics
+        room = self.width() - 12 - (fonts.legend_width + 12 if self.show_legend else 0)
         room = max(120, room)
         dpr = self.devicePixelRatioF()
-        key = (self._trace_lines, room, font.key(), dpr)
+        key = (self._trace_lines, room, fonts.key, dpr)
         if self._panel_cache is None or self._panel_cache[0] != key:
             lines = [fm.elidedText(line, Qt.TextElideMode.ElideRight, room - 10) for line in self._trace_lines]
             w = max(fm.horizontalAdvance(line) for line in lines) + 10
@@ -471,7 +490,7 @@ class FeedView(QWidget):
             # Nearly opaque: the panel often lies over the court's white lines.
             image.fill(QColor(0, 0, 0, 190))
             q = QPainter(image)
-            q.setFont(font)
+            q.setFont(fonts.small)
             for i, line in enumerate(lines):
                 # The rules and the phase first, brighter: what the operator looks for. Drawn on
                 # its baseline, so no box clips a descender ("in_play" read "in play").
@@ -482,6 +501,32 @@ class FeedView(QWidget):
         image = self._panel_cache[1]
         p.drawImage(QPointF(6, self.height() - image.height() / dpr - 6), image)
 
-    @staticmethod
-    def _legend_width(fm: QFontMetrics) -> float:
-        return max(fm.horizontalAdvance(t) for _, t in REJECT_STYLE.values()) + 30
+
+class _SmallFonts:
+    """The overlay's small fonts (legend, trace panel; bold: the candidates' labels)."""
+
+    def __init__(self, key: str, font: QFont) -> None:
+        self.key = key
+        self.small = QFont(font)
+        self.small.setPointSizeF(max(7.0, font.pointSizeF() * 0.85))
+        self.metrics = QFontMetrics(self.small)
+        self.bold = QFont(self.small)
+        self.bold.setBold(True)
+        self.bold_metrics = QFontMetrics(self.bold)
+        self.legend_width = max(self.metrics.horizontalAdvance(t) for _, t in REJECT_STYLE.values()) + 30
+        self._widths: dict[str, int] = {}
+
+    def word_width(self, word: str) -> int:
+        width = self._widths.get(word)
+        if width is None:
+            width = self._widths[word] = self.bold_metrics.horizontalAdvance(word)
+        return width
+
+
+def _covers(boxes: np.ndarray, rings: np.ndarray, own: int) -> np.ndarray:
+    """For each box (rows x0, y0, x1, y1), whether it overlaps any ring (rows alike) but ring
+    ``own``."""
+    b, r = boxes[:, None, :], rings[None, :, :]
+    hit = (b[..., 0] < r[..., 2]) & (r[..., 0] < b[..., 2]) & (b[..., 1] < r[..., 3]) & (r[..., 1] < b[..., 3])
+    hit[:, own] = False
+    return hit.any(axis=1)
