@@ -79,6 +79,25 @@ def main() -> int:
     path = out / "gui3_tuning.png"
     dialog.grab().save(str(path))
     print(f"tuning: {path}")
+    dialog.close()
+
+    def rule_fired() -> bool:
+        """A feed's trace panel names a rule of one camera (the phase alone does not count)."""
+        heads = [feed.trace_text.splitlines()[0] for feed in (window.left_feed, window.right_feed)
+                 if feed.trace_text]
+        return any(name.endswith((":left", ":right")) and not name.startswith("phase:")
+                   for head in heads for name in head.split(" · "))
+
+    window.mask_action.trigger()             # the labels and the panel without the tint
+    window.pause_action.trigger()
+    if run_for(60.0, rule_fired):
+        window.pause_action.trigger()
+        run_for(0.5)
+        path = out / "gui3_trace.png"
+        window.grab_window().save(str(path))
+        print(f"trace: {path}")
+    else:
+        print("trace: no rule fired within 60 s", file=sys.stderr)
     window.close()
     app.quit()
     return 0

@@ -190,13 +190,18 @@ def test_feed_labels_the_nearest_rejected_candidates_by_filter(qtbot):
     feed.show_rejected = True
     assert _colour_pixels(feed.grab(), colour, rect) >= 5
 
-    # A cluster (a player's limbs): labels never cover one another; the ones that find no room go.
+    # A cluster (a player's limbs) and, farther, a ring of another filter: the cluster's first
+    # ring is labelled, then the other filter's, then more of the cluster where they find room;
+    # labels never cover one another.
     cluster = tuple(Candidate(900 + 6 * k, 300 + 4 * k, 10, 3, 50, 8, 0, 0, rejected_by="motion")
                     for k in range(8))
-    feed.set_frame(image, 0.5, CameraResult(detection=shuttle, candidates=(shuttle,) + cluster,
+    far = Candidate(200, 600, 10, 3, 50, 8, 0, 0, rejected_by="short_side")
+    feed.set_frame(image, 0.5, CameraResult(detection=shuttle, candidates=(shuttle, far) + cluster,
                                             image_size=(1280, 720)), np.zeros((0, 3)))
-    rects = [rect for _, _, rect in feed.reject_labels()]
-    assert 1 <= len(rects) <= MAX_REJECT_LABELS
+    labels = feed.reject_labels()
+    assert [word for word, _, _ in labels[:2]] == ["motion", "side"]
+    assert 2 <= len(labels) <= MAX_REJECT_LABELS
+    rects = [rect for _, _, rect in labels]
     assert not any(a.intersects(b) for i, a in enumerate(rects) for b in rects[i + 1:])
 
 

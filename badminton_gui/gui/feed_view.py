@@ -39,6 +39,9 @@ _ring_sprites: dict[tuple[str, float], QImage] = {}
 # Rejected candidates that get a label, nearest to the reported shuttle first: on a busy court
 # (a player's limbs, shoes and racket, ~10 rings in a cluster) more only hide the picture.
 MAX_REJECT_LABELS = 6
+# A ring nearer than this (widget px) to a ring of the same filter that comes before it waits
+# until the others are labelled: one word per player's cluster of limbs, not six.
+REPEAT_GAP = 48.0
 
 
 def _ring_sprite(colour: QColor, dpr: float) -> QImage:
@@ -386,7 +389,8 @@ class FeedView(QWidget):
     def reject_labels(self) -> list[tuple[str, str, QRectF]]:
         """The labels the rejected-candidates overlay draws on this frame at this size: (word,
         reject code, widget rectangle) each, nearest to the reported shuttle first (else to its
-        newest trail point, else to the picture's centre), at most ``MAX_REJECT_LABELS``. A label
+        newest trail point, else to the picture's centre), at most ``MAX_REJECT_LABELS``; a ring
+        within ``REPEAT_GAP`` of an earlier ring of the same filter after the others. A label
         sits beside its ring where it covers no other label, ring or the red circle; where no
         side is free of rings it may cover one, and where no side is free of labels it is left out."""
         cam = self._camera
@@ -416,6 +420,7 @@ class FeedView(QWidget):
             ref = (cam.image_size[0] / 2.0, cam.image_size[1] / 2.0)
         rejected.sort(key=lambda c: (c.x - ref[0]) ** 2 + (c.y - ref[1]) ** 2)
         centres = self._to_widget(np.array([(c.x, c.y) for c in rejected], float))
+        order = _repeats_last([c.rejected_by for c in rejected], centres)
         ring = float(_RING_HALF_SIZE)
         # (x0, y0, x1, y1) of every ring, a little inside the sprite (its halo may be touched).
         rings = np.hstack((centres - (ring - 2), centres + (ring - 2)))
@@ -427,9 +432,10 @@ class FeedView(QWidget):
         x_lo, y_lo, x_hi, y_hi = bounds.left(), bounds.top(), bounds.right(), bounds.bottom()
         h = float(fonts.bold_metrics.height())
         placed: list[tuple[str, str, QRectF]] = []
-        for i, c in enumerate(rejected):
+        for i in order:
             if len(placed) >= MAX_REJECT_LABELS:
                 break
+            c = rejected[i]
             word = reject_short(c.rejected_by)
             w = fonts.word_width(word) + 6.0
             x, y = centres[i]
@@ -521,6 +527,18 @@ class _SmallFonts:
         if width is None:
             width = self._widths[word] = self.bold_metrics.horizontalAdvance(word)
         return width
+
+
+def _repeats_last(reasons: list[str], centres: np.ndarray) -> list[int]:
+    """Indices of the rings in labelling order: as given, but a ring within ``REPEAT_GAP`` of an
+    earlier ring of the same filter after all the others (in their order)."""
+    first: list[int] = []
+    later: list[int] = []
+    for i, reason in enumerate(reasons):
+        near = [j for j in first if reasons[j] == reason
+                and float(np.hypot(*(centres[i] - centres[j]))) < REPEAT_GAP]
+        (later if near else first).append(i)
+    return first + later
 
 
 def _covers(boxes: np.ndarray, rings: np.ndarray, own: int) -> np.ndarray:
