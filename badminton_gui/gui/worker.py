@@ -53,13 +53,13 @@ import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from ..core.adaptation import adapt_to_recording
+from ..core.detect.diagnostics import DetectionDiagnostics
 from ..core.errors import TrackerInputError
 from ..core.evaluation import Label, LiveScore, Outcomes
 from ..core.params import ParamError, TrackerParams
 from ..core.rig import StereoRig
 from ..core.mono import MonoTracker
 from ..core.track_lookahead import DelayedReadout
-from ..core.detect.diagnostics import DetectionDiagnostics
 from ..core.tracker import StereoTracker
 from ..core.types import TrackResult
 from ..io.detect_file import adaptation_asked
@@ -810,7 +810,8 @@ class TrackingWorker(QObject):
         return new
 
     def _publish(self, unshown, trails, tracker: StereoTracker) -> None:
-        """Build the display packet of (frame, result, stats, show_mask, box) and hand it over."""
+        """Build the display packet of (frame, result, stats, show_mask, box, labels, diagnostics)
+        and hand it over."""
         if unshown is not None:
             frame, result, stats, show_mask, display_box, labels, diagnostics = unshown
             self.output.put(self._packet(frame, result, trails, tracker, stats, show_mask, display_box,
