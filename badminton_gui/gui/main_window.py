@@ -1213,13 +1213,14 @@ class MainWindow(QMainWindow):
     def _show_trace(self, packet: DisplayPacket) -> None:
         """The feeds' trace panels for this packet while the rejected-candidates overlay is on
         (the worker traces only then: ``TrackingWorker.set_trace``)."""
-        on = self.rejected_action.isChecked()
+        if not self.rejected_action.isChecked():
+            self.left_feed.set_trace(())
+            self.right_feed.set_trace(())
+            return
         diagnostics = packet.diagnostics or (None, None)
-        for feed, side, diag in ((self.left_feed, "left", diagnostics[0]),
-                                 (self.right_feed, "right", diagnostics[1])):
-            if feed is self.right_feed and packet.right is None:
-                continue
-            feed.set_trace(trace_lines(packet.result.trace, side, diag) if on else ())
+        self.left_feed.set_trace(trace_lines(packet.result.trace, "left", diagnostics[0]))
+        if packet.right is not None:
+            self.right_feed.set_trace(trace_lines(packet.result.trace, "right", diagnostics[1]))
 
     def _slow_views(self) -> list[tuple[str, QWidget, Callable[[DisplayPacket], None]]]:
         views = []
