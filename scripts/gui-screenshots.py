@@ -1,7 +1,8 @@
 """Screenshots of the operator's views that `badminton-gui --screenshot` cannot reach.
 
 Why this file exists: the issue asks for pictures of the tuning dialog and of the optional feed
-overlays (foreground mask, rejected candidates coloured by filter), which need menus opened.
+overlays (foreground mask, rejected candidates coloured and labelled by filter, the trace panel
+of the rules that fired), which need menus opened.
 This drives the real MainWindow on the demo court, with its own throw-away settings file, and
 saves PNGs. Run under Xvfb:
 
@@ -50,9 +51,10 @@ def main() -> int:
         return until is None
 
     def busy_frame() -> bool:
-        """Both cameras found the shuttle and some candidates were rejected: a telling picture."""
+        """Both cameras found the shuttle and some candidates were rejected, on a pair tracked
+        with the overlay on (so its trace panel is filled): a telling picture."""
         p = window.latest_packet
-        if p is None:
+        if p is None or p.diagnostics is None:
             return False
         r = p.result
         rejected = sum(c.rejected_by is not None for cam in (r.left, r.right) for c in cam.candidates)
@@ -77,6 +79,25 @@ def main() -> int:
     path = out / "gui3_tuning.png"
     dialog.grab().save(str(path))
     print(f"tuning: {path}")
+    dialog.close()
+
+    def rule_fired() -> bool:
+        """A feed's trace panel names a rule of one camera (the phase alone does not count)."""
+        heads = [feed.trace_text.splitlines()[0] for feed in (window.left_feed, window.right_feed)
+                 if feed.trace_text]
+        return any(name.endswith((":left", ":right")) and not name.startswith("phase:")
+                   for head in heads for name in head.split(" · "))
+
+    window.mask_action.trigger()             # the labels and the panel without the tint
+    window.pause_action.trigger()
+    if run_for(60.0, rule_fired):
+        window.pause_action.trigger()
+        run_for(0.5)
+        path = out / "gui3_trace.png"
+        window.grab_window().save(str(path))
+        print(f"trace: {path}")
+    else:
+        print("trace: no rule fired within 60 s", file=sys.stderr)
     window.close()
     app.quit()
     return 0

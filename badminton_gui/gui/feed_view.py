@@ -7,6 +7,11 @@ engine's own layout) and blitted 1:1; the overlays are a few QPainter primitives
 full-resolution coordinates mapped to the widget. Measured with the QPainter raster engine on a
 634×357 frame: BGR888 drawn scaled 1.1 ms, RGB32 drawn 1:1 0.04 ms (scripts/gui-timing.py
 times the whole path in the running window). 3-channel BGR still works (scaled, slower).
+
+With the rejected-candidates overlay on, an operator tuning the filters reads why: the nearest
+rejected candidates to the reported shuttle carry the short name of the filter that refused
+them, and a panel in the corner names the rules that fired on the step and what each detector
+stage rejected (``set_trace``; worded by ``overlays.trace_lines`` from the worker's result).
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from PySide6.QtWidgets import QSizePolicy, QWidget
 from ..core.evaluation import Label
 from ..core.types import CameraResult
 from .overlays import (DETECTION_COLOUR, LABEL_COLOUR, REJECT_STYLE, TRAIL_COLOUR, WINDOW_COLOUR,
-                       reject_style)
+                       reject_short, reject_style)
 from .worker import TRAIL_SECONDS
 
 CIRCLE_RADIUS = 11.0     # widget px: clearly visible at any zoom
@@ -31,6 +36,12 @@ _BACKGROUND = QColor(20, 20, 24)
 _RING_RADIUS = 6.0
 _RING_HALF_SIZE = 9                  # widget px from the sprite's centre to its edge
 _ring_sprites: dict[tuple[str, float], QImage] = {}
+# Rejected candidates that get a label, nearest to the reported shuttle first: on a busy court
+# (a player's limbs, shoes and racket, ~10 rings in a cluster) more only hide the picture.
+MAX_REJECT_LABELS = 6
+# A ring nearer than this (widget px) to a ring of the same filter that comes before it waits
+# until the others are labelled: one word per player's cluster of limbs, not six.
+REPEAT_GAP = 48.0
 
 
 def _ring_sprite(colour: QColor, dpr: float) -> QImage:
@@ -89,6 +100,11 @@ class FeedView(QWidget):
         self.show_labels = True
         self._message = "no source"
         self._title_cache: dict[tuple, QImage] = {}
+        self._label_cache: dict[tuple, QImage] = {}
+        self._trace_lines: tuple[str, ...] = ()
+        self._panel_cache: tuple[tuple, QImage] | None = None
+        self._labels_cache: tuple[CameraResult, tuple, list] | None = None
+        self._fonts: _SmallFonts | None = None
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
         self.setMinimumSize(240, 160)
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
@@ -112,10 +128,24 @@ class FeedView(QWidget):
         self._message = ""
         self.update()
 
+    def set_trace(self, lines) -> None:
+        """The trace panel's lines (``overlays.trace_lines``), drawn with the rejected
+        candidates; () for none."""
+        lines = tuple(lines)
+        if lines != self._trace_lines:
+            self._trace_lines = lines
+            self.update()
+
+    @property
+    def trace_text(self) -> str:
+        """The trace panel as it reads, one line per row ("" when it has none)."""
+        return "\n".join(self._trace_lines)
+
     def show_text(self, text: str) -> None:
         """No picture, only a line of text (this view has no camera for the source)."""
         self._image = self._qimage = self._camera = self._label = None
         self._trail = np.zeros((0, 3))
+        self._trace_lines = ()
         self.set_message(text)
 
     def set_message(self, text: str) -> None:
@@ -172,12 +202,15 @@ class FeedView(QWidget):
                 self._paint_window(p)
             if self.show_rejected and self._camera is not None:
                 self._paint_rejected(p)
+                self._paint_reject_labels(p)
             self._paint_trail(p)
             if self.show_labels:
                 self._paint_label(p)
             self._paint_detection(p)
             if self.show_rejected and self.show_legend:
                 self._paint_legend(p)
+            if self.show_rejected and self._trace_lines:
+                self._paint_trace(p)
         self._paint_title(p)
         if self._message:
             p.setPen(QColor(230, 230, 230))
@@ -328,12 +361,11 @@ class FeedView(QWidget):
                         _ring_sprite(reject_style(c.rejected_by)[0], dpr))
 
     def _paint_legend(self, p: QPainter) -> None:
-        f = QFont(self.font())
-        f.setPointSizeF(max(7.0, f.pointSizeF() * 0.85))
-        p.setFont(f)
-        fm = p.fontMetrics()
+        fonts = self._small_fonts()
+        p.setFont(fonts.small)
+        fm = fonts.metrics
         rows = list(REJECT_STYLE.values())
-        width = max(fm.horizontalAdvance(t) for _, t in rows) + 30
+        width = fonts.legend_width
         height = fm.height() * len(rows) + 8
         box = QRectF(self.width() - width - 6, self.height() - height - 6, width, height)
         p.fillRect(box, QColor(0, 0, 0, 160))
@@ -344,3 +376,175 @@ class FeedView(QWidget):
             p.setPen(QColor(235, 235, 235))
             p.drawText(QRectF(box.left() + 20, y, width - 22, fm.height()),
                        Qt.AlignmentFlag.AlignVCenter, text)
+
+    # ---- what rejected the candidates, which rules fired -------------------------------------
+    def _small_fonts(self) -> _SmallFonts:
+        """The legend's and the labels' fonts, their metrics and the words' widths, made once per
+        widget font: making them on every paint was most of the labels' cost."""
+        key = self.font().key()
+        if self._fonts is None or self._fonts.key != key:
+            self._fonts = _SmallFonts(key, self.font())
+        return self._fonts
+
+    def reject_labels(self) -> list[tuple[str, str, QRectF]]:
+        """The labels the rejected-candidates overlay draws on this frame at this size: (word,
+        reject code, widget rectangle) each, nearest to the reported shuttle first (else to its
+        newest trail point, else to the picture's centre), at most ``MAX_REJECT_LABELS``; a ring
+        within ``REPEAT_GAP`` of an earlier ring of the same filter after the others. A label
+        sits beside its ring where it covers no other label, ring or the red circle; where no
+        side is free of rings it may cover one, and where no side is free of labels it is left out."""
+        cam = self._camera
+        if cam is None or self._qimage is None:
+            return []
+        r = self.image_rect()
+        fonts = self._small_fonts()
+        # The same frame painted again (paused, a resize's repaints): the same labels. The
+        # camera result by identity (its mask has no plain ``==``).
+        key = (id(cam), len(self._trail), r.x(), r.y(), r.width(), fonts.key)
+        if self._labels_cache is not None and self._labels_cache[0] is cam and self._labels_cache[1] == key:
+            return self._labels_cache[2]
+        placed = self._place_labels(cam, r, fonts)
+        self._labels_cache = (cam, key, placed)
+        return placed
+
+    def _place_labels(self, cam: CameraResult, bounds: QRectF, fonts: _SmallFonts
+                      ) -> list[tuple[str, str, QRectF]]:
+        rejected = [c for c in cam.candidates if c.rejected_by is not None]
+        if not rejected:
+            return []
+        if cam.detection is not None:
+            ref = (cam.detection.x, cam.detection.y)
+        elif len(self._trail):
+            ref = (self._trail[-1, 1], self._trail[-1, 2])
+        else:
+            ref = (cam.image_size[0] / 2.0, cam.image_size[1] / 2.0)
+        rejected.sort(key=lambda c: (c.x - ref[0]) ** 2 + (c.y - ref[1]) ** 2)
+        centres = self._to_widget(np.array([(c.x, c.y) for c in rejected], float))
+        order = _repeats_last([c.rejected_by for c in rejected], centres)
+        ring = float(_RING_HALF_SIZE)
+        # (x0, y0, x1, y1) of every ring, a little inside the sprite (its halo may be touched).
+        rings = np.hstack((centres - (ring - 2), centres + (ring - 2)))
+        taken: list[tuple[float, float, float, float]] = []     # placed labels and the red circle
+        if cam.detection is not None:
+            d = self.image_to_widget(cam.detection.x, cam.detection.y)
+            rd = CIRCLE_RADIUS + 2.0
+            taken.append((d.x() - rd, d.y() - rd, d.x() + rd, d.y() + rd))
+        x_lo, y_lo, x_hi, y_hi = bounds.left(), bounds.top(), bounds.right(), bounds.bottom()
+        h = float(fonts.bold_metrics.height())
+        placed: list[tuple[str, str, QRectF]] = []
+        for i in order:
+            if len(placed) >= MAX_REJECT_LABELS:
+                break
+            c = rejected[i]
+            word = reject_short(c.rejected_by)
+            w = fonts.word_width(word) + 6.0
+            x, y = centres[i]
+            spots = [(x + ring, y - h / 2), (x - ring - w, y - h / 2), (x - w / 2, y - ring - h),
+                     (x - w / 2, y + ring)]
+            clear = [(sx, sy, sx + w, sy + h) for sx, sy in spots
+                     if x_lo <= sx and sx + w <= x_hi and y_lo <= sy and sy + h <= y_hi
+                     and not any(sx < t[2] and t[0] < sx + w and sy < t[3] and t[1] < sy + h for t in taken)]
+            if not clear:
+                continue
+            covers = _covers(np.array(clear), rings, i)
+            box = clear[int(np.argmin(covers))]        # the first free of rings, else the first
+            taken.append(box)
+            placed.append((word, c.rejected_by, QRectF(box[0], box[1], w, h)))
+        return placed
+
+    def _label_image(self, word: str, colour: QColor) -> QImage:
+        """A candidate's label (its filter's word in its ring's colour on a dark box), drawn once."""
+        fonts = self._small_fonts()
+        dpr = self.devicePixelRatioF()
+        key = (word, colour.name(), fonts.key, dpr)
+        image = self._label_cache.get(key)
+        if image is None:
+            w, h = fonts.word_width(word) + 6, fonts.bold_metrics.height()
+            image = QImage(int(np.ceil(w * dpr)), int(np.ceil(h * dpr)), QImage.Format.Format_ARGB32_Premultiplied)
+            image.setDevicePixelRatio(dpr)
+            image.fill(QColor(0, 0, 0, 170))
+            q = QPainter(image)
+            q.setFont(fonts.bold)
+            q.setPen(colour)
+            q.drawText(QRectF(0, 0, w, h), Qt.AlignmentFlag.AlignCenter, word)
+            q.end()
+            if len(self._label_cache) > 64:
+                self._label_cache.clear()
+            self._label_cache[key] = image
+        return image
+
+    def _paint_reject_labels(self, p: QPainter) -> None:
+        for word, reason, rect in self.reject_labels():
+            p.drawImage(rect.topLeft(), self._label_image(word, reject_style(reason)[0]))
+
+    def _paint_trace(self, p: QPainter) -> None:
+        """The trace panel at the bottom left, beside the legend; drawn once per text and width
+        (a paused frame, a resize repaint the same panel)."""
+        fonts = self._small_fonts()
+        fm = fonts.metrics
+        room = self.width() - 12 - (fonts.legend_width + 12 if self.show_legend else 0)
+        room = max(120, room)
+        dpr = self.devicePixelRatioF()
+        key = (self._trace_lines, room, fonts.key, dpr)
+        if self._panel_cache is None or self._panel_cache[0] != key:
+            lines = [fm.elidedText(line, Qt.TextElideMode.ElideRight, room - 10) for line in self._trace_lines]
+            w = max(fm.horizontalAdvance(line) for line in lines) + 10
+            step = fm.lineSpacing() + 1
+            h = step * len(lines) + fm.descent() + 6
+            image = QImage(int(np.ceil(w * dpr)), int(np.ceil(h * dpr)), QImage.Format.Format_ARGB32_Premultiplied)
+            image.setDevicePixelRatio(dpr)
+            # Nearly opaque: the panel often lies over the court's white lines.
+            image.fill(QColor(0, 0, 0, 190))
+            q = QPainter(image)
+            q.setFont(fonts.small)
+            for i, line in enumerate(lines):
+                # The rules and the phase first, brighter: what the operator looks for. Drawn on
+                # its baseline, so no box clips a descender ("in_play" read "in play").
+                q.setPen(QColor(255, 255, 255) if i == 0 else QColor(215, 215, 215))
+                q.drawText(QPointF(5, 3 + fm.ascent() + i * step), line)
+            q.end()
+            self._panel_cache = (key, image)
+        image = self._panel_cache[1]
+        p.drawImage(QPointF(6, self.height() - image.height() / dpr - 6), image)
+
+
+class _SmallFonts:
+    """The overlay's small fonts (legend, trace panel; bold: the candidates' labels)."""
+
+    def __init__(self, key: str, font: QFont) -> None:
+        self.key = key
+        self.small = QFont(font)
+        self.small.setPointSizeF(max(7.0, font.pointSizeF() * 0.85))
+        self.metrics = QFontMetrics(self.small)
+        self.bold = QFont(self.small)
+        self.bold.setBold(True)
+        self.bold_metrics = QFontMetrics(self.bold)
+        self.legend_width = max(self.metrics.horizontalAdvance(t) for _, t in REJECT_STYLE.values()) + 30
+        self._widths: dict[str, int] = {}
+
+    def word_width(self, word: str) -> int:
+        width = self._widths.get(word)
+        if width is None:
+            width = self._widths[word] = self.bold_metrics.horizontalAdvance(word)
+        return width
+
+
+def _repeats_last(reasons: list[str], centres: np.ndarray) -> list[int]:
+    """Indices of the rings in labelling order: as given, but a ring within ``REPEAT_GAP`` of an
+    earlier ring of the same filter after all the others (in their order)."""
+    first: list[int] = []
+    later: list[int] = []
+    for i, reason in enumerate(reasons):
+        near = [j for j in first if reasons[j] == reason
+                and float(np.hypot(*(centres[i] - centres[j]))) < REPEAT_GAP]
+        (later if near else first).append(i)
+    return first + later
+
+
+def _covers(boxes: np.ndarray, rings: np.ndarray, own: int) -> np.ndarray:
+    """For each box (rows x0, y0, x1, y1), whether it overlaps any ring (rows alike) but ring
+    ``own``."""
+    b, r = boxes[:, None, :], rings[None, :, :]
+    hit = (b[..., 0] < r[..., 2]) & (r[..., 0] < b[..., 2]) & (b[..., 1] < r[..., 3]) & (r[..., 1] < b[..., 3])
+    hit[:, own] = False
+    return hit.any(axis=1)

@@ -44,6 +44,7 @@ from .court_views import CourtGLView, CourtPlanView, SideView, gl_unavailable_re
 from .feed_view import FeedView
 from .help_menu import AboutDialog, ShortcutsDialog, app_icon, log_link_html, open_log_folder
 from .keep_up import FAST_PRESET, DisplayYield, KeepUpWatch
+from .overlays import trace_lines
 from .rig_check import RigCheck, readout_text as rig_readout_text
 from .robot_panel import RobotLinkPanel
 from .sources import CameraPairDialog, SingleVideoDialog, VideoPairDialog, open_spec
@@ -509,6 +510,10 @@ class MainWindow(QMainWindow):
         self.mask_action = self._action(view, "Foreground &mask", self._overlays_changed, "M", checkable=True)
         self.rejected_action = self._action(view, "&Rejected candidates", self._overlays_changed, "C",
                                             checkable=True)
+        self.rejected_action.setToolTip("Ring each candidate a filter refused in its colour and label the "
+                                        "nearest to the shuttle; a corner panel names the rules that "
+                                        "fired on the frame (as 'badminton-track track --trace') and what "
+                                        "each detector stage rejected")
         # The truth's cross (labels, the demo's shuttle): on by default, it costs nothing
         # where the source has no truth.
         self.labels_action = self._action(view, "&Truth (labels)", self._overlays_changed, "L",
@@ -584,6 +589,7 @@ class MainWindow(QMainWindow):
         self.latest_packet = None
         worker = TrackingWorker(opener, self.params, realtime=self.realtime_action.isChecked(),
                                 show_mask=self.mask_action.isChecked(),
+                                trace=self.rejected_action.isChecked(),
                                 live_buffer_pairs=self._live_buffer_pairs(),
                                 lookahead_frames=self._view_lookahead())
         thread = QThread(self)
@@ -886,11 +892,14 @@ class MainWindow(QMainWindow):
     def _overlays_changed(self) -> None:
         if self.worker is not None:
             self.worker.set_show_mask(self.mask_action.isChecked())
+            self.worker.set_trace(self.rejected_action.isChecked())
         for feed in (self.left_feed, self.right_feed):
             feed.show_rejected = self.rejected_action.isChecked()
             feed.show_window = self.rejected_action.isChecked() or self.mask_action.isChecked()
             feed.show_labels = self.labels_action.isChecked()
             feed.update()
+        if self.latest_packet is not None:
+            self._show_trace(self.latest_packet)
 
     def set_params(self, params: TrackerParams) -> None:
         """A new parameter snapshot from the tuning dialog: to the worker, and remembered."""
@@ -1198,7 +1207,20 @@ class MainWindow(QMainWindow):
         if packet.right is not None:
             self.right_feed.set_frame(packet.right, packet.display_scale, r.right, packet.trail_right,
                                       packet.label_right)
+        self._show_trace(packet)
         return True
+
+    def _show_trace(self, packet: DisplayPacket) -> None:
+        """The feeds' trace panels for this packet while the rejected-candidates overlay is on
+        (the worker traces only then: ``TrackingWorker.set_trace``)."""
+        if not self.rejected_action.isChecked():
+            self.left_feed.set_trace(())
+            self.right_feed.set_trace(())
+            return
+        diagnostics = packet.diagnostics or (None, None)
+        self.left_feed.set_trace(trace_lines(packet.result.trace, "left", diagnostics[0]))
+        if packet.right is not None:
+            self.right_feed.set_trace(trace_lines(packet.result.trace, "right", diagnostics[1]))
 
     def _slow_views(self) -> list[tuple[str, QWidget, Callable[[DisplayPacket], None]]]:
         views = []

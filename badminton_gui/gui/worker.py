@@ -53,6 +53,7 @@ import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from ..core.adaptation import adapt_to_recording
+from ..core.detect.diagnostics import DetectionDiagnostics
 from ..core.errors import TrackerInputError
 from ..core.evaluation import Label, LiveScore, Outcomes
 from ..core.params import ParamError, TrackerParams
@@ -219,6 +220,11 @@ class DisplayPacket:
     stats: WorkerStats
     label_left: Label | None = None  # this pair's truth per camera (visible, x, y), when known
     label_right: Label | None = None
+    # Traced (``TrackingWorker.set_trace``, the rejected-candidates overlay): what each camera's
+    # detector counted on this pair, stage by stage (``CameraDetector.last_diagnostics``; None
+    # for a camera the source has not). None when the pair was tracked untraced; the rules that
+    # fired are then not in ``result.trace`` either.
+    diagnostics: tuple[DetectionDiagnostics | None, DetectionDiagnostics | None] | None = None
 
 
 SourceOpener = Callable[..., tuple[FrameSource, StereoRig]]
@@ -313,8 +319,9 @@ class TrackingWorker(QObject):
 
     def __init__(self, open_source: SourceOpener, params: TrackerParams, realtime: bool = True,
                  show_mask: bool = False, live_buffer_pairs: int | None = None,
-                 lookahead_frames: int = 0) -> None:
+                 lookahead_frames: int = 0, trace: bool = False) -> None:
         super().__init__()
+        self._trace = trace
         self._lookahead_frames = max(0, int(lookahead_frames))
         self._lookahead_changed = False
         # The classifier adapted to the recording (``_adapt``) and the classifier settings it
@@ -424,6 +431,13 @@ class TrackingWorker(QObject):
         with self._lock:
             self._show_mask = show
 
+    def set_trace(self, trace: bool) -> None:
+        """From the next pair on, each result names the rules that fired (``TrackResult.trace``)
+        and its display packet carries the detectors' per-stage counts (``DisplayPacket.
+        diagnostics``); off, neither is made, so the overlay that shows them costs nothing."""
+        with self._lock:
+            self._trace = bool(trace)
+
     def set_display_size(self, width: int, height: int) -> None:
         """Shrink frames to fit this box before handing them over (painting 1:1 is cheap)."""
         with self._lock:
@@ -511,7 +525,7 @@ class TrackingWorker(QObject):
         def show(decided: list, stepping: bool = False) -> None:
             """Score, trail and (when the GUI asked for one) publish each decided result."""
             nonlocal unshown
-            for result, (frame, labels, t_available, live_stats, tracked_in) in decided:
+            for result, (frame, labels, t_available, live_stats, tracked_in, diagnostics) in decided:
                 if score is not None and tracked_in == generation:
                     # A camera that brought no new image this step was scored on its last one.
                     if frame.fresh_left:
@@ -537,7 +551,7 @@ class TrackingWorker(QObject):
                     wanted = stepping or (due is not None and t_shown >= due)
                     if wanted:
                         self._display_due = None
-                unshown = (frame, result, stats, show_mask, display_box, labels)
+                unshown = (frame, result, stats, show_mask, display_box, labels, diagnostics)
                 if wanted:
                     self._publish(unshown, trails, tracker)
                     unshown = None
@@ -547,6 +561,7 @@ class TrackingWorker(QObject):
             with self._lock:
                 params, self._pending_params = self._pending_params, None
                 paused, realtime, show_mask = self._paused, self._realtime, self._show_mask
+                trace = self._trace
                 display_box = self._display_box
                 taps = tuple(self._result_taps.values())
                 new_rig, self._pending_rig = self._pending_rig, None
@@ -601,6 +616,8 @@ class TrackingWorker(QObject):
                     speed_meter.clear()
                     pace_wall = None
                     self.busy.emit(self.adaptation_text)
+            if isinstance(tracker, StereoTracker):
+                tracker.trace = trace       # (one camera has no rules to trace)
             if paused and not stepping:
                 # Paused: the display shows the pair the tracker stopped on (so a step shows the
                 # next one), even if the throttle had not asked for it.
@@ -665,6 +682,7 @@ class TrackingWorker(QObject):
                 continue
             skipped_text = ""
             t_done = time.perf_counter()
+            diagnostics = _diagnostics(tracker) if trace else None
             frames += 1
             # The robot and the taps get the live result at once, whatever the view waits for.
             for tap in taps:
@@ -695,7 +713,8 @@ class TrackingWorker(QObject):
                                      paced=reader is None and realtime and not stepping,
                                      rig_epipolar_px=tracker.rig_epipolar_px,
                                      truth_name="" if truth is None else truth.name)
-            show(readout.push(result, (frame, labels, t_available, live_stats, generation)), stepping)
+            show(readout.push(result, (frame, labels, t_available, live_stats, generation, diagnostics)),
+                 stepping)
 
     def _adapt(self, source: FrameSource, tracker: MonoTracker, context: OpeningContext,
                while_playing: bool = False) -> bool:
@@ -791,11 +810,12 @@ class TrackingWorker(QObject):
         return new
 
     def _publish(self, unshown, trails, tracker: StereoTracker) -> None:
-        """Build the display packet of (frame, result, stats, show_mask, box) and hand it over."""
+        """Build the display packet of (frame, result, stats, show_mask, box, labels, diagnostics)
+        and hand it over."""
         if unshown is not None:
-            frame, result, stats, show_mask, display_box, labels = unshown
+            frame, result, stats, show_mask, display_box, labels, diagnostics = unshown
             self.output.put(self._packet(frame, result, trails, tracker, stats, show_mask, display_box,
-                                         labels))
+                                         labels, diagnostics))
             self.packets_built += 1
 
     def _sleep_until(self, due: float) -> None:
@@ -808,7 +828,8 @@ class TrackingWorker(QObject):
     @staticmethod
     def _packet(frame, result: TrackResult, trails, tracker: StereoTracker, stats: WorkerStats,
                 show_mask: bool, display_box: tuple[int, int],
-                labels: tuple[Label | None, Label | None] = (None, None)) -> DisplayPacket:
+                labels: tuple[Label | None, Label | None] = (None, None),
+                diagnostics: tuple | None = None) -> DisplayPacket:
         h, w = frame.left.shape[:2]
         scale = min(1.0, display_box[0] / float(w), display_box[1] / float(h))
         images = []
@@ -840,7 +861,15 @@ class TrackingWorker(QObject):
             trail_right=np.array(trails[1], dtype=float).reshape(-1, 3),
             flight=None if flight is None else np.asarray(flight, dtype=float),
             predicted=None if predicted is None else np.asarray(predicted, dtype=float),
-            stats=stats, label_left=labels[0], label_right=labels[1])
+            stats=stats, label_left=labels[0], label_right=labels[1], diagnostics=diagnostics)
+
+
+def _diagnostics(tracker) -> tuple[DetectionDiagnostics | None, DetectionDiagnostics | None]:
+    """Each camera's per-stage counts of its last frame (a camera that brought no new image
+    this step: of the frame it last brought, as its candidates are)."""
+    if isinstance(tracker, MonoTracker):
+        return tracker.detector.last_diagnostics, None
+    return tracker.left.last_diagnostics, tracker.right.last_diagnostics
 
 
 def _as_of(flight, predicted, t: float):
