@@ -294,3 +294,18 @@ def test_a_held_camera_does_not_confirm_the_other():
     _, (left, right), _ = _readout(before, ReadoutInputs(0.0, (_result(c), _result(c)), (c, c), (0, 1)),
                                    _p(alone_max_frames=0))
     assert left.detection is None and right.detection is not None
+
+
+def test_the_fired_rules_become_the_steps_trace_names():
+    """What the transitions say fired is what ``track --trace`` writes for the step."""
+    from badminton_gui.core.flight.guide import StepGuide
+    from badminton_gui.core.step import Step
+
+    step = Step(0.0, 0.0, (None, None), StepGuide(None, 0.0), trace=[])
+    _, _, _, fired = _hold(REMEMBERED, SHOE, LYING)
+    step.fired_all(fired)
+    step.fired_all((("landed_other_anchor", 1), ("caught", None)))
+    assert step.trace == ["landed_hold:left", "landed_shoe_past:left", "landed_other_anchor:right", "caught"]
+    untraced = Step(0.0, 0.0, (None, None), StepGuide(None, 0.0))
+    untraced.fired_all(fired)
+    assert untraced.trace is None

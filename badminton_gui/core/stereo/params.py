@@ -91,6 +91,9 @@ class StereoParams(ParamGroup):
                                                help="A first sighting scoring less than that may still be vouched for "
                                                     "when it scores at least this and its partner is sure (a first "
                                                     "sighting scoring enough, or the other camera's own choice; 1 = never)")
+    vouch_min_step: float = param(1.0, 0.0, 50.0, step=0.1, unit="px", label="... track's last step ≥",
+                                  help="The held-back candidate's track must have moved at least this in its last "
+                                       "frame (its smoothed velocity remembers older motion: a track that stopped)")
     vouch_min_speed: float = param(2.0, 0.0, 100.0, step=0.5, unit="m/s", label="... 3D speed ≥",
                                    help="The pair's 3D velocity (from the two tracks' image velocities) must be "
                                         "at least this (lights and a shuttle at rest do not vouch)")
