@@ -536,10 +536,10 @@ def window_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rou
                 spent = time.thread_time() - c0
                 cpu += spent
                 both_windowed = all(w.last_window is not None
-                                    for w in (tracker.left._window, tracker.right._window))
+                                    for w in (tracker.left.window_tracker, tracker.right.window_tracker))
                 per_pair.append(spent)
                 model.append(spent if both_windowed else spent - min(camera_cpu.values()))
-            win = tracker.left._window, tracker.right._window
+            win = tracker.left.window_tracker, tracker.right.window_tracker
             share = sum(w.windowed for w in win) / max(sum(w.frames for w in win), 1) if p.window.enabled else 0.0
             tracker.close()
             tracker = StereoTracker(full_rig, p, parallel=True)

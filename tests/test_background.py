@@ -72,7 +72,7 @@ def test_coarse_keeps_the_lying_shuttle_through_its_hold_on_the_real_rally():
     protected box the coarse model lost it at 636 (its difference fell to 10 against the
     threshold 12) and reported nothing to 656. With the coarse preset's patch classifier
     (eighteenth round) it was lost at 636 again two ways: the association kept reporting it
-    itself, so it was never held and never protected (``StereoTracker._lying_landed``), and once
+    itself, so it was never held and never protected (the landed hold's ``HoldDecision.protect``), and once
     held the dimming blob scored 0.0 at 641 and 651, was left out of its track, and ended the
     hold (the hold now also takes an untracked blob at its spot)."""
     from badminton_gui.io.labels import read_point_labels

@@ -12,8 +12,7 @@ import dataclasses
 
 import pytest
 
-from badminton_gui.core.flight.phase import (CAUGHT_FLIGHT_GAP, LANDED_RECENT, PhaseObservation, PhaseState,
-                                             ShuttlePhase, transition, withheld)
+from badminton_gui.core.flight.phase import PhaseObservation, PhaseState, ShuttlePhase, transition, withheld
 from badminton_gui.core.params import TrackerParams
 
 P = TrackerParams()
@@ -22,11 +21,14 @@ DT = 1.0 / 120.0
 STILL = (0.5, -2.5, 0.9)        # court frame, m: in mid-air, away from the net
 
 
-def _stopping(n: int, t0: float = 1.0) -> PhaseState:
-    """A flight followed at 5 m/s up to ``t0``, then ``n`` refused points at STILL."""
+NET = (0.5, 0.1, 1.2)            # ... hanging in the net's mesh
+
+
+def _stopping(n: int, t0: float = 1.0, at: tuple = STILL) -> PhaseState:
+    """A flight followed at 5 m/s up to ``t0``, then ``n`` refused points at ``at``."""
     state = PhaseState(last_flown=(t0, 5.0), last_point=(t0, 0.9))
     for k in range(n):
-        state = transition(state, PhaseObservation(t0 + (k + 1) * DT, STILL, accepted=False), P)
+        state = transition(state, PhaseObservation(t0 + (k + 1) * DT, at, accepted=False), P)
     return state
 
 
@@ -39,19 +41,30 @@ TABLE = [
      PhaseState(), PhaseObservation(1.0, (0, 0, 2.0), True, 8.0, point_height=2.0), P, ShuttlePhase.IN_PLAY, False),
     ("a point on the floor is landed",
      PhaseState(), PhaseObservation(1.0, (0, 0, 0.05), True, 1.0, point_height=0.05), P, ShuttlePhase.LANDED, False),
-    ("landed stays landed without points for LANDED_RECENT s",
-     PhaseState(last_point=(1.0, 0.05)), PhaseObservation(1.0 + 0.9 * LANDED_RECENT), P, ShuttlePhase.LANDED, False),
+    ("landed stays landed without points for landed_recent s",
+     PhaseState(last_point=(1.0, 0.05)), PhaseObservation(1.0 + 0.9 * SP.landed_recent), P, ShuttlePhase.LANDED, False),
     ("... then unseen",
-     PhaseState(last_point=(1.0, 0.05)), PhaseObservation(1.0 + 1.1 * LANDED_RECENT), P, ShuttlePhase.UNSEEN, False),
+     PhaseState(last_point=(1.0, 0.05)), PhaseObservation(1.0 + 1.1 * SP.landed_recent), P, ShuttlePhase.UNSEEN, False),
     ("a refused point just after a fast flight starts a stop",
      PhaseState(last_flown=(1.0, 5.0)), PhaseObservation(1.0 + DT, STILL, False), P, ShuttlePhase.STOPPED, False),
     ("... not after a slow one (a shuttle held before the serve)",
      PhaseState(last_flown=(1.0, 2.0)), PhaseObservation(1.0 + DT, STILL, False), P, ShuttlePhase.UNSEEN, False),
     ("... nor long after the flight",
-     PhaseState(last_flown=(1.0, 5.0)), PhaseObservation(1.0 + 2 * CAUGHT_FLIGHT_GAP, STILL, False), P,
+     PhaseState(last_flown=(1.0, 5.0)), PhaseObservation(1.0 + 2 * SP.caught_flight_gap, STILL, False), P,
      ShuttlePhase.UNSEEN, False),
     ("caught_frames stopped points in mid-air: caught",
      _stopping(SP.caught_frames - 1), PhaseObservation(CAUGHT_AT, STILL, False), P, ShuttlePhase.CAUGHT, True),
+    ("... not at the net (caught_net_exception)",
+     _stopping(SP.caught_frames - 1, at=NET), PhaseObservation(CAUGHT_AT, NET, False), P, ShuttlePhase.UNSEEN, False),
+    ("... at the net too with caught_net_exception off",
+     _stopping(SP.caught_frames - 1, at=NET), PhaseObservation(CAUGHT_AT, NET, False),
+     P.with_value("stereo.caught_net_exception", False), ShuttlePhase.CAUGHT, True),
+    ("... at the net's top with a smaller caught_net_margin",
+     _stopping(SP.caught_frames - 1, at=NET), PhaseObservation(CAUGHT_AT, NET, False),
+     P.with_value("stereo.caught_net_margin", 0.05), ShuttlePhase.CAUGHT, True),
+    ("a stop after a slower flight with caught_min_flight_speed lowered",
+     PhaseState(last_flown=(1.0, 2.0)), PhaseObservation(1.0 + DT, STILL, False),
+     P.with_value("stereo.caught_min_flight_speed", 1.5), ShuttlePhase.STOPPED, False),
     ("... not when they lie on the floor",
      _stopping(SP.caught_frames - 1), PhaseObservation(CAUGHT_AT, STILL, False),
      P.with_value("stereo.landed_max_height", 1.0), ShuttlePhase.LANDED, False),
@@ -99,3 +112,15 @@ def test_a_caught_shuttles_point_is_not_the_last_point():
 def test_no_court_pose_no_catch():
     assert not transition(_stopping(SP.caught_frames - 1), PhaseObservation(CAUGHT_AT, STILL, False), P,
                           has_court_pose=False).caught
+
+
+def test_a_stop_at_the_net_is_named_on_its_step():
+    """``PhaseState.net_stop`` marks the step whose stop the net exception excused (the
+    tracker's trace names it ``caught_net_exception``); never when the rule is off or the stop
+    was a catch."""
+    at_net = transition(_stopping(SP.caught_frames - 1, at=NET), PhaseObservation(CAUGHT_AT, NET, False), P)
+    assert at_net.net_stop and not at_net.caught
+    assert not transition(at_net, PhaseObservation(CAUGHT_AT + DT), P).net_stop
+    off = P.with_value("stereo.caught_net_exception", False)
+    assert not transition(_stopping(SP.caught_frames - 1, at=NET), PhaseObservation(CAUGHT_AT, NET, False), off).net_stop
+    assert not CAUGHT.net_stop

@@ -59,7 +59,7 @@ def test_match_costs_are_the_per_tracklet_formulas():
     d = np.hypot(preds[:, None, 0] - positions[None, :, 0], preds[:, None, 1] - positions[None, :, 1])
     cost = d / gates[:, None]
     cost = cost - 0.5 * np.minimum(np.array([tr.hits for tr in assoc.tracklets]), 20)[:, None] / 20
-    got_d, got_gates, got_cost = assoc._match_costs(t, positions)
+    got_d, got_gates, got_cost = assoc.match_costs(t, positions)
     assert np.array_equal(got_d, d) and np.array_equal(got_gates, gates)
     assert np.array_equal(got_cost, cost)
     assert not math.isnan(float(got_cost.sum()))

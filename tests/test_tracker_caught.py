@@ -4,7 +4,7 @@ neither camera reports it (``stereo.caught_frames``, ``caught_radius``, ``caught
 
 The rule's decision (the phase's pure ``transition``, flight/phase.py) is driven here with the
 flight's verdict on each frame's point set by hand; the withholding
-(``CameraRules.withhold_caught``) with one-candidate camera results. What must not count as a catch: an apex (the flight takes its points), a stop on the
+(the pure ``readout_transition``, flight/camera_rules.py) with one-candidate camera results. What must not count as a catch: an apex (the flight takes its points), a stop on the
 floor (the landed hold's case), a stop in the net, a shuttle held still with no flight before it
 (before a serve), a slow flight moving on. On the real rally where it was found
 (rally_11-47-02, a shuttle caught by hand at 0.9 m) the caught shuttle stops being reported.
@@ -18,12 +18,11 @@ from contextlib import closing
 
 import pytest
 
-from badminton_gui.core.flight.camera_rules import CameraRules
+from badminton_gui.core.flight.camera_rules import ReadoutInputs, ReadoutState, readout_transition
 from badminton_gui.core.flight.phase import PhaseObservation, PhaseState, transition, withheld
 from badminton_gui.core.params import TrackerParams
 from badminton_gui.core.flight.phase import CAUGHT_REASON
 from badminton_gui.core.types import REJECT_STEREO, CameraResult, Candidate
-from badminton_gui.io.demo_scene import make_rig
 from .conftest_data import NYCU_DIR, tracked_rally
 
 DT = 1.0 / 120.0
@@ -34,9 +33,7 @@ class _Shuttle:
 
     def __init__(self, params: TrackerParams) -> None:
         self.params = params
-        rig = make_rig("binocular", (1280, 720))
-        assert rig.has_court_pose
-        self.rules = CameraRules(rig, params)
+        self.readout = ReadoutState()
         self.phase = PhaseState()
 
     def step(self, t: float, point=None, rejected: bool = False, speed: float | None = None) -> bool:
@@ -46,9 +43,13 @@ class _Shuttle:
         return withheld(self.phase, t, self.params)
 
 
-def _tracker(**stereo) -> _Shuttle:
+def _params(**stereo) -> TrackerParams:
     p = TrackerParams()
-    return _Shuttle(dataclasses.replace(p, stereo=dataclasses.replace(p.stereo, **stereo)))
+    return dataclasses.replace(p, stereo=dataclasses.replace(p.stereo, **stereo))
+
+
+def _tracker(**stereo) -> _Shuttle:
+    return _Shuttle(_params(**stereo))
 
 
 def _feed(shuttle: _Shuttle, frames) -> list[bool]:
@@ -109,21 +110,30 @@ def _camera(x: float) -> CameraResult:
     return CameraResult(c, (c,), image_size=(1280, 720))
 
 
-def test_the_caught_shuttle_is_withheld_in_both_cameras_while_it_stays_near_the_hand():
+def _withheld_run(**stereo) -> list[tuple[bool, bool]]:
+    """A catch, then five frames of both cameras' reports: per frame whether each is shown."""
     t = _tracker(caught_frames=10)
     assert _feed(t, _flight(20) + _stop(10))[-1]
     shown = []
     for k, (xl, xr) in enumerate([(600, 800), (605, 806), (612, 815), (700, 822), (618, 900)]):
         if k:
             assert t.step((30 + k) * DT)            # the next frames: no 3D point, still caught
-        left, right = t.rules.withhold_caught([_camera(xl), _camera(xr)], t.phase)
+        t.readout, (left, right), fired = readout_transition(t.readout, ReadoutInputs(
+            (30 + k) * DT, (_camera(xl), _camera(xr)), caught=True, phase=t.phase),
+            _params(caught_frames=10, alone_limit=False, **stereo))
+        assert fired == (("caught", None),)
         for res in (left, right):
             if res.detection is None:
                 assert res.candidates[0].rejected_by == REJECT_STEREO
         shown.append((left.detection is not None, right.detection is not None))
-    # withheld at the catch and while each report moves ≤ 12 px a frame from the last one
-    # withheld; a report far from it (another blob) is shown
-    assert shown == [(False, False), (False, False), (False, False), (True, False), (False, True)]
+    return shown
+
+
+def test_the_caught_shuttle_is_withheld_in_both_cameras_while_it_stays_near_the_hand():
+    # withheld at the catch and while each report moves ≤ caught_step px a frame from the last
+    # one withheld; a report far from it (another blob) is shown
+    assert _withheld_run() == [(False, False), (False, False), (False, False), (True, False), (False, True)]
+    assert _withheld_run(caught_step=90.0) == [(False, False)] * 5
 
 
 RALLY = NYCU_DIR / "rally_11-47-02"

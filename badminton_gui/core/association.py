@@ -107,9 +107,10 @@ class TrackletAssociator:
                 for tr in self.tracklets if tr.hits >= 2]
         return np.asarray(rows, dtype=float).reshape(-1, 3)
 
-    def _match_costs(self, t: float, positions: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(tracklets × candidates distances to the predictions, gates, matching costs)."""
+    def match_costs(self, t: float, positions: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(tracklets × candidates distances to the predictions, gates, matching costs) of the
+        live tracklets at ``t`` against ``positions`` (N, 2); changes nothing."""
         # Per tracklet: predicted x, y, gate and hits, in one pass (hits are small integers:
         # exact as floats).
         # ``history_needs_motion``: still clutter (a shoe, the crowd) claims by distance alone,
@@ -177,7 +178,7 @@ class TrackletAssociator:
         motion = [math.nan] * n
         if not (self.tracklets and n):
             return assigned, motion
-        d, gates, cost = self._match_costs(t, positions)
+        d, gates, cost = self.match_costs(t, positions)
         if self.params.followed_swap_margin < 1.0:
             self._favour_shuttle_like(d, gates, cost, scores)
         if self.params.blind_gate > 0 and blind is not None and self.selected is not None:

@@ -49,6 +49,16 @@ class BackgroundModel:
     def params(self) -> tuple[BackgroundParams, BinarizeParams]:
         return self._bg, self._bin
 
+    @property
+    def average(self) -> np.ndarray | None:
+        """The brighter-than-average method's running average (model scale), as a read-only
+        view; None before its first frame or with another method."""
+        if self._average is None:
+            return None
+        view = self._average.view()
+        view.flags.writeable = False
+        return view
+
     def set_params(self, background: BackgroundParams, binarize: BinarizeParams) -> None:
         """Apply new parameters; the learnt model survives unless its structure changed."""
         rebuild = (background.method != self._bg.method

@@ -39,7 +39,7 @@ import numpy as np
 
 from .association import TrackletAssociator
 from .background import BackgroundModel
-from .detect.candidates import (MAX_COLOUR_CHECKS, ContourShapes, MergedBlobSplitter, measure_contours,
+from .detect.candidates import (ContourShapes, MergedBlobSplitter, measure_contours,
                                 rank_for_measuring, shape_filters, shape_rejects, too_large)
 from .detect.measure import (FEATURE_NAMES, PATCH_CELLS, PATCH_HALF, PATCH_NAMES,  # noqa: F401
                              BlobMeasurements, measure_blobs, patch_features)
@@ -51,12 +51,6 @@ from .params import TrackerParams
 from .types import REJECT_MOTION, REJECT_SCORE, REJECT_WHITENESS, CameraResult, Candidate
 from .window import WindowTracker
 
-# px at 1280 px width: the half-size of the box around a held shuttle thresholded lower in the
-# next frame (``protect_report``); a shuttle lying on the floor is ≈ 6–10 px long there.
-PROTECT_RADIUS = 8.0
-# px: a held-back candidate's track must have moved at least this in its last step for the other
-# camera to vouch for it (``vouchable``): its smoothed velocity remembers older motion.
-VOUCH_MIN_STEP = 1.0
 
 
 @dataclasses.dataclass(slots=True)
@@ -249,7 +243,7 @@ class CameraDetector:
         self._last_mask = mask
         self._large_boxes = too_large(shapes, p)
         rejected, blobs = shape_rejects(shapes, length_ok, short_ok)
-        limit = min(int(p.association.max_measured), MAX_COLOUR_CHECKS)
+        limit = int(p.association.max_measured)
         dropped = []
         if len(blobs) > limit:
             bg = self._background
@@ -327,7 +321,7 @@ class CameraDetector:
         tr = self._associator.tracklet(candidate.tracklet)
         if (tr is not None and tr.hit_now and tr.velocity_known and tr.quality >= min_quality
                 and len(tr.recent) >= 2
-                and math.hypot(tr.x - tr.recent[-2][0], tr.y - tr.recent[-2][1]) >= VOUCH_MIN_STEP):
+                and math.hypot(tr.x - tr.recent[-2][0], tr.y - tr.recent[-2][1]) >= self.params.stereo.vouch_min_step):
             return tr.vx, tr.vy
         return None
 
@@ -442,7 +436,7 @@ class CameraDetector:
             self._background.protect(None)
             return
         s = self._mask_scale
-        r = math.ceil(PROTECT_RADIUS * width / 1280.0 * s) + int(self.params.background.shake_tolerance)
+        r = math.ceil(self.params.background.protect_radius * width / 1280.0 * s) + int(self.params.background.shake_tolerance)
         x, y = report.x * s, report.y * s
         self._background.protect((int(x) - r, int(y) - r, int(x) + r + 1, int(y) + r + 1))
 

@@ -40,6 +40,11 @@ class Step:
         if self.trace is not None:
             self.trace.append(rule if cam is None else f"{rule}:{SIDES[cam]}")
 
+    def fired_all(self, fired: tuple[tuple[str, int | None], ...]) -> None:
+        """Each (rule, camera) of ``fired`` changed this step's readout."""
+        for rule, cam in fired:
+            self.fired(rule, cam)
+
     def add(self, cam: int, found: Candidate) -> None:
         """``found`` becomes camera ``cam``'s report and joins its candidates."""
         self.dets[cam] = found

@@ -56,7 +56,7 @@ import numpy.ma  # noqa: F401  np.median imports it on its first call: 17 ms in 
 
 from .detector import CameraDetector
 from .frame_checks import InputChecks
-from .flight.camera_rules import CameraRules
+from .flight.camera_rules import HoldInputs, ReadoutInputs, ReadoutState, hold_transition, readout_transition
 from .flight.guide import StepGuide
 from .flight.look import FlightLook
 from .flight.follow import FlightFollower
@@ -108,7 +108,7 @@ class StereoTracker:
         self.sight = SightOfCamera(self.rig, self.params, self._trajectory)
         self.follower = FlightFollower(self.rig, self.params, self._trajectory, self.sight, self.cork,
                                        self.pairing.right_xy)
-        self.rules = CameraRules(self.rig, self.params)
+        self.readout = ReadoutState()
         self.phase = PhaseState()
         # Each camera's last image (the guided look's motion check) and last readout (what a
         # step that brings no new image from that camera reports for it).
@@ -125,8 +125,7 @@ class StereoTracker:
     @params.setter
     def params(self, params: TrackerParams) -> None:
         self._params = params
-        for stage in (self.gate, self.pairing, self.vouch, self.look, self.cork, self.sight, self.follower,
-                      self.rules):
+        for stage in (self.gate, self.pairing, self.vouch, self.look, self.cork, self.sight, self.follower):
             stage.params = params
 
     def set_params(self, params: TrackerParams) -> None:
@@ -222,7 +221,7 @@ class StereoTracker:
         side. The windows are chosen first, so a camera's periodic whole frame is never run in
         turn with the other's."""
         (left_bgr, right_bgr), t, t_r = step.frames, step.t, step.t_right
-        self.left.keep_whole, self.right.keep_whole = self.rules.holding(0), self.rules.holding(1)
+        self.left.keep_whole, self.right.keep_whole = self.readout.holding(0), self.readout.holding(1)
         in_turn = self.left.plan_window(left_bgr, t) & self.right.plan_window(right_bgr, t_r)
         if self._pool is not None and not in_turn:
             # Only the image half runs side by side (CameraDetector.segment); the measuring
@@ -263,25 +262,22 @@ class StereoTracker:
                 self.paths.note(cam, step.t, det.x, det.y, detectors[cam].tracklet_velocity(det))
 
     # ---- stage 4: the landed hold, each camera's readout at the cork -----------------------
-    def _hold_and_readout(self, step: Step) -> None:
-        res, dets = step.results, step.dets
-        (res[0], dets[0]), (res[1], dets[1]), step.point, step.epi = self.rules.hold_both(
-            (res[0], dets[0]), (res[1], dets[1]), step.point, step.epi, step.t, self.phase)
-        for cam in (0, 1):
-            if self.rules.holding(cam):
-                step.fired("landed_hold", cam)
-        self._protect_and_show(step, (0, 1))
-
-    def _protect_and_show(self, step: Step, cameras: tuple[int, ...]) -> None:
-        """A landed shuttle lying still stays in its camera's mask; the 2D readout is the cork,
-        not the trailing bright centroid (the 3D point is still triangulated from the measured
-        centroids: each camera's lead is estimated on its own and their disagreement would be a
-        disparity error; the same bias is removed in 3D, ``stereo/cork.py``)."""
+    def _hold_and_readout(self, step: Step, cameras: tuple[int, ...] = (0, 1)) -> None:
+        """The landed hold; a landed shuttle lying still stays in its camera's mask; the 2D
+        readout is the cork, not the trailing bright centroid (the 3D point is still triangulated
+        from the measured centroids: each camera's lead is estimated on its own and their
+        disagreement would be a disparity error; the same bias is removed in 3D, ``stereo/cork.py``)."""
+        height = None if step.point is None else float(self.rig.to_output(step.point)[0][2])
+        self.readout, hold, fired = hold_transition(self.readout, HoldInputs(
+            step.t, tuple(step.results), tuple(step.dets), cameras, height, (self.paths.last(0), self.paths.last(1)),
+            self.phase, self.rig.has_court_pose), self.params)
+        step.results, step.dets = list(hold.results), list(hold.reports)
+        if hold.drop_point:
+            step.point, step.epi = None, None
+        step.fired_all(fired)
         detectors = (self.left, self.right)
         for cam in cameras:
-            det, width = step.dets[cam], step.frames[cam].shape[1]
-            lying = self.rules.lying_landed(cam, det, step.t, width, self.phase, self.paths)
-            detectors[cam].protect_report(det if lying else None, width)
+            detectors[cam].protect_report(hold.protect[cam], step.frames[cam].shape[1])
             # The sources hand out a new array per frame: keeping the reference costs no copy.
             self._previous[cam] = step.frames[cam]
         for cam in cameras:
@@ -293,12 +289,19 @@ class StereoTracker:
         self.phase = transition(self.phase, PhaseObservation(
             step.t, measured, accepted, _speed(flight), None if point is None else float(point[2])),
             self.params, self.rig.has_court_pose)
-        if withheld(self.phase, step.t, self.params):
+        if self.phase.net_stop:
+            step.fired("caught_net_exception")
+        caught = withheld(self.phase, step.t, self.params)
+        if caught:
             point, flight = None, caught_flight(flight)
-            step.results = self.rules.withhold_caught(step.results, self.phase)
-            step.fired("caught")
-        self.rules.note_step(step, point is not None, None if point is None else float(point[2]))
+        self._readout_rules(step, ReadoutInputs(step.t, tuple(step.results), tuple(step.dets), (0, 1), point is not None,
+                                                None if point is None else float(point[2]), caught, self.phase))
         return point, flight
+
+    def _readout_rules(self, step: Step, inputs: ReadoutInputs) -> None:
+        self.readout, results, fired = readout_transition(self.readout, inputs, self.params)
+        step.results = list(results)
+        step.fired_all(fired)
 
     def _result(self, step: Step, index: int, index_right: int, point, flight: FlightInfo,
                 measured, start: float) -> TrackResult:
@@ -344,7 +347,7 @@ class StereoTracker:
         frames[cam] = frame_bgr
         step = Step(t, t, (frames[0], frames[1]), StepGuide(self._trajectory, t),
                     trace=[] if self.trace else None)
-        detector.keep_whole = self.rules.holding(cam)
+        detector.keep_whole = self.readout.holding(cam)
         detector.plan_window(frame_bgr, t)
         result = detector.find_candidates(frame_bgr, t, keep_masks)
         step.results = [other, other]
@@ -354,8 +357,7 @@ class StereoTracker:
         self.look.look_one(step, cam, self._previous[cam])
         self._note_paths(step, (cam,))
         self.look.exits(step, self.paths, (cam,))
-        self.rules.hold_one(step, cam, self.phase)
-        self._protect_and_show(step, (cam,))
+        self._hold_and_readout(step, (cam,))
         det, result = step.dets[cam], step.results[cam]
         if (sp.one_camera_rays and det is not None and not det.predicted
                 and result.detection is not None and self.rig.has_court_pose):
@@ -364,12 +366,10 @@ class StereoTracker:
         else:
             flight = self._trajectory.update(t, None)
         point = self._trajectory.filtered_position()
-        if withheld(self.phase, t, self.params):
+        caught = withheld(self.phase, t, self.params)
+        if caught:
             point, flight = None, caught_flight(flight)
-            step.results = self.rules.withhold_caught(step.results, self.phase, cameras=(cam,))
-            step.fired("caught")
-        self.rules.note_anchor(cam, step.results[cam].detection, False)
-        self.rules.limit_alone_step(step, False, (cam,))
+        self._readout_rules(step, ReadoutInputs(t, tuple(step.results), None, (cam,), caught=caught, phase=self.phase))
         self.phase = transition(self.phase, PhaseObservation(
             t, point_height=None if point is None else float(point[2]), paired=False),
             self.params, self.rig.has_court_pose)

@@ -23,11 +23,6 @@ from ..types import REJECT_LENGTH, REJECT_SHORT_SIDE, REJECT_WHITENESS, Candidat
 from .measure import GROW, scaled_boxes, window_maxima
 from .scoring import ShapedBlob
 
-# At most this many blobs per frame get the (more expensive) full-resolution colour check;
-# beyond it the largest blobs are dropped first (players, not shuttles).
-MAX_COLOUR_CHECKS = 64
-
-
 @dataclasses.dataclass(frozen=True, slots=True)
 class ContourShapes:
     """Filters 1 and 2's measurements of every contour of a frame, full-resolution px."""

@@ -23,7 +23,9 @@ import numpy as np
 
 from ..background import median_float32
 
-# Margin (full-res px) around a blob's box for the sub-pixel refinement window.
+# Margin (full-res px) around a blob's box for the sub-pixel refinement window. A constant, not
+# a parameter: the appearance features the shipped classifiers were trained on are measured in
+# this window, so changing it means retraining them (resources/candidate_classifier*.json).
 REFINE_MARGIN = 5
 # The mask grown by one full-resolution pixel: the blur fringe of a blob belongs to it.
 GROW = np.ones((3, 3), np.uint8)

@@ -44,6 +44,10 @@ class BackgroundParams(ParamGroup):
     shake_tolerance: int = param(1, 0, 5, step=1, unit="px", label="Shake tolerance",
                                  help="Brighter-than-average: compare with the brightest average pixel within "
                                       "this radius (processing-scale px), so a shaking camera's edges stay quiet")
+    protect_radius: float = param(8.0, 0.0, 100.0, step=0.5, unit="px", label="Held shuttle kept within",
+                                  help="Half-size of the box around a held landed shuttle that the next frame's "
+                                       "mask keeps from a lower threshold (px at 1280 px width; a shuttle lying on "
+                                       "the floor is ≈ 6–10 px long there; 0: its own pixel and the shake tolerance)")
     processing_scale: float = param(0.5, 0.125, 1.0, step=0.125, label="Processing scale",
                                     help="Background model runs on the image scaled by this factor")
     coarse_from_width: int = param(0, 0, 8192, step=64, unit="px", label="Coarser from width",
@@ -167,6 +171,8 @@ class ColourParams(ParamGroup):
     edge_exit_area: float = param(0.6, 0.0, 1.0, step=0.05, label="... when its area is below",
                                   help="... and its blob's area is below this fraction of the median of its "
                                        "tracklet's previous blobs' areas (the cork leads: it leaves first)")
+    edge_exit_frames: int = param(8, 1, 120, step=1, unit="frames", label="... over",
+                                  help="How many of the tracklet's previous blobs that median is taken over")
 
 
 @dataclass(frozen=True, slots=True)
@@ -300,8 +306,8 @@ class AssociationParams(ParamGroup):
     # 16. Measuring 64 only after a frame in which the followed tracklet found nothing fixed none
     # of the serves (the followed tracklet goes on with the racket instead of missing).
     max_measured: int = param(64, 1, 500, step=1, label="Blobs measured",
-                              help="At most this many blobs per frame get the full-resolution measurement: "
-                                   "those near a live tracklet first, then the strongest differences")
+                              help="At most this many blobs per frame get the (more expensive) full-resolution "
+                                   "measurement: those near a live tracklet first, then the strongest differences")
     min_quality: float = param(0.0, 0.0, 1.0, step=0.01, label="Minimum candidate quality",
                                help="Candidates below this shape/contrast score are not associated")
     exit_margin: float = param(0.0, 0.0, 200.0, step=1.0, unit="px", label="Left the image within",

@@ -26,9 +26,6 @@ from ..types import REJECT_MOTION, Candidate, make_candidate
 from .diagnostics import TrackletReport
 from .scoring import ScoredBlobs
 
-# Frames of a tracklet's blob areas remembered for ``colour.edge_exit``.
-EDGE_AREA_FRAMES = 8
-
 Link = tuple[int, float, float]   # (tracklet ident, distance from its prediction, merit) per blob
 
 
@@ -139,16 +136,18 @@ class TrackletLooks:
         self._widths: dict[int, deque] = {}
         self._areas: dict[int, deque] = {}
 
-    def note(self, ident: int, short_side: float, area: float, width_frames: int, edge_exit: bool) -> None:
+    def note(self, ident: int, short_side: float, area: float, width_frames: int, area_frames: int) -> None:
+        """Tracklet ``ident``'s blob this frame; ``area_frames``: how many of its areas to keep
+        (``colour.edge_exit_frames``; 0: none, the edge exit off)."""
         if width_frames > 1:
             widths = self._widths.get(ident)
             if widths is None or widths.maxlen != width_frames:
                 widths = self._widths[ident] = deque(widths or (), maxlen=width_frames)
             widths.append(short_side)
-        if edge_exit:
+        if area_frames > 0:
             areas = self._areas.get(ident)
-            if areas is None:
-                areas = self._areas[ident] = deque(maxlen=EDGE_AREA_FRAMES)
+            if areas is None or areas.maxlen != area_frames:
+                areas = self._areas[ident] = deque(areas or (), maxlen=area_frames)
             areas.append(area)
 
     def forget_dead(self, tracklets: list[Tracklet], width_frames: int, edge_exit: bool) -> None:
@@ -215,7 +214,7 @@ class TrackletStage:
         passed, each of quality ≥ ``association.lone_quality``: ``accept_lone``)."""
         p = self.params
         width_frames = int(p.colour.head_lead_width_frames)
-        edge_exit = p.colour.edge_exit > 0
+        area_frames = int(p.colour.edge_exit_frames) if p.colour.edge_exit > 0 else 0
         lone = p.association.lone_quality < 1.0
         refused: list[int] | None = [] if lone else None
         candidates: list[Candidate] = []
@@ -234,10 +233,10 @@ class TrackletStage:
                 else:
                     score = merit
                     refused = None
-                self.looks.note(ident, short_side, area, width_frames, edge_exit)
+                self.looks.note(ident, short_side, area, width_frames, area_frames)
             candidates.append(make_candidate(x, y, length, short_side, whiteness, area, motion, score,
                                              reason, tracklet=ident))
-        self.looks.forget_dead(self.associator.tracklets, width_frames, edge_exit)
+        self.looks.forget_dead(self.associator.tracklets, width_frames, area_frames > 0)
         return candidates, refused
 
 

@@ -14,14 +14,16 @@ frame; "accepted": the flight filter took the step's measured point)::
     CAUGHT          caught_hold s passed since the catch                         (not caught)
     CAUGHT          accepted point, flight speed ≥ caught_release_speed          IN_PLAY
     not CAUGHT      accepted point                                               IN_PLAY / LANDED
-    not CAUGHT      refused point within CAUGHT_FLIGHT_GAP s of a flight         STOPPED
-                    ≥ CAUGHT_MIN_FLIGHT_SPEED (or already STOPPED)
+    not CAUGHT      refused point within caught_flight_gap s of a flight         STOPPED
+                    ≥ caught_min_flight_speed (or already STOPPED)
     STOPPED         caught_frames refused points within caught_radius,           CAUGHT
                     above landed_max_height and not at the net
-    STOPPED         those points spread, lie on the floor, or hang at the net    UNSEEN / LANDED
+    STOPPED         those points spread, or lie on the floor                     UNSEEN / LANDED
+    STOPPED         they hang at the net (caught_net_exception; within           UNSEEN / LANDED,
+                    caught_net_margin of its plane, not above its top)           net_stop
     STOPPED         a step with no measured point                                UNSEEN / LANDED
     (not caught)    a reported point above landed_max_height                     IN_PLAY
-    (not caught)    the last point, within LANDED_RECENT s, at most              LANDED
+    (not caught)    the last point, within landed_recent s, at most              LANDED
                     landed_max_height high
     (not caught)    otherwise                                                    UNSEEN
 
@@ -41,20 +43,8 @@ from ..court import NET_HEIGHT_POSTS
 from ..params import TrackerParams
 from ..types import FlightInfo
 
-# m/s: how fast the flight must have been followed just before its 3D points stopped dead for
-# ``stereo.caught_frames`` to call it caught (a shuttle held before the serve had no flight).
-CAUGHT_MIN_FLIGHT_SPEED = 3.0
-# s: how long before the first stopped point the flight's last accepted point may lie.
-CAUGHT_FLIGHT_GAP = 0.05
-# m: how near the net's plane (court Y = 0) and above its top a stop counts as the net's, not a
-# hand's: the shuttle hangs in the mesh or falls off the tape in full view.
-CAUGHT_NET_MARGIN = 0.3
 # What the readout and the robot are told while the shuttle is caught (``FlightInfo.withheld_reason``).
 CAUGHT_REASON = "caught: out of play"
-# s: how recent the flight's last low 3D point must be for the shuttle to count as landed (a
-# shuttle lands and comes to rest in a fraction of a second; the pause allowance runs out 40
-# frames later at 119 fps).
-LANDED_RECENT = 1.0
 
 
 class ShuttlePhase(enum.Enum):
@@ -91,7 +81,8 @@ class PhaseState:
     ``stopped``: the measured points the flight refused since its last accepted one, (t, court
     point); ``last_flown``: (t, speed) of the flight's last accepted point before a catch;
     ``caught_at``: the time of the catch (None: not caught); ``caught_new``: caught on this very
-    step; ``last_point``: (t, court height) of the last reported 3D point."""
+    step; ``last_point``: (t, court height) of the last reported 3D point; ``net_stop``: on this
+    very step a stop met the catch's conditions but lay at the net (``caught_net_exception``)."""
 
     phase: ShuttlePhase = ShuttlePhase.UNSEEN
     stopped: tuple[tuple[float, tuple[float, float, float]], ...] = ()
@@ -99,21 +90,22 @@ class PhaseState:
     caught_at: float | None = None
     caught_new: bool = False
     last_point: tuple[float, float] | None = None
+    net_stop: bool = False
 
     @property
     def caught(self) -> bool:
         return self.caught_at is not None
 
     def landed(self, t: float, params: TrackerParams) -> bool:
-        """The 3D flight's last point, within ``LANDED_RECENT`` s of ``t``, lay near the floor."""
+        """The 3D flight's last point, within ``stereo.landed_recent`` s of ``t``, lay near the floor."""
         last = self.last_point
-        return (last is not None and t - last[0] <= LANDED_RECENT
+        return (last is not None and t - last[0] <= params.stereo.landed_recent
                 and last[1] <= params.stereo.landed_max_height)
 
 
 def _catch(state: PhaseState, obs: PhaseObservation, params: TrackerParams
-           ) -> tuple[tuple, tuple[float, float] | None, float | None, bool]:
-    """The caught rule on a pair step: (stopped, last_flown, caught_at, caught_new) after it."""
+           ) -> tuple[tuple, tuple[float, float] | None, float | None, bool, bool]:
+    """The caught rule on a pair step: (stopped, last_flown, caught_at, caught_new, net_stop) after it."""
     sp = params.stereo
     t = obs.t
     stopped, flown, caught_at = state.stopped, state.last_flown, state.caught_at
@@ -125,26 +117,29 @@ def _catch(state: PhaseState, obs: PhaseObservation, params: TrackerParams
                 caught_at = None
             if caught_at is None:
                 flown = (t, obs.speed)
-        return (), flown, caught_at, False
+        return (), flown, caught_at, False, False
     if caught_at is not None:
-        return stopped, flown, caught_at, False
+        return stopped, flown, caught_at, False, False
     if obs.measured is None:
-        return (), flown, None, False
-    if not stopped and (flown is None or t - flown[0] > CAUGHT_FLIGHT_GAP + 1e-9
-                        or flown[1] < CAUGHT_MIN_FLIGHT_SPEED):
-        return stopped, flown, None, False
+        return (), flown, None, False, False
+    if not stopped and (flown is None or t - flown[0] > sp.caught_flight_gap + 1e-9
+                        or flown[1] < sp.caught_min_flight_speed):
+        return stopped, flown, None, False, False
     stopped = stopped + ((t, obs.measured),)
     if len(stopped) < sp.caught_frames:
-        return stopped, flown, None, False
+        return stopped, flown, None, False, False
     points = np.array([p for _, p in stopped[-sp.caught_frames:]])
     centre = points.mean(axis=0)
     if (float(np.max(np.linalg.norm(points - centre, axis=1))) > sp.caught_radius
-            or centre[2] <= sp.landed_max_height
-            or (abs(centre[1]) <= CAUGHT_NET_MARGIN and centre[2] <= NET_HEIGHT_POSTS + CAUGHT_NET_MARGIN)):
-        # Not caught: lying on the floor (the landed hold's case), or stopped by the net,
-        # where it hangs in the mesh or on the tape in view (rally_11-47-21 879, labelled).
-        return (), flown, None, False
-    return (), flown, t, True
+            or centre[2] <= sp.landed_max_height):
+        # Not caught: lying on the floor (the landed hold's case).
+        return (), flown, None, False, False
+    margin = sp.caught_net_margin
+    if sp.caught_net_exception and abs(centre[1]) <= margin and centre[2] <= NET_HEIGHT_POSTS + margin:
+        # Not caught: stopped by the net, where it hangs in the mesh or on the tape in view
+        # (rally_11-47-21 879, labelled).
+        return (), flown, None, False, True
+    return (), flown, t, True, False
 
 
 def transition(state: PhaseState, obs: PhaseObservation, params: TrackerParams,
@@ -152,7 +147,7 @@ def transition(state: PhaseState, obs: PhaseObservation, params: TrackerParams,
     """The phase after one step (pure: ``state`` is left as it was).
 
     The caught rule (``stereo.caught_frames``): a shuttle in flight never stops in mid-air. When
-    the flight was followed at ``CAUGHT_MIN_FLIGHT_SPEED`` or more and its next measured 3D
+    the flight was followed at ``caught_min_flight_speed`` or more and its next measured 3D
     points are refused by it and stay within ``caught_radius`` of each other above the floor for
     ``caught_frames`` frames, a hand or a racket caught it (rally_11-47-02 172: from 5 m/s to
     still at 0.9 m); the labellers stop marking a shuttle held in the hand, and the robot has
@@ -162,11 +157,11 @@ def transition(state: PhaseState, obs: PhaseObservation, params: TrackerParams,
     before a serve with no flight before it.
     """
     sp = params.stereo
-    stopped, flown, caught_at, new = state.stopped, state.last_flown, state.caught_at, False
+    stopped, flown, caught_at, new, net = state.stopped, state.last_flown, state.caught_at, False, False
     if sp.caught_frames <= 0 or not has_court_pose:
         caught_at = None
     elif obs.paired:
-        stopped, flown, caught_at, new = _catch(state, obs, params)
+        stopped, flown, caught_at, new, net = _catch(state, obs, params)
     # A one-camera step reads the catch without ending it: the next pair step does.
     caught = caught_at is not None and sp.caught_frames > 0 and obs.t - caught_at <= sp.caught_hold
     last_point = state.last_point
@@ -178,12 +173,12 @@ def transition(state: PhaseState, obs: PhaseObservation, params: TrackerParams,
         phase = ShuttlePhase.STOPPED
     elif obs.point_height is not None and obs.point_height > sp.landed_max_height:
         phase = ShuttlePhase.IN_PLAY
-    elif (last_point is not None and obs.t - last_point[0] <= LANDED_RECENT
+    elif (last_point is not None and obs.t - last_point[0] <= sp.landed_recent
           and last_point[1] <= sp.landed_max_height):
         phase = ShuttlePhase.LANDED
     else:
         phase = ShuttlePhase.UNSEEN
-    return PhaseState(phase, stopped, flown, caught_at, new, last_point)
+    return PhaseState(phase, stopped, flown, caught_at, new, last_point, net)
 
 
 def withheld(state: PhaseState, t: float, params: TrackerParams) -> bool:

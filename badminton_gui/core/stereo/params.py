@@ -91,6 +91,9 @@ class StereoParams(ParamGroup):
                                                help="A first sighting scoring less than that may still be vouched for "
                                                     "when it scores at least this and its partner is sure (a first "
                                                     "sighting scoring enough, or the other camera's own choice; 1 = never)")
+    vouch_min_step: float = param(1.0, 0.0, 50.0, step=0.1, unit="px", label="... track's last step ≥",
+                                  help="The held-back candidate's track must have moved at least this in its last "
+                                       "frame (its smoothed velocity remembers older motion: a track that stopped)")
     vouch_min_speed: float = param(2.0, 0.0, 100.0, step=0.5, unit="m/s", label="... 3D speed ≥",
                                    help="The pair's 3D velocity (from the two tracks' image velocities) must be "
                                         "at least this (lights and a shuttle at rest do not vouch)")
@@ -153,6 +156,24 @@ class StereoParams(ParamGroup):
                                     "there is still reported for this many frames while it stays put (0 = off)")
     landed_max_height: float = param(0.3, 0.0, 5.0, step=0.05, unit="m", label="... landed below",
                                      help="The flight's last 3D point must be this low above the court")
+    landed_recent: float = param(1.0, 0.0, 60.0, step=0.1, unit="s", label="... within",
+                                 help="... and at most this old: a shuttle lands and comes to rest in a fraction "
+                                      "of a second")
+    landed_step: float = param(4.0, 0.0, 100.0, step=0.5, unit="px", label="... moving at most",
+                               help="How far a held landed shuttle's candidate may move from one frame to the next, "
+                                    "in pixels of a 1280-wide picture (it slides a little; a hand picking it up "
+                                    "moves more)")
+    flown_memory: float = param(5.0, 0.0, 600.0, step=0.5, unit="s", label="... its track flown within",
+                                help="Only a track reported with a 3D point above the floor this recently is held "
+                                     "(a landed shuttle slides and lies still for up to ~1.5 s first; a shoe walked "
+                                     "along the floor was never seen in the air)")
+    landed_shoe_past: bool = flag(True, label="... through a shoe walking past",
+                                  help="A new track never seen in the air, with no stereo partner above the floor, "
+                                       "does not take the report from the landed shuttle while the hold lasts (a "
+                                       "player's white shoe walking past after the rally)")
+    landed_other_anchor: bool = flag(True, label="... anchored by the other camera's hold",
+                                     help="A camera's report keeps its right to a hold while the other camera holds "
+                                          "its landed shuttle (that hold leaves the frame without a 3D point)")
     # A shuttle cannot stop in mid-air: a flight whose 3D points stop dead above the floor was
     # caught (by a hand, or on a racket's strings) and is out of play until it is hit again.
     caught_frames: int = param(10, 0, 1000, step=1, unit="frames", label="Caught after",
@@ -168,6 +189,21 @@ class StereoParams(ParamGroup):
     caught_hold: float = param(0.5, 0.0, 60.0, step=0.1, unit="s", label="... or for at most",
                                help="... or when this long has passed since the catch (the shuttle dropped "
                                     "from the hand for the next serve is reported)")
+    caught_step: float = param(12.0, 0.0, 200.0, step=1.0, unit="px", label="... withheld moving at most",
+                               help="How far a caught shuttle's report may move from one frame to the next and still "
+                                    "be withheld as the one in the hand, in pixels of a 1280-wide picture (a hand "
+                                    "carrying it walks, it does not fly)")
+    caught_min_flight_speed: float = param(3.0, 0.0, 100.0, step=0.5, unit="m/s", label="... after a flight of",
+                                           help="How fast the flight must have been followed just before its points "
+                                                "stopped (a shuttle held before the serve had no flight)")
+    caught_flight_gap: float = param(0.05, 0.0, 5.0, step=0.01, unit="s", label="... ending at most",
+                                     help="How long before the first stopped point the flight's last accepted point "
+                                          "may lie")
+    caught_net_exception: bool = flag(True, label="... not at the net",
+                                      help="A stop at the net (near its plane, not above its top) is no catch: the "
+                                           "shuttle hangs in the mesh or falls off the tape in full view")
+    caught_net_margin: float = param(0.3, 0.0, 3.0, step=0.05, unit="m", label="... the net within",
+                                     help="How near the net's plane and above its top a stop counts as the net's")
     align_pairs: bool = flag(True, label="Pair at one moment",
                              help="Cameras without a common trigger: the right camera's detection is moved along "
                                   "its track to the left image's time before the two are paired (images 4 ms apart "
