@@ -170,18 +170,21 @@ def _net_top(x: float) -> float:
     return court.NET_HEIGHT_CENTRE + (court.NET_HEIGHT_POSTS - court.NET_HEIGHT_CENTRE) * frac
 
 
-def render_background(cam: PinholeCamera, polygons=None, colours=None) -> np.ndarray:
+def render_background(cam: PinholeCamera, polygons=None, colours=None, net: bool = True
+                      ) -> np.ndarray:
     """The static hall, court, posts and net as this camera sees them (BGR uint8).
 
     ``polygons``: (3D polygon, colour key or BGR tuple) in painter's order, instead of the demo
     hall's (a randomised hall, ``demo_style.py``); ``colours``: the keys' colours, net and posts
-    included (default ``COLOURS``).
+    included (default ``COLOURS``); ``net=False``: the hall alone, without net and posts.
     """
     colours = COLOURS if colours is None else colours
     w, h = cam.size
     img = np.zeros((h, w, 3), np.uint8)
     for poly, key in (_hall_polygons() if polygons is None else polygons):
         _fill_polygon(img, cam, poly, colours[key] if isinstance(key, str) else key)
+    if not net:
+        return img
     # Net: translucent dark mesh with a grid, then the white tape, then the posts.
     xs = np.linspace(-court.HALF_WIDTH_DOUBLES, court.HALF_WIDTH_DOUBLES, 9)
     overlay = img.copy()

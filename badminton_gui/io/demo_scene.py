@@ -159,6 +159,7 @@ class DemoScene:
                        else RallyScript(self.seed, shots=style.rally_shots))
         self.cameras = [dr.PinholeCamera.from_rig(self.rig, i) for i in (0, 1)]
         self._look = None if style is None else style.look(self.cameras)
+        self._clothes = (None, None) if style is None else style.clothes()
         self._backgrounds = ([dr.render_background(c) for c in self.cameras] if style is None
                              else list(self._look.backgrounds))
         w, h = self.rig.image_size
@@ -214,7 +215,7 @@ class DemoScene:
     def _players(self, t: float) -> list[list]:
         """Projected body parts of both players, per camera."""
         caps = [player_capsules(self.script, p, t) for p in (NEAR, FAR)]
-        clothes = (None, None) if self.style is None else self.style.player_colours
+        clothes = self._clothes
         return [[pc for p in (NEAR, FAR) for pc in dr.project_capsules(cam, caps[p], p, clothes[p])]
                 for cam in self.cameras]
 
