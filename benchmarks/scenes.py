@@ -30,7 +30,7 @@ import json
 import math
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
@@ -233,17 +233,41 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-frames", type=int, default=None, help="at most this many frames a clip")
     ap.add_argument("--jobs", type=int, default=1, help="clips tracked in parallel processes")
     ap.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
+    ap.add_argument("--log", type=Path, default=None, metavar="FILE",
+                    help="append each finished clip's counts to FILE (JSON lines); clips already "
+                         "in FILE are not run again, so a stopped run resumes")
     args = ap.parse_args(argv)
     seeds = args.seeds if args.seeds is not None else (1 if args.quick else 8)
     seconds = args.seconds if args.seconds is not None else (5.0 if args.quick else 8.0)
-    tasks = [(fam, seed, seconds, args.max_frames) for fam in args.families
-             for seed in range(args.first_seed, args.first_seed + seeds)]
+    # Seed by seed across the families: a run stopped early has every family.
+    tasks = [(fam, seed, seconds, args.max_frames)
+             for seed in range(args.first_seed, args.first_seed + seeds) for fam in args.families]
+    done = {}
+    if args.log is not None and args.log.is_file():
+        for line in args.log.read_text(encoding="utf-8").splitlines():
+            record = json.loads(line)
+            done[tuple(record["task"])] = record["clip"]
     start = time.perf_counter()
+    todo = [t for t in tasks if t not in done]
+
+    def finished(task, clip) -> None:
+        done[task] = clip
+        if args.log is not None:
+            with open(args.log, "a", encoding="utf-8") as fh:
+                fh.write(json.dumps(_finite({"task": list(task), "clip": clip})) + "\n")
+        if not args.json:
+            print(f"  done {task[0]} seed {task[1]} ({len(done)}/{len(tasks)}, "
+                  f"{time.perf_counter() - start:.0f} s)", file=sys.stderr, flush=True)
+
     if args.jobs > 1:
         with ProcessPoolExecutor(args.jobs) as pool:
-            clips = list(pool.map(_run_one, tasks))
+            futures = {pool.submit(_run_one, t): t for t in todo}
+            for future in as_completed(futures):
+                finished(futures[future], future.result())
     else:
-        clips = [_run_one(t) for t in tasks]
+        for task in todo:
+            finished(task, _run_one(task))
+    clips = [done[t] for t in tasks]
     families = {fam: summarise([c for c in clips if c["family"] == fam]) for fam in args.families}
     if args.json:
         print(json.dumps(_finite({
