@@ -226,7 +226,7 @@ def _run_one(task) -> dict:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.partition("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--quick", action="store_true", help="1 seed per family, 5 s clips (≈ 2 min on an idle core)")
+    ap.add_argument("--quick", action="store_true", help="1 seed per family, 5 s clips")
     ap.add_argument("--seeds", type=int, default=None, help="seeds per family (default 8; --quick 1)")
     ap.add_argument("--first-seed", type=int, default=BENCHMARK_SEEDS_FROM,
                     help=f"first seed (default {BENCHMARK_SEEDS_FROM}: the reserved benchmark seeds)")
