@@ -323,6 +323,20 @@ def run_real(folder: Path, noise: float, ahead: float = 0.3) -> int:
     return 0
 
 
+def prediction_before(history, t_from: float, t_ask: float):
+    """(landing prediction, payload) of the last step of ``history`` — (t, FlightInfo, payload)
+    in time order — between ``t_from`` (the shot's hit) and ``t_ask``; (None, payload) when that
+    step has no prediction of this shot, (None, None) with no step at all."""
+    before = [(info, payload) for t, info, payload in history if t_from <= t <= t_ask]
+    info, payload = before[-1] if before else (None, None)
+    # A flight that lost its points keeps its last prediction (in_flight False): it counts when
+    # that flight was followed during this shot (not a previous shot's).
+    if info is not None and (info.in_flight or any(
+            i.in_flight and i.shot_index == info.shot_index for i, _ in before)):
+        return info.prediction, payload
+    return None, payload
+
+
 def run_demo_track(folders: list[Path]) -> int:
     """Speed and landing of Trajectory on the pipeline's own 3D points (demo court truth).
 
@@ -390,15 +404,8 @@ def run_demo_track(folders: list[Path]) -> int:
             acc["landed"] += 1
             parts = []
             for lead in LEAD_TIMES_MS:
-                before = [(info, row) for t, info, _, row in history
-                          if arr[0, 0] <= t <= t_land - lead / 1000.0]
-                info, row = before[-1] if before else (None, None)
-                # A flight that lost its points keeps its last prediction (in_flight False): it
-                # counts when that flight was followed during this shot (not a previous shot's).
-                pred = None
-                if info is not None and (info.in_flight or any(
-                        i.in_flight and i.shot_index == info.shot_index for i, _ in before)):
-                    pred = info.prediction
+                pred, row = prediction_before([(t, info, row) for t, info, _, row in history],
+                                              arr[0, 0], t_land - lead / 1000.0)
                 if pred is None:
                     acc["lead"][lead].append(None)
                     parts.append(f"{lead}: —")

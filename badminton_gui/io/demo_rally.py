@@ -225,8 +225,11 @@ def _next_kind(incoming: str, rng: np.random.Generator) -> tuple[str, float]:
 class RallyScript:
     """Shots and player keys generated lazily from a seed; random access by time."""
 
-    def __init__(self, seed: int = 0) -> None:
+    def __init__(self, seed: int = 0, shots: tuple[int, int] = (3, 10)) -> None:
+        # ``shots``: a rally has lo ≤ n < hi shots; shorter rallies land more often per second
+        # of footage (the landing benchmark of the randomised scenes, ``demo_style.py``).
         self._rng = np.random.default_rng(seed)
+        self._shots = (int(shots[0]), int(shots[1]))
         self.segments: list[Segment] = []
         self._starts: list[float] = []
         self.contacts: list[Contact] = []
@@ -268,7 +271,7 @@ class RallyScript:
         rng = self._rng
         server = self._rally_count % 2
         self._rally_count += 1
-        n_shots = int(rng.integers(3, 10))
+        n_shots = int(rng.integers(*self._shots))
         s = _side_sign(server)
         server_x = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.3, 0.9))
         p0 = np.array([server_x, s * rng.uniform(2.4, 3.2), 1.0])

@@ -170,12 +170,21 @@ def _net_top(x: float) -> float:
     return court.NET_HEIGHT_CENTRE + (court.NET_HEIGHT_POSTS - court.NET_HEIGHT_CENTRE) * frac
 
 
-def render_background(cam: PinholeCamera) -> np.ndarray:
-    """The static hall, court, posts and net as this camera sees them (BGR uint8)."""
+def render_background(cam: PinholeCamera, polygons=None, colours=None, net: bool = True
+                      ) -> np.ndarray:
+    """The static hall, court, posts and net as this camera sees them (BGR uint8).
+
+    ``polygons``: (3D polygon, colour key or BGR tuple) in painter's order, instead of the demo
+    hall's (a randomised hall, ``demo_style.py``); ``colours``: the keys' colours, net and posts
+    included (default ``COLOURS``); ``net=False``: the hall alone, without net and posts.
+    """
+    colours = COLOURS if colours is None else colours
     w, h = cam.size
     img = np.zeros((h, w, 3), np.uint8)
-    for poly, key in _hall_polygons():
-        _fill_polygon(img, cam, poly, COLOURS[key])
+    for poly, key in (_hall_polygons() if polygons is None else polygons):
+        _fill_polygon(img, cam, poly, colours[key] if isinstance(key, str) else key)
+    if not net:
+        return img
     # Net: translucent dark mesh with a grid, then the white tape, then the posts.
     xs = np.linspace(-court.HALF_WIDTH_DOUBLES, court.HALF_WIDTH_DOUBLES, 9)
     overlay = img.copy()
@@ -183,23 +192,23 @@ def render_background(cam: PinholeCamera) -> np.ndarray:
         top0, top1 = _net_top(x0), _net_top(x1)
         quad = np.array([[x0, 0, top0 - court.NET_TOP_OF_MESH_DROP], [x1, 0, top1 - court.NET_TOP_OF_MESH_DROP],
                          [x1, 0, top1], [x0, 0, top0]])
-        _fill_polygon(overlay, cam, quad, COLOURS["net"])
+        _fill_polygon(overlay, cam, quad, colours["net"])
     img[:] = cv2.addWeighted(overlay, 0.45, img, 0.55, 0)
     grid = img.copy()
     for x in np.arange(-court.HALF_WIDTH_DOUBLES, court.HALF_WIDTH_DOUBLES + 1e-6, 0.15):
         top = _net_top(x)
-        _draw_segment(grid, cam, (x, 0, top - court.NET_TOP_OF_MESH_DROP), (x, 0, top), COLOURS["net"], 1)
+        _draw_segment(grid, cam, (x, 0, top - court.NET_TOP_OF_MESH_DROP), (x, 0, top), colours["net"], 1)
     for dz in np.arange(0.0, court.NET_TOP_OF_MESH_DROP, 0.15):
         for x0, x1 in zip(xs[:-1], xs[1:]):
             _draw_segment(grid, cam, (x0, 0, _net_top(x0) - dz), (x1, 0, _net_top(x1) - dz),
-                          COLOURS["net"], 1)
+                          colours["net"], 1)
     img[:] = cv2.addWeighted(grid, 0.5, img, 0.5, 0)
     for x0, x1 in zip(xs[:-1], xs[1:]):
         quad = np.array([[x0, 0, _net_top(x0) - 0.075], [x1, 0, _net_top(x1) - 0.075],
                          [x1, 0, _net_top(x1)], [x0, 0, _net_top(x0)]])
-        _fill_polygon(img, cam, quad, COLOURS["tape"])
+        _fill_polygon(img, cam, quad, colours["tape"])
     for bottom, top in court.net_posts():
-        _draw_capsule(img, cam, bottom, top, 0.02, 0.02, COLOURS["post"])
+        _draw_capsule(img, cam, bottom, top, 0.02, 0.02, colours["post"])
     return img
 
 
@@ -264,8 +273,10 @@ class ProjectedCapsule(NamedTuple):
     mean_depth: float               # (depth[0] + depth[1]) / 2, the painter's-order key
 
 
-def project_capsules(cam: PinholeCamera, capsules: list[Capsule], player: int
-                     ) -> list[ProjectedCapsule]:
+def project_capsules(cam: PinholeCamera, capsules: list[Capsule], player: int,
+                     colours: dict | None = None) -> list[ProjectedCapsule]:
+    """The player's body parts in this camera; ``colours``: their clothing (default
+    ``PLAYER_COLOURS[player]``)."""
     if not capsules:
         return []
     ends = np.array([[c.a, c.b] for c in capsules], float).reshape(-1, 3)
@@ -274,7 +285,7 @@ def project_capsules(cam: PinholeCamera, capsules: list[Capsule], player: int
     uv = cam.project_camera(np.where(pc[:, 2:3] >= NEAR_PLANE, pc, 1.0)).reshape(-1, 2, 2).tolist()
     depth = pc[:, 2].reshape(-1, 2).tolist()
     focal = cam.focal
-    colours = PLAYER_COLOURS[player]
+    colours = PLAYER_COLOURS[player] if colours is None else colours
     out = []
     for i, c in enumerate(capsules):
         if not in_front[i]:
@@ -344,22 +355,25 @@ def lying_direction(horizontal) -> np.ndarray:
 
 
 def draw_shuttle(img: np.ndarray, cam: PinholeCamera, positions: np.ndarray,
-                 directions: np.ndarray, gain: float) -> None:
+                 directions: np.ndarray, gain: float, scale: float = 1.0,
+                 brightness: float = 1.0) -> None:
     """Composite a shuttle integrated over ``positions`` (K samples across the exposure).
 
     ``directions`` (K, 3) are unit flight directions: the skirt trails opposite to them.
     Drawn at 4× into a two-channel patch (coverage, premultiplied grey), averaged over the
-    samples and reduced with INTER_AREA, so edges and blur are sub-pixel exact.
+    samples and reduced with INTER_AREA, so edges and blur are sub-pixel exact. ``scale``
+    multiplies the shuttle's dimensions, ``brightness`` its grey (a worn or differently lit
+    shuttle); at 1.0 both leave every product unchanged.
     """
     h_img, w_img = img.shape[:2]
     heads = cam.to_camera(positions)
-    tails = cam.to_camera(positions - SKIRT_LENGTH * directions)
+    tails = cam.to_camera(positions - (SKIRT_LENGTH * scale) * directions)
     if np.any(heads[:, 2] < NEAR_PLANE) or np.any(tails[:, 2] < NEAR_PLANE):
         return
     uv_h = cam.project_camera(heads)
     uv_t = cam.project_camera(tails)
-    r_h = cam.focal * CORK_RADIUS / heads[:, 2]
-    r_t = cam.focal * SKIRT_RADIUS / tails[:, 2]
+    r_h = cam.focal * (CORK_RADIUS * scale) / heads[:, 2]
+    r_t = cam.focal * (SKIRT_RADIUS * scale) / tails[:, 2]
     margin = float(max(r_h.max(), r_t.max())) + 2.0
     allpts = np.vstack([uv_h, uv_t])
     x0 = int(np.floor(allpts[:, 0].min() - margin))
@@ -384,7 +398,8 @@ def draw_shuttle(img: np.ndarray, cam: PinholeCamera, positions: np.ndarray,
     # operations in the same order, ``round`` = ``np.round`` (half to even): same pixels.
     uv_h_l, uv_t_l = uv_h.tolist(), uv_t.tolist()
     r_h_l, r_t_l = r_h.tolist(), r_t.tolist()
-    skirt_colour = (190, 165)          # coverage 0.75, grey 215 premultiplied
+    skirt_colour = (190, round(165 * brightness))   # coverage 0.75, grey 215 premultiplied
+    cork_colour = (255, round(250 * brightness))
     for k in range(len(positions)):
         canvas.fill(0)
         (hx, hy), (tx, ty) = uv_h_l[k], uv_t_l[k]
@@ -406,7 +421,7 @@ def draw_shuttle(img: np.ndarray, cam: PinholeCamera, positions: np.ndarray,
         r_end = rt * max(0.3, end_on[k])
         cv2.circle(canvas, (round(ctx), round(cty)), max(round(r_end * SCALE), 1), skirt_colour,
                    -1, cv2.LINE_AA, SHIFT)
-        cv2.circle(canvas, (round(chx), round(chy)), max(round(rh * SCALE), 1), (255, 250), -1,
+        cv2.circle(canvas, (round(chx), round(chy)), max(round(rh * SCALE), 1), cork_colour, -1,
                    cv2.LINE_AA, SHIFT)
         # cv2.accumulate: 3x faster than numpy's casting ``acc += canvas``; both add integers
         # below 2^24 in float32, which is exact, so the sums are the same.

@@ -10,6 +10,8 @@ Its ``rig`` is the exact ``StereoRig`` (with court pose) that the frames were re
 
 Two rigs: ``"binocular"`` (two cameras 0.6 m apart beside the near half of the court, where
 the robot plays) and ``"ends"`` (one camera high behind each baseline, like the NYCU rig).
+A ``SceneStyle`` (``demo_style.py``) replaces the hall, rig, lens, camera, shuttle and players
+by a randomised one; without it the scene is the demo court every earlier figure was taken on.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import math
 from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -28,6 +31,9 @@ from ..core.rig import StereoRig
 from ..core.types import StereoFrame
 from . import demo_render as dr
 from .demo_rally import FAR, NEAR, RallyScript, player_capsules
+
+if TYPE_CHECKING:
+    from .demo_style import SceneStyle
 
 RIG_KINDS = ("binocular", "ends")
 REFERENCE_SIZE = (1280, 720)
@@ -129,31 +135,42 @@ class DemoScene:
 
     def __init__(self, seed: int = 0, size: tuple[int, int] = REFERENCE_SIZE,
                  rig: str = "binocular", fps: float = 120.0, n_frames: int | None = None,
-                 noise: bool = True, flicker: bool = True) -> None:
-        if rig not in RIG_KINDS:
+                 noise: bool = True, flicker: bool = True,
+                 style: "SceneStyle | None" = None) -> None:
+        """``style``: a randomised scene (``demo_style.sample_scene``); it decides the rig, the
+        image size and the frame rate, so ``size``, ``rig`` and ``fps`` are not used with it."""
+        self.style = style
+        if style is not None:
+            rig, size, fps = style.family, style.size, style.fps
+        elif rig not in RIG_KINDS:
             raise ValueError(f"unknown demo rig {rig!r}: choose one of {', '.join(RIG_KINDS)}")
         if fps <= 0:
             raise ValueError(f"fps must be positive, got {fps}")
         self.seed = int(seed)
         self.rig_kind = rig
         self.name = f"Demo court ({rig}, seed {self.seed})"
-        self.rig: StereoRig = make_rig(rig, size)
+        self.rig: StereoRig = make_rig(rig, size) if style is None else style.rig()
         self._fps = float(fps)
         self.n_frames = n_frames
         self.noise = noise
         self.flicker = flicker
-        self.exposure = EXPOSURE
-        self.script = RallyScript(self.seed)
+        self.exposure = EXPOSURE if style is None else style.exposure
+        self.script = (RallyScript(self.seed) if style is None
+                       else RallyScript(self.seed, shots=style.rally_shots))
         self.cameras = [dr.PinholeCamera.from_rig(self.rig, i) for i in (0, 1)]
-        self._backgrounds = [dr.render_background(c) for c in self.cameras]
+        self._look = None if style is None else style.look(self.cameras)
+        self._clothes = (None, None) if style is None else style.clothes()
+        self._backgrounds = ([dr.render_background(c) for c in self.cameras] if style is None
+                             else list(self._look.backgrounds))
         w, h = self.rig.image_size
         self._noise = []
         if noise:
+            sigma = NOISE_SIGMA if style is None else style.noise_sigma
             for cam in (0, 1):
                 rng = np.random.default_rng([self.seed, 1000 + cam])
                 # One flat buffer: every frame's noise is a *contiguous* slice of it, so cv2.add
                 # reads it in place (a 2-D window of a wider array is copied first: 4 ms a frame).
-                buf = rng.normal(NOISE_MEAN, NOISE_SIGMA, (h + NOISE_PAD + 1) * w * 3)
+                buf = rng.normal(NOISE_MEAN, sigma, (h + NOISE_PAD + 1) * w * 3)
                 self._noise.append(np.clip(np.round(buf), 0, 255).astype(np.uint8))
         self._truth_cache: OrderedDict[int, tuple[FrameTruth, list]] = OrderedDict()
         self._next = 0
@@ -190,10 +207,16 @@ class DemoScene:
             raise ValueError(f"frame index must be a non-negative integer, got {index!r}")
         return int(index) / self._fps
 
+    def background(self, camera: int) -> np.ndarray:
+        """A copy of the static image of camera 0 (left) or 1 (right): no flicker, noise, boards,
+        players or shuttle."""
+        return self._backgrounds[camera].copy()
+
     def _players(self, t: float) -> list[list]:
         """Projected body parts of both players, per camera."""
         caps = [player_capsules(self.script, p, t) for p in (NEAR, FAR)]
-        return [[pc for p in (NEAR, FAR) for pc in dr.project_capsules(cam, caps[p], p)]
+        clothes = self._clothes
+        return [[pc for p in (NEAR, FAR) for pc in dr.project_capsules(cam, caps[p], p, clothes[p])]
                 for cam in self.cameras]
 
     def _truth_and_players(self, index: int) -> tuple[FrameTruth, list]:
@@ -237,6 +260,8 @@ class DemoScene:
         if not self.flicker:
             return 1.0
         t = self.time_of(index)
+        if self.style is not None:
+            return self.style.flicker_gain(t)
         return 1.0 + 0.02 * math.sin(2 * math.pi * 100.0 * t) + 0.01 * math.sin(2 * math.pi * 0.37 * t + self.seed)
 
     def _exposure_samples(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
@@ -289,6 +314,8 @@ class DemoScene:
                 img = cv2.convertScaleAbs(bg, alpha=gain, beta=beta)
             else:
                 img = bg.copy()
+            if self._look is not None:
+                self._look.draw_boards(img, cam_i, truth.t)
             # Painter's order: body parts and the shuttle from far to near.
             items = [(pc.mean_depth, 0, pc) for pc in players[cam_i]]
             if samples is not None:
@@ -297,7 +324,11 @@ class DemoScene:
             items.sort(key=lambda it: -it[0])
             for _, is_shuttle, pc in items:
                 if is_shuttle:
-                    dr.draw_shuttle(img, cam, samples[0], samples[1], gain)
+                    if self.style is None:
+                        dr.draw_shuttle(img, cam, samples[0], samples[1], gain)
+                    else:
+                        dr.draw_shuttle(img, cam, samples[0], samples[1], gain,
+                                        self.style.shuttle_scale, self.style.shuttle_brightness)
                 else:
                     dr.draw_capsule(img, pc, gain)
             if self.noise:
