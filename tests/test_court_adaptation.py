@@ -111,11 +111,18 @@ def _three_flights(adaptation, tracker, rng):
 def test_training_runs_beside_the_tracker_and_its_classifiers_go_in_at_a_later_step():
     params = _live_params()
     tracker = _Tracker(params)
+    shipped = tracker.left.classifier
     adaptation = CourtAdaptation(params.adapt, train=_quick)
-    t = _three_flights(adaptation, tracker, np.random.default_rng(1))
+    rng = np.random.default_rng(1)
+    t, step = 0.0, 0
+    while adaptation.progress.state == "collecting":
+        tracker.left.last_scored = tracker.right.last_scored = _learnable_scored(rng)
+        adaptation.observe(tracker, _result(t, step // 8))       # flights of 8 pairs
+        t, step = t + 0.01, step + 1
     assert adaptation.progress.state == "training" and adaptation.progress.fraction == 1.0
+    assert adaptation.progress.flights == 2 and tracker.left.classifier is shipped
     adaptation.wait(120)
-    assert adaptation.adapted is None       # not while the tracker is inside a step
+    assert adaptation.adapted is None       # not while the tracker may be inside a step
     adaptation.observe(tracker, _result(t, -1, in_flight=False))
     assert adaptation.progress.state == "adapted" and tracker.right.classifier is adaptation.adapted[1]
 

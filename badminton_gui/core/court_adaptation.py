@@ -42,7 +42,7 @@ REFERENCE_WIDTH = 1280.0
 class AdaptProgress:
     """How far the court adaptation is: the flights and candidates collected, and its state."""
 
-    state: str = "off"                   # off / collecting / training / adapted
+    state: str = "off"                   # off / collecting / training / adapted / failed
     flights: int = 0                     # flights that labelled their frames
     positives: tuple[int, int] = (0, 0)  # shuttle candidates per camera
     negatives: tuple[int, int] = (0, 0)  # candidates labelled not the shuttle per camera
@@ -54,10 +54,19 @@ class AdaptProgress:
         if self.state == "off":
             return ""
         if self.state == "collecting":
-            return f"adapting to the court: {100 * self.fraction:.0f} % ({self.flights} flights)"
+            return f"adapting to the court: {100 * self.fraction:.0f} %"
         if self.state == "training":
             return "adapting to the court: training"
-        return f"adapted to the court ({self.flights} flights, {min(self.positives)} shuttle frames)"
+        if self.state == "failed":
+            return "not adapted to the court"
+        return "adapted to the court"
+
+    @property
+    def detail(self) -> str:
+        """What it learns from, one line (a tooltip)."""
+        return (f"{self.flights} flight{'s' if self.flights != 1 else ''} both cameras agreed on; shuttle "
+                f"candidates {self.positives[0]} / {self.positives[1]}, others {self.negatives[0]} / "
+                f"{self.negatives[1]} (left / right)")
 
 
 class StereoHarvest:
@@ -204,6 +213,8 @@ class CourtAdaptation:
             state = "off"
         elif self.adapted is not None:
             state = "adapted"
+        elif self._failed:
+            state = "failed"
         elif self._thread is not None:
             state = "training"
         else:
@@ -230,6 +241,8 @@ class CourtAdaptation:
         if self._trained is not None:
             self._swap(detectors, params)
             return
+        if self._failed:
+            self._thread = None
         if self._thread is not None or self._failed:
             return
         self.harvest.add(result, (detectors[0].last_scored, detectors[1].last_scored))
