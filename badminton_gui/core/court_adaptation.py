@@ -17,6 +17,14 @@ pseudo-rehearsal of the classifier it starts from) once the harvest reaches its 
 background thread, and swaps the classifiers into the tracker's detectors between two steps.
 ``adapt_to_stereo_recording`` is the offline form: one pass over a recording, the classifiers from
 everything it collected (``track --adapt`` tracks a second pass with them).
+
+What it gains and costs, hence off by default (``adapt.enabled``): on a held-out rally of the
+NYCU rig (rally_11-48-10, first pass: 7 flights, ~720 shuttle candidates a camera) it lost,
+95.02 / 75.99 -> 91.53 / 72.60 % per camera, mostly by new reports where the labels have none;
+on the demo court at 640×360 (seed 5) 97.80 / 96.90 -> 97.70 / 97.90 %
+(``benchmarks/court_adaptation.py``). As with ``core/adaptation.py``'s runs on the rig, the
+shipped classifier already ranks the shuttle well there, and retraining on a few hundred
+pseudo-labelled frames trades that for the harvest's imbalance and mistakes.
 """
 
 from __future__ import annotations
