@@ -107,8 +107,9 @@ def _lookahead_args(lookahead: int | None) -> list[str]:
 
 
 def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path, preset: str | None = None,
-                lookahead: int | None = None):
-    """Jobs for one stereo clip: `track` first, then `detect` per camera."""
+                lookahead: int | None = None, adapt: bool | None = None):
+    """Jobs for one stereo clip: `track` first, then `detect` per camera. ``adapt``: `track
+    --adapt` / `--no-adapt` (None: the preset's ``adapt.enabled``)."""
     out_track = tmp / f"{clip.name}_track.csv"
     extra = ["--max-frames", str(max_frames)] if max_frames else []
     preset_args = ["--preset", preset] if preset else []
@@ -124,7 +125,8 @@ def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path, preset:
     def track():
         rate, _ = run_cli(["track", "--left", str(clip.left), "--right", str(clip.right),
                            "--calib", str(rig_path), "-o", str(out_track)]
-                          + pairing + extra + preset_args)
+                          + pairing + extra + preset_args
+                          + ([] if adapt is None else ["--adapt" if adapt else "--no-adapt"]))
         left, right, rows = read_track(out_track)
         rows_out = [Row(clip.name, "left", "track", clip.held_out, "stereo",
                         score(left, clip.left_labels, 2048, max_frames, clip.left if seek else None),
@@ -295,6 +297,10 @@ def main() -> int:
                     help="preset name or .json for the broadcast clips (default: broadcast)")
     ap.add_argument("--lookahead", type=int, default=None, metavar="N",
                     help="frames of look-ahead for every CLI run (default: the CLI's own default; 0 = live readout)")
+    ap.add_argument("--adapt", action=argparse.BooleanOptionalAction, default=None,
+                    help="stereo clips: `track --adapt` (each camera's classifier adapted to the clip "
+                         "from a first pass's flights, core/court_adaptation.py) or --no-adapt "
+                         "(default: the preset's adapt.enabled)")
     ap.add_argument("--keep", default=None, metavar="DIR",
                     help="write the CLI outputs (track/detect CSVs, rig) here and keep them for diagnosis")
     args = ap.parse_args()
@@ -325,7 +331,7 @@ def main() -> int:
             run_cli(["import-calib", "--nycu", str(cfg1), str(cfg2), "-o", str(rig_path)])
         jobs = []
         for c in stereo:
-            clip_jobs = stereo_jobs(c, tmp, max_frames, rig_path, args.preset, args.lookahead)
+            clip_jobs = stereo_jobs(c, tmp, max_frames, rig_path, args.preset, args.lookahead, args.adapt)
             jobs += clip_jobs[:1] if args.track_only else clip_jobs[1:] if args.detect_only else clip_jobs
         jobs += [broadcast_job(c, tmp, max_frames, args.lookahead, args.broadcast_preset) for c in broadcast]
         start = time.perf_counter()

@@ -7,7 +7,7 @@ import logging
 import sys
 
 from ..core.tracker import configure_opencv_threads
-from ..io.track_file import TrackFileError, track_to_csv
+from ..io.track_file import TrackFileError, adapt_to_pair, track_to_csv
 from .common import (Progress, UserError, add_json_argument, add_lookahead_argument, add_preset_argument,
                      add_video_pair_arguments, open_stereo_videos, outcomes_json, params_from_args,
                      baud_rate, frame_count, preset_file, print_json, refuse_output_over_inputs)
@@ -39,6 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                          "('court' or 'left-camera'), rig_epipolar_px (null: not measured), rig_note "
                          "('' when the rig held), score (null without labels, else left/right with "
                          "tp, tn, fp1, fp2, fn and accuracy, precision, recall, f1 as fractions)")
+    p.add_argument("--adapt", action=argparse.BooleanOptionalAction, default=None,
+                   help="first adapt each camera's classifier to this court from the flights both "
+                        "cameras agree on (two passes; default: the preset's adapt.enabled)")
     p.add_argument("--trace", action="store_true", help="a last CSV column, Trace, naming the tracker's "
                    "rules that fired on each row's step")
     p.set_defaults(func=run)
@@ -48,6 +51,10 @@ def run(args: argparse.Namespace) -> int:
     refuse_output_over_inputs(args.output, args.left, args.right, args.calib, args.left_times,
                               args.right_times, preset_file(args))
     params = params_from_args(args)
+    adapt = params.adapt.enabled if args.adapt is None else args.adapt
+    # The file has its future: the classifiers come from a whole first pass, not live.
+    params = params.with_value("adapt.enabled", False)
+    classifiers = _adapted_classifiers(args, params) if adapt else None
     link = _robot_link(args)     # before the videos' reader thread: a refused port starts nothing
     source = None
     try:
@@ -58,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             summary = track_to_csv(source, rig, params, args.output, max_frames=args.max_frames,
                                    link=link, progress=None if args.quiet else progress.update,
-                                   truth=truth, trace=args.trace)
+                                   truth=truth, trace=args.trace, classifiers=classifiers)
         except TrackFileError as exc:
             raise UserError(str(exc)) from None
         finally:
@@ -94,6 +101,28 @@ def run(args: argparse.Namespace) -> int:
         if summary.score_text:
             print(summary.score_text + " (the timestamp files' labels)")
     return 0
+
+
+def _adapted_classifiers(args, params):
+    """The first pass of ``--adapt``: each camera's classifier adapted to this court, or None
+    (said on stderr) when no flight both cameras agreed on was long enough."""
+    rig, source, total = open_stereo_videos(args)
+    configure_opencv_threads()
+    progress = Progress(total, "adapt")
+    try:
+        classifiers, harvest = adapt_to_pair(source, rig, params, max_frames=args.max_frames,
+                                             progress=None if args.quiet else progress.update)
+    finally:
+        source.close()
+        if not args.quiet:
+            progress.close()
+    said = (f"{harvest.flights} flights, shuttle candidates {harvest.positives[0]} / {harvest.positives[1]}, "
+            f"others {harvest.negatives[0]} / {harvest.negatives[1]} (left / right)")
+    if classifiers is None:
+        _log.warning("adaptation: nothing to learn from (%s); the preset's classifiers are kept", said)
+    elif not args.quiet:
+        print(f"adapted to the court: {said}", file=sys.stderr)
+    return classifiers
 
 
 def _robot_link(args):

@@ -24,12 +24,12 @@ from .detect.params import (AssociationParams, BackgroundParams, BinarizeParams,
                             WindowParams)
 from .flight.params import LookaheadParams, TrajectoryParams
 from .param_fields import ParamError, ParamGroup, choice, flag, param
-from .stereo.params import StereoParams
+from .stereo.params import CourtAdaptParams, StereoParams
 
 __all__ = ["TrackerParams", "ParamError", "ParamGroup", "param", "choice", "flag", "field_info",
            "BackgroundParams", "BinarizeParams", "ContourLengthParams", "TiltedRectParams",
            "ColourParams", "MotionParams", "AssociationParams", "ClassifierParams", "WindowParams",
-           "StereoParams", "TrajectoryParams", "LookaheadParams"]
+           "StereoParams", "TrajectoryParams", "LookaheadParams", "CourtAdaptParams"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,6 +48,7 @@ class TrackerParams:
     trajectory: TrajectoryParams = field(default_factory=TrajectoryParams)
     lookahead: LookaheadParams = field(default_factory=LookaheadParams)
     window: WindowParams = field(default_factory=WindowParams)
+    adapt: CourtAdaptParams = field(default_factory=CourtAdaptParams)
 
     # ---- generic access, used by presets, the tuning dialog and the CLI -------------------
     def groups(self) -> Iterator[tuple[str, ParamGroup]]:

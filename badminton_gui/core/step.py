@@ -34,6 +34,8 @@ class Step:
     point: np.ndarray | None = None
     epi: float | None = None
     trace: list[str] | None = None
+    # The pair's measured point extended the followed flight (``TrackResult.pair_in_flight``).
+    in_flight: bool = False
 
     def fired(self, rule: str, cam: int | None = None) -> None:
         """The rule ``rule`` (of camera ``cam``) changed this step's readout."""

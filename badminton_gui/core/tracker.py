@@ -33,6 +33,10 @@ Cameras without a common trigger (``process_frame``): a step may bring one camer
 measured. In a pair whose images were taken apart, the right detection is moved along its track
 to the left image's time before the two are paired (``stereo.align_pairs``).
 
+``StereoTracker.adaptation`` (``core/court_adaptation.py``, ``adapt`` parameters, off by default)
+learns the court's shuttle from the flights both cameras agree on and swaps each camera's
+classifier between two steps.
+
 ``StereoTracker.trace = True`` makes each result name the rules that fired on its step
 (``TrackResult.trace``).
 
@@ -54,6 +58,7 @@ import cv2
 import numpy as np
 import numpy.ma  # noqa: F401  np.median imports it on its first call: 17 ms in the middle of a rally
 
+from .court_adaptation import CourtAdaptation
 from .detector import CameraDetector
 from .frame_checks import InputChecks
 from .flight.camera_rules import HoldInputs, ReadoutInputs, ReadoutState, hold_transition, readout_transition
@@ -94,6 +99,7 @@ class StereoTracker:
         self._checked_size = False
         # Each result names the rules that fired on its step (``TrackResult.trace``).
         self.trace = False
+        self.adaptation = CourtAdaptation(self.params.adapt)
         self._new_state()
 
     def _new_state(self) -> None:
@@ -148,12 +154,12 @@ class StereoTracker:
 
     @property
     def rig_epipolar_px(self) -> float | None:
-        """How far the rig really misses: the median epipolar error (px) of the sure pairs
-        learnt so far, or None before enough of them. A chessboard-calibrated rig stays at a few
-        px; the NYCU rig imported from its ``.cfg`` files misses by ≈ 30 px."""
+        """How far the rig really misses: the median epipolar error (px) of the sure pairs learnt so
+        far (None: too few yet); a chessboard rig a few px, the NYCU rig from its ``.cfg`` ≈ 30 px."""
         return self.gate.rig_error_px()
 
     def close(self) -> None:
+        self.adaptation.close()
         if self._pool is not None:
             self._pool.shutdown(wait=True)
             self._pool = None
@@ -207,10 +213,8 @@ class StereoTracker:
 
     def _check_sizes(self, left_bgr: np.ndarray, right_bgr: np.ndarray) -> None:
         if not self._checked_size:
-            h, w = left_bgr.shape[:2]
-            self.rig.check_image_size(w, h, "the left frames")
-            hr, wr = right_bgr.shape[:2]
-            self.rig.check_image_size(wr, hr, "the right frames")
+            for image, name in ((left_bgr, "the left frames"), (right_bgr, "the right frames")):
+                self.rig.check_image_size(image.shape[1], image.shape[0], name)
             self._checked_size = True
 
     # ---- stage 1: segmentation and candidates, per camera ----------------------------------
@@ -316,13 +320,15 @@ class StereoTracker:
             predicted_distance = None if guide is None else float(np.linalg.norm(self.rig.to_left([guide[0]])[0]))
         if step.trace is not None:
             step.trace.append(f"phase:{self.phase.phase.name.lower()}")
-        return TrackResult(
+        result = TrackResult(
             index=index, timestamp=step.t, left=step.results[0], right=step.results[1], point=point,
             in_court_frame=self.rig.has_court_pose, distance=distance, speed=_speed(flight),
             epipolar_error=step.epi, index_right=index_right,
             measured_point=measured, predicted_distance=predicted_distance,
             processing_ms=(time.perf_counter() - start) * 1000.0, flight=flight,
-            trace=() if step.trace is None else tuple(step.trace))
+            trace=() if step.trace is None else tuple(step.trace), pair_in_flight=step.in_flight)
+        self.adaptation.observe(self, result)
+        return result
 
     # ---- a step with one camera's image ----------------------------------------------------
     def _process_one(self, cam: int, frame_bgr: np.ndarray, t: float, index: int, index_right: int,

@@ -187,6 +187,9 @@ class TrackResult:
     # The rules that fired on this step, in order (``StereoTracker.trace``; empty unless enabled,
     # so a result stays cheap), e.g. ("guided_search:left", "landed_hold:right", "phase:landed").
     trace: tuple[str, ...] = ()
+    # The pair's measured point extended the followed 3D flight (the drag-model filter took it):
+    # both cameras' reports were the shuttle in flight (core/court_adaptation.py learns from them).
+    pair_in_flight: bool = False
 
     @property
     def has_point(self) -> bool:

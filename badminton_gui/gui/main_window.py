@@ -446,6 +446,8 @@ class MainWindow(QMainWindow):
         self.statusBar().addPermanentWidget(self.status_record)
         self.status_state = QLabel("")
         self.statusBar().addPermanentWidget(self.status_state)
+        self.status_adapt = QLabel("")     # the court adaptation's progress ('adapt' parameters)
+        self.statusBar().addPermanentWidget(self.status_adapt)
         if self.gl_reason:
             note = QLabel("2D views only")
             note.setToolTip(self.gl_reason)
@@ -1261,6 +1263,9 @@ class MainWindow(QMainWindow):
             show(packet)
         if self.worker is not None and self.worker.link_error:
             self.link_panel.status.setText(self.worker.link_error)
+        if self.status_adapt.text() != packet.stats.adapt_text:
+            self.status_adapt.setText(packet.stats.adapt_text)
+            self.status_adapt.setToolTip(packet.stats.adapt_detail)
         self._check_keep_up(now, packet)
 
     def _check_keep_up(self, now: float, packet: DisplayPacket) -> None:

@@ -203,6 +203,9 @@ class WorkerStats:
     score_left: Outcomes | None = None
     score_right: Outcomes | None = None
     truth_name: str = ""
+    # The court adaptation's progress (``StereoTracker.adaptation``), one line; '' when off.
+    adapt_text: str = ""
+    adapt_detail: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -228,6 +231,14 @@ class DisplayPacket:
 
 
 SourceOpener = Callable[..., tuple[FrameSource, StereoRig]]
+
+
+def _adapt_readout(tracker) -> dict[str, str]:
+    """The court adaptation's status-bar line and its tooltip (none for one camera)."""
+    if not isinstance(tracker, StereoTracker):
+        return {}
+    progress = tracker.adaptation.progress
+    return {"adapt_text": progress.text, "adapt_detail": progress.detail if progress.text else ""}
 
 
 class OpeningContext:
@@ -712,9 +723,15 @@ class TrackingWorker(QObject):
                                      live=reader is not None,
                                      paced=reader is None and realtime and not stepping,
                                      rig_epipolar_px=tracker.rig_epipolar_px,
+<<<<<<< HEAD
                                      truth_name="" if truth is None else truth.name)
             show(readout.push(result, (frame, labels, t_available, live_stats, generation, diagnostics)),
                  stepping)
+=======
+                                     truth_name="" if truth is None else truth.name,
+                                     **_adapt_readout(tracker))
+            show(readout.push(result, (frame, labels, t_available, live_stats, generation)), stepping)
+>>>>>>> i40-adapt
 
     def _adapt(self, source: FrameSource, tracker: MonoTracker, context: OpeningContext,
                while_playing: bool = False) -> bool:

@@ -51,22 +51,25 @@ def evaluate_demo(seed: int = 0, frames: int = 1000, size: tuple[int, int] = (12
                   rig: str = "binocular", params: TrackerParams | None = None,
                   warmup: int = 0,
                   on_frame: Callable[[object, object, tuple[str, str]], None] | None = None,
-                  lookahead: int | None = None) -> DemoScore:
+                  lookahead: int | None = None, classifiers: tuple | None = None) -> DemoScore:
     """Track ``frames`` demo frames and score them against the scene's truth.
 
     ``on_frame(result, truth, (code_left, code_right))`` is called for every scored frame
     (the per-frame error listing of ``benchmarks/demo_accuracy.py --errors``). ``lookahead``:
     frames of look-ahead of the scored readout (core/lookahead.py; None: ``params``' own).
+    ``classifiers``: (left, right) candidate classifiers instead of the preset's (one adapted to
+    the court, ``core/court_adaptation.py``).
     """
     ks = (None,) if lookahead is None else (lookahead,)
-    return evaluate_demo_lookaheads(seed, frames, size, rig, params, warmup, on_frame, ks)[ks[0]]
+    return evaluate_demo_lookaheads(seed, frames, size, rig, params, warmup, on_frame, ks, classifiers)[ks[0]]
 
 
 def evaluate_demo_lookaheads(seed: int = 0, frames: int = 1000, size: tuple[int, int] = (1280, 720),
                              rig: str = "binocular", params: TrackerParams | None = None,
                              warmup: int = 0,
                              on_frame: Callable[[object, object, tuple[str, str]], None] | None = None,
-                             lookaheads: tuple[int | None, ...] = (0,)) -> dict:
+                             lookaheads: tuple[int | None, ...] = (0,),
+                             classifiers: tuple | None = None) -> dict:
     """One tracking run scored with several look-aheads: {K: DemoScore} (the readout is only
     post-processed, so each K gives what a run with that K would). ``on_frame`` sees the first K's
     readout.
@@ -76,6 +79,9 @@ def evaluate_demo_lookaheads(seed: int = 0, frames: int = 1000, size: tuple[int,
     params = params or TrackerParams()
     scene = DemoScene(seed=seed, size=size, rig=rig, n_frames=frames + warmup)
     tracker = StereoTracker(scene.rig, params)
+    if classifiers is not None:
+        tracker.left.use_classifier(classifiers[0])
+        tracker.right.use_classifier(classifiers[1])
     delays = {k: StereoLookahead(scene.rig, params if k is None else params.with_value("lookahead.frames", k),
                                  tracker.epipolar_tolerance) for k in lookaheads}
     tol = tolerance_px(size[0])

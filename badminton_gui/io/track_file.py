@@ -18,6 +18,7 @@ from typing import Callable
 from ..core.evaluation import LiveScore, Outcomes
 from ..core.params import TrackerParams
 from ..core.rig import StereoRig, refine_threshold
+from ..core.court_adaptation import StereoHarvest, adapt_to_stereo_recording
 from ..core.errors import TrackerInputError
 from ..core.track_lookahead import StereoLookahead
 from ..core.tracker import StereoTracker
@@ -196,3 +197,30 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                             None if score is None else score.outcomes(0),
                             None if score is None else score.outcomes(1),
                             tuple(sorted(withheld.items())), tuple(getattr(source, "notes", ())))
+
+
+def adapt_to_pair(source, rig: StereoRig, params: TrackerParams, *, max_frames: int | None = None,
+                  progress: Callable[[int], None] | None = None,
+                  should_stop: Callable[[], bool] | None = None) -> tuple[tuple | None, StereoHarvest]:
+    """The first pass of `track --adapt`: the recording tracked once with the preset's classifiers,
+    the candidates of every flight both cameras agree on labelled (core/court_adaptation.py), and
+    each camera's classifier trained on them: ((left, right) or None when the pass found nothing
+    to learn from or was stopped, the harvest). ``track_to_csv(classifiers=...)`` then tracks
+    a second pass with them. The source is not closed here."""
+    tracker = StereoTracker(rig, params.with_value("adapt.enabled", False))
+
+    def frames():
+        n = 0
+        while max_frames is None or n < max_frames:
+            frame = source.read()
+            if frame is None:
+                return
+            yield frame
+            n += 1
+            if progress is not None:
+                progress(n)
+
+    try:
+        return adapt_to_stereo_recording(tracker, frames(), should_stop or (lambda: False), params.adapt)
+    finally:
+        tracker.close()

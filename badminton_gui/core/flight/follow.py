@@ -45,7 +45,9 @@ class FlightFollower:
             sight_cam = self.sight.camera(step.dets[0], step.dets[1], step.t)
         if sight_cam is None:
             head = np.eye(3) * m.head_variance if m.head_variance > 0 else None
-            return self.trajectory.update(step.t, m.point, m.noise_shape, head), None
+            info = self.trajectory.update(step.t, m.point, m.noise_shape, head)
+            step.in_flight = m.point is not None and self.trajectory.filtered_position() is not None
+            return info, None
         # The right image's own time when its clock lags (``align_pairs``), never earlier
         # than the last step (the trajectory would take that for a replay and reset).
         last = self.trajectory.last_time

@@ -221,3 +221,29 @@ class StereoParams(ParamGroup):
                                         "ahead of the blob's 3D point along the landing direction (0 = off)")
     rest_cork_below: float = param(0.010, 0.0, 0.1, step=0.001, unit="m", label="Lying: cork below",
                                    help="... and this much lower (the skirt's rim holds the tail up)")
+
+
+@dataclass(frozen=True, slots=True)
+class CourtAdaptParams(ParamGroup):
+    """Adapting the candidate classifier to the court in front of the cameras, from flights both
+    cameras agree on (``core/court_adaptation.py``)."""
+
+    TITLE: ClassVar[str] = "Adapt to the court"
+    enabled: bool = flag(False, label="Adapt to the court",
+                         help="Flights both cameras agree on and the 3D flight filter follows label each "
+                              "camera's candidates (the pair: the shuttle; blobs far from it: not); once "
+                              "enough are collected, each camera's classifier is retrained on them and "
+                              "swapped in between two steps (`track --adapt`: from a first pass)")
+    min_flight_points: int = param(20, 3, 1000, step=1, unit="pairs", label="From flights of at least",
+                                   help="A flight labels its frames only when the flight filter took at "
+                                        "least this many of its pairs (a short one may be a wrong pair)")
+    target_flights: int = param(6, 1, 500, step=1, unit="flights", label="Adapt after",
+                                help="Live: the classifiers are retrained once this many flights ...")
+    target_positives: int = param(400, 10, 100000, step=10, unit="frames", label="... and shuttle frames",
+                                  help="... and this many labelled shuttle candidates per camera are collected")
+    radius: float = param(8.0, 1.0, 100.0, step=0.5, unit="px", label="The shuttle within",
+                          help="A candidate this close to the camera's report on a flight's pair is the "
+                               "shuttle (px at 1280 wide)")
+    far_radius: float = param(40.0, 5.0, 2000.0, step=5.0, unit="px", label="Not the shuttle beyond",
+                              help="A candidate this far from that report is not the shuttle; those in "
+                                   "between are not used (px at 1280 wide)")
