@@ -723,15 +723,10 @@ class TrackingWorker(QObject):
                                      live=reader is not None,
                                      paced=reader is None and realtime and not stepping,
                                      rig_epipolar_px=tracker.rig_epipolar_px,
-<<<<<<< HEAD
-                                     truth_name="" if truth is None else truth.name)
-            show(readout.push(result, (frame, labels, t_available, live_stats, generation, diagnostics)),
-                 stepping)
-=======
                                      truth_name="" if truth is None else truth.name,
                                      **_adapt_readout(tracker))
-            show(readout.push(result, (frame, labels, t_available, live_stats, generation)), stepping)
->>>>>>> i40-adapt
+            show(readout.push(result, (frame, labels, t_available, live_stats, generation, diagnostics)),
+                 stepping)
 
     def _adapt(self, source: FrameSource, tracker: MonoTracker, context: OpeningContext,
                while_playing: bool = False) -> bool:
