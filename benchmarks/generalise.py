@@ -82,6 +82,8 @@ def fold_classifier(venue: str, jobs: list[tuple], parts: list, place: dict[str,
 
 
 def leave_venue_out(args) -> int:
+    """Fold by fold (each fold's clips scored as soon as its classifier is trained, so an
+    interrupted run still gives whole folds), then the totals per venue."""
     from train_classifier import dump
     place = venues()
     clips = [c for c in broadcast_clips() if c.name in place]
@@ -89,41 +91,37 @@ def leave_venue_out(args) -> int:
     if missing:
         print(f"not in venues.csv (left out): {', '.join(missing)}")
     names = sorted(set(place[c.name] for c in clips))
-    folds = [v for v in names if not args.only or v in args.only]
-    classifiers = {}
+    folds = [v for v in args.only if v in names] if args.only else names
+    jobs = [(str(c.video), str(c.labels), "broadcast", 100000, True, "unchanged") for c in clips]
     if not args.shipped:
-        jobs = [(str(c.video), str(c.labels), "broadcast", 100000, True, "unchanged") for c in clips]
         with ProcessPoolExecutor(args.jobs) as pool:
             parts = list(pool.map(dump, jobs))
-        for venue in folds:
-            model, seconds, rows = fold_classifier(venue, jobs, parts, place, args.seed)
-            classifiers[venue] = model
-            print(f"classifier without {venue}: {rows} candidates, "
-                  f"{'cached' if not seconds else f'trained in {seconds:.0f} s'}", flush=True)
-    tasks = [(c, classifiers.get(place[c.name]), rest_frames(c.labels, 1280, c.video))
-             for c in clips if place[c.name] in folds]
-    with ProcessPoolExecutor(args.jobs) as pool:
-        counts = list(pool.map(_score, tasks))
     who = "the shipped classifier" if args.shipped else "trained without its venue"
-    print(f"\nTV clips, `detect --preset broadcast`, {who}; protocol, then in play "
-          f"(frames at rest left out):")
-    print(f"{'clip':12s} {'venue':13s} {'set':8s} {'frames':>6s} {'rest':>4s}  "
-          f"{'acc':>7s} {'prec':>7s} {'recall':>7s} {'F1':>7s}  | in play: acc, prec, recall, F1")
-    per_venue: dict[str, list[Outcomes]] = {}
-    for (clip, _m, rest), c in zip(tasks, counts):
-        o, p = outcomes(c), outcomes(c, "in-play ")
-        totals = per_venue.setdefault(place[clip.name], [Outcomes(), Outcomes(), 0])
-        totals[0], totals[1], totals[2] = totals[0] + o, totals[1] + p, totals[2] + len(rest)
-        print(f"{clip.name:12s} {place[clip.name]:13s} {'held-out' if clip.held_out else 'tuned-on':8s} "
-              f"{o.total:6d} {len(rest):4d}  {fmt(o)}  | {fmt(p)}")
-    print(f"\nper venue ({who}):")
-    everything = [Outcomes(), Outcomes()]
-    for venue, (o, p, rest) in per_venue.items():
-        everything = [everything[0] + o, everything[1] + p]
-        print(f"{venue:13s} {sum(place[c.name] == venue for c, _m, _r in tasks):2d} clips "
-              f"{o.total:5d} frames {rest:4d} at rest  {fmt(o)}  | {fmt(p)}")
-    o, p = everything
-    print(f"{'all':13s} {len(tasks):2d} clips {o.total:5d} frames {'':12s}  {fmt(o)}  | {fmt(p)}")
+    print(f"TV clips, `detect --preset broadcast`, {who}; protocol, then in play "
+          f"(frames at rest left out):", flush=True)
+    per_venue: dict[str, tuple[Outcomes, Outcomes, int, int]] = {}
+    for venue in folds:
+        model = None
+        if not args.shipped:
+            model, seconds, rows = fold_classifier(venue, jobs, parts, place, args.seed)
+            print(f"\nclassifier without {venue}: {rows} candidates, "
+                  f"{'cached' if not seconds else f'trained in {seconds:.0f} s'}", flush=True)
+        tasks = [(c, model, rest_frames(c.labels, 1280, c.video)) for c in clips if place[c.name] == venue]
+        total, play, at_rest = Outcomes(), Outcomes(), 0
+        with ProcessPoolExecutor(args.jobs) as pool:
+            for (clip, _m, rest), counts in zip(tasks, pool.map(_score, tasks)):
+                o, p = outcomes(counts), outcomes(counts, "in-play ")
+                total, play, at_rest = total + o, play + p, at_rest + len(rest)
+                print(f"  {clip.name:12s} {venue:13s} {'held-out' if clip.held_out else 'tuned-on':8s} "
+                      f"{o.total:5d} frames {len(rest):4d} at rest  {fmt(o)}  | {fmt(p)}", flush=True)
+        per_venue[venue] = (total, play, at_rest, len(tasks))
+    print(f"\nper venue ({who}): accuracy, precision, recall, F1 | the same in play")
+    everything = [Outcomes(), Outcomes(), 0, 0]
+    for venue, (o, p, rest, n) in per_venue.items():
+        everything = [everything[0] + o, everything[1] + p, everything[2] + rest, everything[3] + n]
+        print(f"  {venue:13s} {n:2d} clips {o.total:5d} frames {rest:4d} at rest  {fmt(o)}  | {fmt(p)}")
+    o, p, rest, n = everything
+    print(f"  {'all':13s} {n:2d} clips {o.total:5d} frames {rest:4d} at rest  {fmt(o)}  | {fmt(p)}")
     return 0
 
 
