@@ -9,7 +9,7 @@ trains: ``train_classifier.dump``, ``train_broadcast``), and the left-out venue'
 adaptation to each clip). Each clip is scored by the protocol and by the in-play score, which
 leaves out the labelled frames whose shuttle is at rest (core/evaluation.py ``at_rest_frames``).
 
-    .venv/bin/python benchmarks/generalise.py --venues                  # five folds (≈ 25 min on 2 idle cores)
+    .venv/bin/python benchmarks/generalise.py --venues                  # five folds: three MLPs on ≈ 170,000 candidates each
     .venv/bin/python benchmarks/generalise.py --venues --only odense    # one fold
     .venv/bin/python benchmarks/generalise.py --venues --shipped        # the shipped classifier instead (no training)
     .venv/bin/python benchmarks/generalise.py --rest                    # labelled frames at rest, per clip
