@@ -58,6 +58,10 @@ def fmt(o: Outcomes) -> str:
     return f"{o.accuracy:7.2%} {o.precision:7.2%} {o.recall:7.2%} {o.f1:7.2%}"
 
 
+def counts_of(o: Outcomes) -> str:
+    return f"TP {o.tp} TN {o.tn} FP1 {o.fp1} FP2 {o.fp2} FN {o.fn}"
+
+
 def _score(task: tuple):
     """Census counts of one clip with one classifier (None: the preset's)."""
     from broadcast_census import census
@@ -113,8 +117,11 @@ def leave_venue_out(args) -> int:
                 o, p = outcomes(counts), outcomes(counts, "in-play ")
                 total, play, at_rest = total + o, play + p, at_rest + len(rest)
                 print(f"  {clip.name:12s} {venue:13s} {'held-out' if clip.held_out else 'tuned-on':8s} "
-                      f"{o.total:5d} frames {len(rest):4d} at rest  {fmt(o)}  | {fmt(p)}", flush=True)
+                      f"{o.total:5d} frames {len(rest):4d} at rest  {fmt(o)}  | {fmt(p)}  ({counts_of(o)})",
+                      flush=True)
         per_venue[venue] = (total, play, at_rest, len(tasks))
+        print(f"  {venue} total: {fmt(total)}  | in play {fmt(play)}  ({counts_of(total)}; in play "
+              f"{counts_of(play)})", flush=True)
     print(f"\nper venue ({who}): accuracy, precision, recall, F1 | the same in play")
     everything = [Outcomes(), Outcomes(), 0, 0]
     for venue, (o, p, rest, n) in per_venue.items():
