@@ -38,11 +38,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from badminton_gui.core.evaluation import Outcomes, evaluate, tolerance_px  # noqa: E402
+from badminton_gui.core.evaluation import Outcomes, evaluate, in_play, tolerance_px  # noqa: E402
 from badminton_gui.core.rig import StereoRig  # noqa: E402
 from badminton_gui.io.labels import read_point_labels  # noqa: E402
-from clips import (LABELLED_BY_SEEK, broadcast_clips, nycu_cfgs, seek_frame_map,  # noqa: E402
-                   stereo_clips)
+from clips import (LABELLED_BY_SEEK, broadcast_clips, nycu_cfgs, rest_frames,  # noqa: E402
+                   seek_frame_map, stereo_clips)
 
 CLI = [sys.executable, "-m", "badminton_gui.cli"]
 
@@ -57,6 +57,18 @@ class Row:
     outcomes: Outcomes
     rate: float          # frames (or pairs) per second of the CLI run, decoding included
     unit: str
+    in_play: Outcomes    # the same without the labelled frames at rest (core/evaluation.py)
+    rest: int            # how many labelled frames are at rest
+
+
+def scored(clip: str, camera: str, mode: str, held_out: bool, kind: str, pred: dict, labels: Path,
+           width: int, max_frames: int | None, video: Path, seek: bool, rate: float, unit: str) -> Row:
+    """One row: ``pred`` scored by the protocol and in play (the label rows of ``labels`` whose
+    shuttle is at rest left out, ``clips.rest_frames``)."""
+    rest = rest_frames(labels, width, video)
+    seek_video = video if seek else None
+    return Row(clip, camera, mode, held_out, kind, score(pred, labels, width, max_frames, seek_video),
+               rate, unit, score(pred, labels, width, max_frames, seek_video, rest), len(rest))
 
 
 def run_cli(argv: list[str]) -> tuple[float, str]:
@@ -70,12 +82,12 @@ def run_cli(argv: list[str]) -> tuple[float, str]:
 
 
 def score(pred: dict, labels_path: Path, width: int, max_frames: int | None,
-          seek_video: Path | None = None) -> Outcomes:
+          seek_video: Path | None = None, rest: frozenset[int] = frozenset()) -> Outcomes:
     """The five outcomes of ``pred`` (decoded frame -> detection) against a label file.
     ``seek_video``: the labels were drawn on the frames a seek to each index shows
     (clips.LABELLED_BY_SEEK): label row i is compared with the prediction for that image, and rows
-    whose seek shows no image are left out."""
-    labels = read_point_labels(labels_path).as_dict()
+    whose seek shows no image are left out. ``rest``: label rows left out (the in-play score)."""
+    labels = in_play(read_point_labels(labels_path).as_dict(), rest)
     last = (max(pred) if pred else -1) if max_frames is not None else None
     if seek_video is not None:
         images = seek_frame_map(seek_video)
@@ -128,12 +140,10 @@ def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path, preset:
                           + pairing + extra + preset_args
                           + ([] if adapt is None else ["--adapt" if adapt else "--no-adapt"]))
         left, right, rows = read_track(out_track)
-        rows_out = [Row(clip.name, "left", "track", clip.held_out, "stereo",
-                        score(left, clip.left_labels, 2048, max_frames, clip.left if seek else None),
-                        rate, "pairs/s"),
-                    Row(clip.name, "right", "track", clip.held_out, "stereo",
-                        score(right, clip.right_labels, 2048, max_frames, clip.right if seek else None),
-                        rate, "pairs/s")]
+        rows_out = [scored(clip.name, "left", "track", clip.held_out, "stereo", left, clip.left_labels,
+                           2048, max_frames, clip.left, seek, rate, "pairs/s"),
+                    scored(clip.name, "right", "track", clip.held_out, "stereo", right, clip.right_labels,
+                           2048, max_frames, clip.right, seek, rate, "pairs/s")]
         return rows_out, three_d_errors(rows, clip, rig_path)
 
     def detect(camera: str, video: Path, labels: Path):
@@ -144,9 +154,8 @@ def stereo_jobs(clip, tmp: Path, max_frames: int | None, rig_path: Path, preset:
             else:
                 rate, _ = run_cli(["detect", str(video), "-o", str(out)] + preset_args)
                 rate = rate if rate == rate else _rate_from_elapsed(video)
-            return [Row(clip.name, camera, "detect", clip.held_out, "stereo",
-                        score(read_detect(out), labels, 2048, max_frames, video if seek else None),
-                        rate, "frames/s")], None
+            return [scored(clip.name, camera, "detect", clip.held_out, "stereo", read_detect(out),
+                           labels, 2048, max_frames, video, seek, rate, "frames/s")], None
         return job
 
     return [track, detect("left", clip.left, clip.left_labels),
@@ -262,8 +271,8 @@ def broadcast_job(clip, tmp: Path, max_frames: int | None, lookahead: int | None
             # classifier to the recording (core/adaptation.py), so neither does its figure.
             rate, _ = run_cli(["detect", str(clip.video), "-o", str(out), "--preset", preset]
                               + _lookahead_args(lookahead) + (["--no-adapt"] if lookahead == 0 else []))
-        return [Row(clip.name, "-", "detect", clip.held_out, "broadcast",
-                    score(read_detect(out), clip.labels, 1280, max_frames), rate, "frames/s")], None
+        return [scored(clip.name, "-", "detect", clip.held_out, "broadcast", read_detect(out),
+                       clip.labels, 1280, max_frames, clip.video, False, rate, "frames/s")], None
     return job
 
 
@@ -272,11 +281,12 @@ def fmt_row(r: Row) -> str:
     mark = "held-out" if r.held_out else "tuned-on"
     return (f"{r.clip:16s} {r.camera:5s} {r.mode:6s} {mark:8s} {o.tp:5d} {o.tn:5d} {o.fp1:5d} "
             f"{o.fp2:5d} {o.fn:5d}  {o.accuracy:6.3f} {o.precision:6.3f} {o.recall:6.3f} "
-            f"{o.f1:6.3f}  {r.rate:6.1f} {r.unit}")
+            f"{o.f1:6.3f}  {r.rest:4d} {r.in_play.accuracy:6.3f} {r.in_play.f1:6.3f}  {r.rate:6.1f} {r.unit}")
 
 
 HEADER = (f"{'clip':16s} {'cam':5s} {'mode':6s} {'set':8s} {'TP':>5s} {'TN':>5s} {'FP1':>5s} "
-          f"{'FP2':>5s} {'FN':>5s}  {'acc':>6s} {'prec':>6s} {'recall':>6s} {'F1':>6s}  speed")
+          f"{'FP2':>5s} {'FN':>5s}  {'acc':>6s} {'prec':>6s} {'recall':>6s} {'F1':>6s}  "
+          f"{'rest':>4s} {'playacc':>6s} {'playF1':>6s}  speed")
 
 
 def main() -> int:
@@ -353,6 +363,10 @@ def main() -> int:
             rates = [r.rate for r in sel if r.rate == r.rate]
             print(f"  {kind:9s} {mode:6s} {'held-out' if held else 'tuned-on':8s} {tot.summary()}"
                   f"  median speed {np.median(rates) if rates else float('nan'):.1f} {sel[0].unit}")
+            # Beside it, never instead: the in-play score (the frames at rest left out).
+            play = sum((r.in_play for r in sel), Outcomes())
+            print(f"  {'':9s} {'':6s} {'in play':8s} {play.summary()}  ({sum(r.rest for r in sel)} "
+                  f"frames at rest left out)")
             # The totals without the clips labelled through seeks too: their score rests on
             # clips.seek_frame_map, the others' on the labels alone.
             sequential = [r for r in sel if r.clip not in LABELLED_BY_SEEK]

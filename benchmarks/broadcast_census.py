@@ -113,7 +113,8 @@ def label_cause(det: CameraDetector, result, x: float, y: float, tol: float) -> 
 def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
            overrides: tuple[tuple[str, str], ...] = (), transform=None,
            classifier=None, adapt: bool | None = None, oracle: bool = False,
-           skip_frames: frozenset[int] = frozenset()) -> collections.Counter:
+           skip_frames: frozenset[int] = frozenset(), at_rest: frozenset[int] = frozenset()
+           ) -> collections.Counter:
     """Outcome counts of one clip, and (outcome, cause) counts of its wrong frames.
 
     ``transform``: an object with ``frame(image) -> image`` and ``point(x, y) -> (x, y) | None``
@@ -123,7 +124,9 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
     classifier to the clip first as `detect` does (core/adaptation.py); None: as the preset says,
     and never for the live readout (look-ahead 0: the GUI does not adapt). ``oracle``: score the
     candidates from the labels instead (``LabelOracle``; no adaptation). ``skip_frames``: frames
-    left out of the counts (counted as ``skipped``: clips.DISPUTED_FRAMES)."""
+    left out of the counts (counted as ``skipped``: clips.DISPUTED_FRAMES). The in-play outcomes
+    are counted too, as ``"in-play TP"`` and so on: every frame but ``at_rest``'s
+    (core/evaluation.py ``at_rest_frames``)."""
     params = load_preset(preset).with_value("lookahead.frames", lookahead)
     for path, value in overrides:
         params = params.with_value(path, value)
@@ -188,6 +191,8 @@ def census(clip, preset: str, lookahead: int, frames_out: list[str] | None,
         else:
             outcome = "TP" if math.hypot(d.x - x, d.y - y) <= tol else "FP1"
         out[outcome] += 1
+        if f not in at_rest:
+            out[f"in-play {outcome}"] += 1
         if outcome in ("TP", "TN"):
             continue
         if visible:

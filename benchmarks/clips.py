@@ -17,6 +17,8 @@ from stat import S_ISLNK
 import cv2
 import numpy as np
 
+from badminton_gui.core.evaluation import at_rest_frames
+from badminton_gui.io.labels import read_point_labels, read_timestamps
 from badminton_gui.io.safe_write import replacing
 from badminton_gui.io.video import frame_times
 
@@ -120,6 +122,22 @@ def nycu_cfgs() -> tuple[Path, Path]:
     """The rally calibration (.cfg) that fits every NYCU clip and the launcher clip."""
     rally = sorted((DATA_DIR / "nycu-stereo").glob("rally_*"))[0]
     return rally / "CameraReader_1.cfg", rally / "CameraReader_2.cfg"
+
+
+def rest_frames(labels_path: Path, width: int, video: Path) -> frozenset[int]:
+    """The label rows of one file whose shuttle is at rest (core/evaluation.py ``at_rest_frames``:
+    what the in-play score leaves out), timed by its Timestamp column when it has one, else by the
+    video's frame rate."""
+    labels = read_point_labels(labels_path).as_dict()
+    try:
+        frames, stamps = read_timestamps(labels_path)
+        times = dict(zip(frames.tolist(), stamps.tolist()))
+    except ValueError:
+        times = None
+    cap = cv2.VideoCapture(str(video))
+    fps = cap.get(cv2.CAP_PROP_FPS) or 30.0
+    cap.release()
+    return at_rest_frames(labels, width, times, fps)
 
 
 def seek_frame_map(video: Path) -> np.ndarray:

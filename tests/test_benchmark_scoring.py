@@ -83,3 +83,24 @@ def test_benchmark_caches_are_private(tmp_path, monkeypatch):
     (tmp_path / "badminton-gui" / "linked").symlink_to(elsewhere)
     with pytest.raises(RuntimeError, match="symlink"):
         clips.cache_dir("linked")
+
+
+def test_the_in_play_row_leaves_the_held_serve_out(tmp_path):
+    # A shuttle held still for 1 s (30 frames at 30 fps, no Timestamp column), then flying: a
+    # chain that never reports the held shuttle misses 30 labelled frames by the protocol; in
+    # play, those of them at rest are left out (clips.rest_frames, the video's frame rate).
+    video = tmp_path / "clip.avi"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, (64, 48))
+    if not writer.isOpened():
+        pytest.skip("no MJPG writer in this OpenCV build")
+    for _ in range(60):
+        writer.write(np.zeros((48, 64, 3), np.uint8))
+    writer.release()
+    labels = tmp_path / "labels.csv"
+    xs = [100.0] * 30 + [100.0 + 15 * k for k in range(1, 31)]
+    write_point_labels(labels, range(60), [True] * 60, [(x, 50.0) for x in xs])
+    pred = {f: (f >= 30, xs[f], 50.0) for f in range(60)}
+    row = accuracy.scored("c", "-", "detect", True, "broadcast", pred, labels, 1280, None, video,
+                          False, 30.0, "frames/s")
+    assert (row.outcomes.tp, row.outcomes.fn) == (30, 30)
+    assert row.rest >= 25 and (row.in_play.tp, row.in_play.fn) == (30, 30 - row.rest)

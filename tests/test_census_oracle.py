@@ -114,6 +114,14 @@ def test_skipped_frames_leave_the_counts_and_are_counted_apart(tmp_path):
     assert part["TP"] >= whole["TP"] - 10
 
 
+def test_the_in_play_counts_leave_the_frames_at_rest_out_and_the_protocol_keeps_them(tmp_path):
+    clip = _dot_clip(tmp_path, 0.0)
+    counts = broadcast_census.census(clip, "broadcast", 4, None, oracle=True, at_rest=frozenset(range(10)))
+    outcomes = ("TP", "TN", "FP1", "FP2", "FN")
+    assert sum(counts[k] for k in outcomes) == 45
+    assert sum(counts[f"in-play {k}"] for k in outcomes) == 35
+    assert all(counts[f"in-play {k}"] <= counts[k] for k in outcomes)
+
 def test_the_disputed_frames_are_the_held_serves_of_the_tuned_on_tv_clips():
     import clips
     assert set(clips.DISPUTED_FRAMES) == {"bwf_00001", "bwf_00025"}

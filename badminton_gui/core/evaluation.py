@@ -5,6 +5,12 @@ TP / TN / FP1 / FP2 / FN the same way. Every labelled frame is one outcome:
 TP (detected, labelled, within tolerance), FP1 (detected, labelled, too far), FP2 (detected, not
 labelled), FN (labelled, not detected), TN (neither). The tolerance is 4 px at 512 px width,
 scaled with the image width (10 px at 1280, 16 px at 2048).
+
+Beside it, the *in-play* score (:func:`at_rest_frames`): the product reports the shuttle from its
+first motion at the serve until it comes to rest after landing, not a shuttle held before the
+serve or lying after the rally. Label files differ on those frames (a held serve is labelled
+visible in one clip and not in another), so a figure that leaves them out is given beside the
+protocol's, never instead of it.
 """
 
 from __future__ import annotations
@@ -89,6 +95,75 @@ def evaluate(pred: dict[int, tuple[bool, float, float]], labels: dict[int, tuple
     return Outcomes(tp=int((codes == "TP").sum()), tn=int((codes == "TN").sum()),
                     fp1=int((codes == "FP1").sum()), fp2=int((codes == "FP2").sum()),
                     fn=int((codes == "FN").sum()))
+
+
+# "Still": the labelled shuttle moves less than this many px (at 512 px width, scaled like the
+# tolerance) over STILL_WINDOW s. Labels carry no world scale, so stillness is judged in the
+# image: a shuttle in flight crosses far more than this in 0.1 s, a held or lying one moves by
+# the labeller's click jitter.
+STILL_AT_512 = 3.0
+STILL_WINDOW = 0.1
+# A shuttle that stopped stays in play this long (it comes to rest after landing); still longer,
+# it is at rest.
+REST_AFTER = 0.5
+
+
+def _still(times: np.ndarray, xy: np.ndarray, limit: float) -> tuple[np.ndarray, np.ndarray]:
+    """(still, known) per visible frame: whether the labelled shuttle moves less than ``limit``
+    px in STILL_WINDOW s, from the median position over the STILL_WINDOW s before the frame to the
+    median over the STILL_WINDOW s after it (medians: a label's click jitter is a px or two a
+    frame), scaled to the window where the clip's edge or a gap shortens one side (at most
+    doubled). Seen over less than half the window, a frame is neither still nor moving: not
+    ``known``."""
+    still = np.zeros(len(times), dtype=bool)
+    known = np.zeros(len(times), dtype=bool)
+    lo = np.searchsorted(times, times - STILL_WINDOW, side="left")
+    hi = np.searchsorted(times, times + STILL_WINDOW, side="right")
+    for k in range(len(times)):
+        if times[hi[k] - 1] - times[lo[k]] < STILL_WINDOW / 2:
+            continue
+        known[k] = True
+        before, after = slice(lo[k], k + 1), slice(k, hi[k])
+        moved = np.hypot(*(np.median(xy[after], axis=0) - np.median(xy[before], axis=0)))
+        apart = np.median(times[after]) - np.median(times[before])
+        still[k] = bool(moved * STILL_WINDOW / max(apart, STILL_WINDOW / 2) < limit)
+    return still, known
+
+
+def at_rest_frames(labels: dict[int, tuple[bool, float, float]], image_width: int,
+                   times: dict[int, float] | None = None, fps: float = 30.0) -> frozenset[int]:
+    """The labelled-visible frames whose shuttle is at rest: still before its first motion, or
+    still for more than REST_AFTER s after it stopped. ``times``: frame -> seconds (default
+    frame / ``fps``). A still stretch ends where the shuttle moves, or reappears more than the
+    still limit away after frames without a label (picked up out of view); frames labelled not
+    visible are never at rest (they score as they are)."""
+    frames = np.array(sorted(f for f, (visible, _x, _y) in labels.items() if visible), dtype=np.int64)
+    if len(frames) == 0:
+        return frozenset()
+    t = np.array([times[f] if times is not None and f in times else f / fps for f in frames], float)
+    xy = np.array([labels[f][1:] for f in frames], dtype=float).reshape(-1, 2)
+    limit = tolerance_px(image_width, STILL_AT_512)
+    still, known = _still(t, xy, limit)
+    moving = np.flatnonzero(known & ~still)
+    first_motion = t[moving[0]] if len(moving) else math.inf
+    rest: list[int] = []
+    start = None
+    for k in range(len(frames)):
+        if not still[k]:
+            start = None
+            continue
+        if start is None or np.hypot(*(xy[k] - xy[k - 1])) >= limit:
+            start = k
+        if t[start] < first_motion or t[k] - t[start] > REST_AFTER:
+            rest.append(int(frames[k]))
+    return frozenset(rest)
+
+
+def in_play(labels: dict[int, tuple[bool, float, float]], rest: frozenset[int]
+            ) -> dict[int, tuple[bool, float, float]]:
+    """``labels`` without the frames at rest (:func:`at_rest_frames`): what the in-play score
+    counts."""
+    return {f: v for f, v in labels.items() if f not in rest}
 
 
 # One camera's truth for one frame: (visible, x, y) in full-resolution pixels; None: the frame
