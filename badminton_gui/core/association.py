@@ -81,6 +81,13 @@ class TrackletAssociator:
         # a candidate near it may still inherit its history for ``motion.lost_after`` s.
         self._ghost: Tracklet | None = None
         self._next_id = 0
+        # The pixel values of the gates grow or shrink with the shuttle's image scale where a
+        # tracklet is (``shuttle_scale.enabled``; set per frame by the detector; None: as given).
+        self.scale = None
+
+    def factor(self, tr: Tracklet) -> float:
+        """The factor of the pixel values of the gates at the tracklet's image position."""
+        return 1.0 if self.scale is None else self.scale.at1(tr.x, tr.y)
 
     def set_params(self, motion: MotionParams, association: AssociationParams) -> None:
         self.motion = motion
@@ -95,11 +102,12 @@ class TrackletAssociator:
     def gate(self, tr: Tracklet, dt: float) -> float:
         """Speed-aware gate radius (px): grows with the tracklet's own speed and the time step."""
         m = self.motion
+        f = self.factor(tr)
         if not tr.velocity_known:
             # Unknown velocity: anything up to the fastest plausible image speed.
-            return m.base_radius + m.max_image_speed * dt
-        return (m.base_radius + self.params.speed_gate_gain * tr.speed * dt
-                + self.params.acceleration_px * (1 + tr.misses))
+            return (m.base_radius + m.max_image_speed * dt) * f
+        return (m.base_radius * f + self.params.speed_gate_gain * tr.speed * dt
+                + self.params.acceleration_px * f * (1 + tr.misses))
 
     def live_predictions(self, t: float) -> np.ndarray:
         """(N, 3) predicted x, y and gate of the tracklets seen at least twice."""
@@ -119,7 +127,8 @@ class TrackletAssociator:
         any_age = not p.history_needs_motion
         rows = np.array([(*tr.predict(t), self.gate(tr, max(t - tr.t, 1e-3)),
                           tr.hits if (any_age or tr.ident == self.selected
-                                      or tr.recent_travel(p.travel_window) >= p.min_travel) else 0)
+                                      or tr.recent_travel(p.travel_window) >= p.min_travel * self.factor(tr))
+                          else 0)
                          for tr in self.tracklets])
         gates = rows[:, 2]
         d = np.hypot(rows[:, None, 0] - positions[None, :, 0],
@@ -233,7 +242,7 @@ class TrackletAssociator:
         for i, tr in enumerate(self.tracklets):
             if (tr.ident == self.selected and tr.velocity_known and tr.hits >= p.min_hits
                     and blind(*tr.predict(t))):
-                gates[i] = min(gates[i], p.blind_gate)
+                gates[i] = min(gates[i], p.blind_gate * self.factor(tr))
                 return
 
     def _drop_lost(self, t: float, blind: Callable[[float, float], bool] | None) -> None:
@@ -288,7 +297,7 @@ class TrackletAssociator:
         if tr.quality < p.min_track_quality:
             return None
         merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation + p.quality_weight * tr.quality
-                 - tr.residual / max(p.residual_scale, 1e-6) + p.hysteresis)
+                 - tr.residual / max(p.residual_scale * self.factor(tr), 1e-6) + p.hysteresis)
         return tr, max(merit, 0.0)
 
     @property
@@ -327,7 +336,7 @@ class TrackletAssociator:
         if old is None or old.hit_now or not len(positions) or self.params.rebirth_radius <= 0:
             return None
         # The radius grows with the frames the followed tracklet has been missing.
-        best, best_d = None, self.params.rebirth_radius * (1 + 0.5 * old.misses)
+        best, best_d = None, self.params.rebirth_radius * self.factor(old) * (1 + 0.5 * old.misses)
         for j, (x, y) in enumerate(positions):
             if assigned[j] >= 0 or scores[j] < self.params.min_track_quality:
                 continue
@@ -365,7 +374,8 @@ class TrackletAssociator:
         # Plain mean over the first hits, then an exponential memory of ~5 frames.
         tr.quality += (score - tr.quality) * max(0.2, 1.0 / (tr.hits + 1))
         tr.x, tr.y, tr.t = x, y, t
-        if predicted and self.params.jump_residual > 0 and dist > self.params.jump_residual:
+        f = self.factor(tr)
+        if predicted and self.params.jump_residual > 0 and dist > self.params.jump_residual * f:
             # The step left the predicted path (a racket hit, or a tracklet hopping between
             # clutter blobs inside its wide gates): the travel before it says nothing about
             # what the tracklet follows now, so the travel and pause rules start afresh.
@@ -389,7 +399,7 @@ class TrackletAssociator:
         tr.hit_now = True
         tr.travel = max(tr.travel, math.hypot(x - tr.start_x, y - tr.start_y))
         tr.recent.append((x, y))
-        if tr.recent_travel(self.params.travel_window) >= self.params.min_travel:
+        if tr.recent_travel(self.params.travel_window) >= self.params.min_travel * f:
             tr.still_for = 0
         else:
             tr.still_for += 1
@@ -412,18 +422,19 @@ class TrackletAssociator:
         # Moving now, or a shuttle that flew far and slows down for a moment (apex, the far
         # court); clutter (lights, screens) never flies far, a shuttle on the floor stays
         # still for longer than the allowance.
-        moving = tr.recent_travel(p.travel_window) >= p.min_travel
+        f = self.factor(tr)
+        moving = tr.recent_travel(p.travel_window) >= p.min_travel * f
         allowance = p.pause_frames
         if p.followed_pause_frames > 0 and tr.ident == self.selected:
             # The shuttle being followed may rest for long (held before the serve, lying after
             # the rally: TV labels mark it visible), other tracklets only for a moment.
             allowance = p.followed_pause_frames
-        pausing = tr.travel >= p.flight_travel and tr.still_for <= allowance
+        pausing = tr.travel >= p.flight_travel * f and tr.still_for <= allowance
         if not (moving or pausing):
             return -1.0
         merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation
                  + p.quality_weight * tr.quality
-                 - tr.residual / max(p.residual_scale, 1e-6))
+                 - tr.residual / max(p.residual_scale * f, 1e-6))
         if tr.ident == self.selected and (quality is None or quality >= p.hysteresis_min_quality):
             # Not when this frame's blob does not look like a shuttle at all: after a racket
             # contact the followed tracklet goes on with the racket (or a hand), whose running
