@@ -104,8 +104,11 @@ class TrackletAssociator:
         m = self.motion
         f = self.factor(tr)
         if not tr.velocity_known:
-            # Unknown velocity: anything up to the fastest plausible image speed.
-            return (m.base_radius + m.max_image_speed * dt) * f
+            # Unknown velocity: anything up to the fastest plausible image speed (with the
+            # camera's geometry: the shuttle's top speed seen at its nearest from there).
+            if self.scale is None:
+                return m.base_radius + m.max_image_speed * dt
+            return m.base_radius * f + self.scale.speed_at1(tr.x, tr.y) * dt
         return (m.base_radius * f + self.params.speed_gate_gain * tr.speed * dt
                 + self.params.acceleration_px * f * (1 + tr.misses))
 

@@ -220,7 +220,8 @@ class MotionParams(ParamGroup):
                                help="Allowed distance from the predicted position at zero speed")
     max_image_speed: float = param(15000.0, 0.0, 100000.0, step=100.0, unit="px/s",
                                    label="Maximum image speed",
-                                   help="Fastest shuttle in the image; the gate grows with the time step")
+                                   help="Fastest shuttle in the image; the gate grows with the time step "
+                                        "(with 'Gates from geometry': the top speed in m/s seen from the camera)")
     lost_after: float = param(0.15, 0.0, 5.0, step=0.01, unit="s", label="Lost after",
                               help="Without a hit for this long the track is dropped and any candidate may start a new one")
     coast_blind: int = param(10, 0, 60, step=1, unit="frames", label="Coast through glare",

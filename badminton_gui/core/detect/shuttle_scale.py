@@ -89,22 +89,28 @@ class ShuttleScaleMap:
         """The factor by which pixel gates tuned at image scale ``reference`` (px/m) grow or
         shrink at each image position here (or, not ``per_position``, the camera's median)."""
         factor = self.typical_scale / float(reference)
+        speed = self.max_speed
         if not per_position:
             factor = np.full_like(factor, float(np.median(factor)))
-        return GateScale(self.image_size, factor)
+            speed = np.full_like(speed, float(np.median(speed)))
+        return GateScale(self.image_size, factor, speed)
 
 
 @dataclasses.dataclass(frozen=True, slots=True)
 class GateScale:
-    """A factor per grid cell for the pixel gates of filters 1, 2 and 4; cheap to look up for
-    many points at once (``at``) or one at a time (``at1``, plain Python)."""
+    """A factor per grid cell for the pixel gates of filters 1, 2 and 4, and the shuttle's
+    largest image speed there; cheap to look up for many points at once (``at``) or one at a
+    time (``at1``, ``speed_at1``: plain Python)."""
 
     image_size: tuple[int, int]
     factor: np.ndarray                # (ny, nx)
+    speed: np.ndarray                 # (ny, nx) px/s
     _rows: tuple = dataclasses.field(default=(), repr=False, compare=False)
+    _speed_rows: tuple = dataclasses.field(default=(), repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_rows", tuple(tuple(r) for r in self.factor.tolist()))
+        object.__setattr__(self, "_speed_rows", tuple(tuple(r) for r in self.speed.tolist()))
 
     def at(self, xs, ys) -> np.ndarray:
         """The factors at image points ``xs``, ``ys``."""
@@ -114,13 +120,22 @@ class GateScale:
         row = np.clip((np.asarray(ys, dtype=float) * ny / h).astype(np.int64), 0, ny - 1)
         return self.factor[row, col]
 
-    def at1(self, x: float, y: float) -> float:
-        """The factor at one image point."""
+    def _cell1(self, x: float, y: float) -> tuple[int, int]:
         ny, nx = self.factor.shape
         w, h = self.image_size
         col = min(max(int(x * nx / w), 0), nx - 1) if math.isfinite(x) else 0
         row = min(max(int(y * ny / h), 0), ny - 1) if math.isfinite(y) else 0
+        return row, col
+
+    def at1(self, x: float, y: float) -> float:
+        """The factor at one image point."""
+        row, col = self._cell1(x, y)
         return self._rows[row][col]
+
+    def speed_at1(self, x: float, y: float) -> float:
+        """The shuttle's largest image speed (px/s) at one image point."""
+        row, col = self._cell1(x, y)
+        return self._speed_rows[row][col]
 
 
 def _cell_samples(width: int, height: int, grid: tuple[int, int]) -> np.ndarray:
