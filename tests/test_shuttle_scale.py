@@ -89,3 +89,20 @@ def test_detector_map_follows_params_and_rig():
     # Frames of another size than the rig's, or no rig: the image alone.
     assert on.scale_map(320, 240).source == "image"
     assert CameraDetector(params).scale_map(640, 480).source == "image"
+
+
+def test_stereo_tracker_hands_each_camera_its_rig():
+    from badminton_gui.core.tracker import StereoTracker
+    from badminton_gui.io.demo_scene import make_rig
+
+    rig = make_rig("binocular", (640, 360))
+    tracker = StereoTracker(rig, TrackerParams().with_value("shuttle_scale.enabled", True))
+    try:
+        left, right = tracker.left.scale_map(640, 360), tracker.right.scale_map(640, 360)
+        assert left.source == right.source == "rig"
+        # The demo's side rack at 640 px sees the shuttle at under the reference scale: the
+        # pixel gates shrink there.
+        p = ShuttleScaleParams()
+        assert np.median(left.gate_scale(p.reference_scale).factor) < 0.6
+    finally:
+        tracker.close()
