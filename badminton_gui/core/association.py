@@ -130,8 +130,7 @@ class TrackletAssociator:
         any_age = not p.history_needs_motion
         rows = np.array([(*tr.predict(t), self.gate(tr, max(t - tr.t, 1e-3)),
                           tr.hits if (any_age or tr.ident == self.selected
-                                      or tr.recent_travel(p.travel_window) >= p.min_travel * self.factor(tr))
-                          else 0)
+                                      or tr.recent_travel(p.travel_window) >= p.min_travel) else 0)
                          for tr in self.tracklets])
         gates = rows[:, 2]
         d = np.hypot(rows[:, None, 0] - positions[None, :, 0],
@@ -402,7 +401,7 @@ class TrackletAssociator:
         tr.hit_now = True
         tr.travel = max(tr.travel, math.hypot(x - tr.start_x, y - tr.start_y))
         tr.recent.append((x, y))
-        if tr.recent_travel(self.params.travel_window) >= self.params.min_travel * f:
+        if tr.recent_travel(self.params.travel_window) >= self.params.min_travel:
             tr.still_for = 0
         else:
             tr.still_for += 1
@@ -425,14 +424,18 @@ class TrackletAssociator:
         # Moving now, or a shuttle that flew far and slows down for a moment (apex, the far
         # court); clutter (lights, screens) never flies far, a shuttle on the floor stays
         # still for longer than the allowance.
+        # The travel thresholds stay in pixels with the camera's geometry: they tell motion from
+        # the jitter of a still blob (a hand, a held shuttle), which is a pixel or two of the
+        # mask whatever the shuttle's scale (scaled down with it on the demo court at 640×360,
+        # clutter passed as moving: seed 1 left 96.5 → 91.2 %).
         f = self.factor(tr)
-        moving = tr.recent_travel(p.travel_window) >= p.min_travel * f
+        moving = tr.recent_travel(p.travel_window) >= p.min_travel
         allowance = p.pause_frames
         if p.followed_pause_frames > 0 and tr.ident == self.selected:
             # The shuttle being followed may rest for long (held before the serve, lying after
             # the rally: TV labels mark it visible), other tracklets only for a moment.
             allowance = p.followed_pause_frames
-        pausing = tr.travel >= p.flight_travel * f and tr.still_for <= allowance
+        pausing = tr.travel >= p.flight_travel and tr.still_for <= allowance
         if not (moving or pausing):
             return -1.0
         merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation
