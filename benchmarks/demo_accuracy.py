@@ -1,6 +1,6 @@
 """Tracker against the demo court's ground truth: 2D accuracy per camera and 3D error.
 
-    .venv/bin/python benchmarks/demo_accuracy.py [--frames 1000] [--seeds 0 1 2] [--size 1280x720] [--rig binocular] [--errors] [--lookahead N]
+    .venv/bin/python benchmarks/demo_accuracy.py [--frames 1000] [--seeds 0 1 2] [--size 1280x720] [--rig binocular] [--errors] [--lookahead N] [--preset P]
 
 Prints one line per seed and the totals: the figures of the tracking-engine issue
 (2D accuracy ≥ 99 % per camera at the protocol's tolerance, 4 px at 512 px width; 3D RMS ≤ 1 cm within 6 m of the rig).
@@ -10,6 +10,8 @@ rejected each (``-`` for the reported one) — where to look first when tuning.
 ``--lookahead N`` also scores, from the same tracking run, the readout re-decided N frames later
 (core/lookahead.py: what `track --lookahead N` writes; latency N / fps online) and prints it
 beside the online figure; ``--errors`` then lists the look-ahead readout's errors.
+``--preset`` runs with a preset or a parameter file (e.g. ``{"shuttle_scale": {"enabled": true}}``)
+instead of the built-in defaults.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from badminton_gui.io.demo_eval import evaluate_demo_lookaheads  # noqa: E402
+from badminton_gui.io.presets import load_preset  # noqa: E402
 
 
 def main() -> None:
@@ -37,7 +40,10 @@ def main() -> None:
     ap.add_argument("--lookahead", type=int, nargs="+", default=[], metavar="N",
                     help="also score the readout re-decided N frames later (core/lookahead.py); several N "
                          "are scored from the same tracking run")
+    ap.add_argument("--preset", default=None, help="a preset name or a .json parameter file (default: the "
+                                                   "built-in parameter defaults)")
     args = ap.parse_args()
+    params = load_preset(args.preset) if args.preset else None
     ks = tuple(args.lookahead) + (0,)
     la_l, la_r = {}, {}
     la_errs, la_rngs = {k: [] for k in args.lookahead}, {k: [] for k in args.lookahead}
@@ -53,7 +59,8 @@ def main() -> None:
         if args.errors:
             def on_frame(result, truth, codes, seed=seed, listing=listing):
                 listing.extend(_error_lines(seed, result, truth, codes))
-        scores = evaluate_demo_lookaheads(seed, args.frames, size, args.rig, on_frame=on_frame, lookaheads=ks)
+        scores = evaluate_demo_lookaheads(seed, args.frames, size, args.rig, params, on_frame=on_frame,
+                                          lookaheads=ks)
         s = scores[0]
         if listing:
             print("\n".join(listing))

@@ -81,6 +81,13 @@ class TrackletAssociator:
         # a candidate near it may still inherit its history for ``motion.lost_after`` s.
         self._ghost: Tracklet | None = None
         self._next_id = 0
+        # The pixel values of the gates grow or shrink with the shuttle's image scale where a
+        # tracklet is (``shuttle_scale.enabled``; set per frame by the detector; None: as given).
+        self.scale = None
+
+    def factor(self, tr: Tracklet) -> float:
+        """The factor of the pixel values of the gates at the tracklet's image position."""
+        return 1.0 if self.scale is None else self.scale.at1(tr.x, tr.y)
 
     def set_params(self, motion: MotionParams, association: AssociationParams) -> None:
         self.motion = motion
@@ -95,11 +102,15 @@ class TrackletAssociator:
     def gate(self, tr: Tracklet, dt: float) -> float:
         """Speed-aware gate radius (px): grows with the tracklet's own speed and the time step."""
         m = self.motion
+        f = self.factor(tr)
         if not tr.velocity_known:
-            # Unknown velocity: anything up to the fastest plausible image speed.
-            return m.base_radius + m.max_image_speed * dt
-        return (m.base_radius + self.params.speed_gate_gain * tr.speed * dt
-                + self.params.acceleration_px * (1 + tr.misses))
+            # Unknown velocity: anything up to the fastest plausible image speed (with the
+            # camera's geometry: the shuttle's top speed seen at its nearest from there).
+            if self.scale is None:
+                return m.base_radius + m.max_image_speed * dt
+            return m.base_radius * f + self.scale.speed_at1(tr.x, tr.y) * dt
+        return (m.base_radius * f + self.params.speed_gate_gain * tr.speed * dt
+                + self.params.acceleration_px * f * (1 + tr.misses))
 
     def live_predictions(self, t: float) -> np.ndarray:
         """(N, 3) predicted x, y and gate of the tracklets seen at least twice."""
@@ -234,7 +245,7 @@ class TrackletAssociator:
         for i, tr in enumerate(self.tracklets):
             if (tr.ident == self.selected and tr.velocity_known and tr.hits >= p.min_hits
                     and blind(*tr.predict(t))):
-                gates[i] = min(gates[i], p.blind_gate)
+                gates[i] = min(gates[i], p.blind_gate * self.factor(tr))
                 return
 
     def _drop_lost(self, t: float, blind: Callable[[float, float], bool] | None) -> None:
@@ -289,7 +300,7 @@ class TrackletAssociator:
         if tr.quality < p.min_track_quality:
             return None
         merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation + p.quality_weight * tr.quality
-                 - tr.residual / max(p.residual_scale, 1e-6) + p.hysteresis)
+                 - tr.residual / max(p.residual_scale * self.factor(tr), 1e-6) + p.hysteresis)
         return tr, max(merit, 0.0)
 
     @property
@@ -328,7 +339,7 @@ class TrackletAssociator:
         if old is None or old.hit_now or not len(positions) or self.params.rebirth_radius <= 0:
             return None
         # The radius grows with the frames the followed tracklet has been missing.
-        best, best_d = None, self.params.rebirth_radius * (1 + 0.5 * old.misses)
+        best, best_d = None, self.params.rebirth_radius * self.factor(old) * (1 + 0.5 * old.misses)
         for j, (x, y) in enumerate(positions):
             if assigned[j] >= 0 or scores[j] < self.params.min_track_quality:
                 continue
@@ -366,7 +377,8 @@ class TrackletAssociator:
         # Plain mean over the first hits, then an exponential memory of ~5 frames.
         tr.quality += (score - tr.quality) * max(0.2, 1.0 / (tr.hits + 1))
         tr.x, tr.y, tr.t = x, y, t
-        if predicted and self.params.jump_residual > 0 and dist > self.params.jump_residual:
+        f = self.factor(tr)
+        if predicted and self.params.jump_residual > 0 and dist > self.params.jump_residual * f:
             # The step left the predicted path (a racket hit, or a tracklet hopping between
             # clutter blobs inside its wide gates): the travel before it says nothing about
             # what the tracklet follows now, so the travel and pause rules start afresh.
@@ -413,6 +425,11 @@ class TrackletAssociator:
         # Moving now, or a shuttle that flew far and slows down for a moment (apex, the far
         # court); clutter (lights, screens) never flies far, a shuttle on the floor stays
         # still for longer than the allowance.
+        # The travel thresholds stay in pixels with the camera's geometry: they tell motion from
+        # the jitter of a still blob (a hand, a held shuttle), which is a pixel or two of the
+        # mask whatever the shuttle's scale (scaled down with it on the demo court at 640×360,
+        # clutter passed as moving: seed 1 left 96.5 → 91.2 %).
+        f = self.factor(tr)
         moving = tr.recent_travel(p.travel_window) >= p.min_travel
         allowance = p.pause_frames
         if p.followed_pause_frames > 0 and tr.ident == self.selected:
@@ -424,7 +441,7 @@ class TrackletAssociator:
             return -1.0
         merit = (min(tr.hits, p.hits_saturation) / p.hits_saturation
                  + p.quality_weight * tr.quality
-                 - tr.residual / max(p.residual_scale, 1e-6))
+                 - tr.residual / max(p.residual_scale * f, 1e-6))
         if tr.ident == self.selected and (quality is None or quality >= p.hysteresis_min_quality):
             # Not when this frame's blob does not look like a shuttle at all: after a racket
             # contact the followed tracklet goes on with the racket (or a hand), whose running

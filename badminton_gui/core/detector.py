@@ -39,13 +39,14 @@ import numpy as np
 
 from .association import TrackletAssociator
 from .background import BackgroundModel
-from .detect.candidates import (ContourShapes, MergedBlobSplitter, measure_contours,
+from .detect.candidates import (ContourShapes, MergedBlobSplitter, gate_factors, measure_contours,
                                 rank_for_measuring, shape_filters, shape_rejects, too_large)
 from .detect.measure import (FEATURE_NAMES, PATCH_CELLS, PATCH_HALF, PATCH_NAMES,  # noqa: F401
                              BlobMeasurements, measure_blobs, patch_features)
 from .detect.diagnostics import DetectionDiagnostics, ScoreReport, ShapeReport
 from .detect.scoring import BlobScorer, ScoredBlobs, ScoreFunction, ShapedBlob, score_blobs
 from .detect.segmentation import ModelGrey, Segmented, external_contours, model_scale  # noqa: F401
+from .detect.shuttle_scale import GateScale, ShuttleScaleMap, from_image, from_rig
 from .detect.tracklets import TrackletStage
 from .params import TrackerParams
 from .types import REJECT_MOTION, REJECT_SCORE, REJECT_WHITENESS, CameraResult, Candidate
@@ -67,7 +68,9 @@ class _FrameMemory:
 class CameraDetector:
     """Finds the shuttle in one camera's frames."""
 
-    def __init__(self, params: TrackerParams | None = None) -> None:
+    def __init__(self, params: TrackerParams | None = None, geometry: tuple[object, int] | None = None) -> None:
+        """``geometry``: (a rig with its court pose, this camera's index in it), whose view of the
+        court gives the shuttle's image scale (``shuttle_scale.enabled``; None: the image alone)."""
         self.params = params or TrackerParams()
         self._background = BackgroundModel(self.params.background, self.params.binarize)
         self._associator = TrackletAssociator(self.params.motion, self.params.association)
@@ -87,6 +90,11 @@ class CameraDetector:
         self.keep_whole = False
         self.last_split = 0   # candidates split off merged blobs in the last frame
         self.last_diagnostics: DetectionDiagnostics | None = None   # the last frame, stage by stage
+        # ``shuttle_scale.enabled``: the camera's geometry (a rig with its court pose and this
+        # camera's index; None: the image alone) and the map and gate factors made from it for
+        # (its parameters, the frame size).
+        self._geometry = geometry
+        self._scale: tuple[object, ShuttleScaleMap, GateScale] | None = None
         self._fresh_state()
 
     def _fresh_state(self) -> None:
@@ -102,6 +110,36 @@ class CameraDetector:
         self._window.set_params(params)
         self._scorer.set_params(params)
         self._tracklets.params = params
+
+    def use_rig(self, rig, camera: int) -> None:
+        """Take the shuttle's image scale from camera ``camera`` of ``rig`` (which has its court
+        pose) instead of the image alone (``shuttle_scale.enabled``)."""
+        self._geometry = (rig, int(camera))
+        self._scale = None
+
+    def scale_map(self, width: int, height: int) -> ShuttleScaleMap | None:
+        """The shuttle's image sizes and speeds over frames of this size (None:
+        ``shuttle_scale.enabled`` is off)."""
+        scale = self._gate_scale(width, height)
+        return None if scale is None else self._scale[1]
+
+    def _gate_scale(self, width: int, height: int) -> GateScale | None:
+        """The gate factors of filters 1, 2 and 4 for frames of this size (None: off)."""
+        sp = self.params.shuttle_scale
+        if not sp.enabled:
+            return None
+        key = (sp, int(width), int(height))
+        if self._scale is None or self._scale[0] != key:
+            shuttle_map = None
+            if self._geometry is not None and tuple(self._geometry[0].image_size) == key[1:]:
+                try:
+                    shuttle_map = from_rig(self._geometry[0], self._geometry[1], sp)
+                except ValueError:
+                    shuttle_map = None   # no line of sight meets the play volume: the image alone
+            if shuttle_map is None:
+                shuttle_map = from_image(int(width), int(height), sp)
+            self._scale = (key, shuttle_map, shuttle_map.gate_scale(sp.reference_scale, sp.per_position))
+        return self._scale[2]
 
     def reset(self) -> None:
         self._background.reset()
@@ -209,8 +247,10 @@ class CameraDetector:
         mask = segmented.mask
         sx, sy = w / mask.shape[1], h / mask.shape[0]
         self._mask_scale = mask.shape[1] / w
-        rejected, blobs, shapes, shape_counts = self._shape_stage(segmented, t, w, sx, sy)
-        scored = self._score_stage(frame_bgr, segmented, blobs, shapes, t, w, sx, sy)
+        gates = self._gate_scale(w, h)
+        self._associator.scale = gates
+        rejected, blobs, shapes, shape_counts, factor = self._shape_stage(segmented, t, w, sx, sy, gates)
+        scored = self._score_stage(frame_bgr, segmented, blobs, shapes, t, w, sx, sy, factor)
         blind = None
         if self.params.motion.coast_blind > 0:
             ms_x, ms_y = 1.0 / sx, 1.0 / sy
@@ -231,17 +271,20 @@ class CameraDetector:
                             window=None if window is None else tuple(int(v) for v in window),
                             left_picture=self._tracklets.exit_hold.left_picture)
 
-    def _shape_stage(self, segmented: Segmented, t: float, w: int, sx: float, sy: float
-                     ) -> tuple[list[Candidate], list[ShapedBlob], ContourShapes, tuple[int, int, int, int]]:
+    def _shape_stage(self, segmented: Segmented, t: float, w: int, sx: float, sy: float,
+                     gates: GateScale | None) -> tuple[list[Candidate], list[ShapedBlob], ContourShapes,
+                                                       tuple[int, int, int, int], np.ndarray | float]:
         """Filters 1 and 2 on the contours, then at most ``association.max_measured`` blobs for
         the full-resolution look: (the candidates rejected on the way, the blobs that go on,
-        every contour's shape, the counts of ``ShapeReport`` but the split parts)."""
+        every contour's shape, the counts of ``ShapeReport`` but the split parts, the contours'
+        gate factors)."""
         p = self.params
         mask = segmented.mask
         shapes = measure_contours(segmented.contours, sx, sy)
-        length_ok, short_ok = shape_filters(shapes, p, self._associator.followed, t, w)
+        factor = gate_factors(shapes, gates)
+        length_ok, short_ok = shape_filters(shapes, p, self._associator.followed, t, w, factor)
         self._last_mask = mask
-        self._large_boxes = too_large(shapes, p)
+        self._large_boxes = too_large(shapes, p, factor)
         rejected, blobs = shape_rejects(shapes, length_ok, short_ok)
         limit = int(p.association.max_measured)
         dropped = []
@@ -253,10 +296,11 @@ class CameraDetector:
             rejected += dropped
         counts = (len(shapes.length), int(np.count_nonzero(~length_ok)),
                   int(np.count_nonzero(length_ok & ~short_ok)), len(dropped))
-        return rejected, blobs, shapes, counts
+        return rejected, blobs, shapes, counts, factor
 
     def _score_stage(self, frame_bgr: np.ndarray, segmented: Segmented, blobs: list[ShapedBlob],
-                     shapes: ContourShapes, t: float, w: int, sx: float, sy: float) -> ScoredBlobs:
+                     shapes: ContourShapes, t: float, w: int, sx: float, sy: float,
+                     factor: np.ndarray | float = 1.0) -> ScoredBlobs:
         """Filter 3, the features and the score of the blobs, and of the parts split off long
         blobs (measured on their own pixels)."""
         p = self.params
@@ -264,7 +308,7 @@ class CameraDetector:
         measured = measure_blobs(frame_bgr, segmented.mask, [b.box for b in blobs], sx, sy, head)
         split = self._memory.splitter.split(p, self._associator, segmented.gray, segmented.mask,
                                             segmented.contours, shapes, t, w,
-                                            segmented.fresh_part(self._mask_scale))
+                                            segmented.fresh_part(self._mask_scale), factor)
         self.last_split = len(split[1]) if split is not None else 0
         if split is not None:
             core_mask, parts = split

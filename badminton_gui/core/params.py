@@ -20,8 +20,8 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from .detect.params import (AssociationParams, BackgroundParams, BinarizeParams, ClassifierParams,
-                            ColourParams, ContourLengthParams, MotionParams, TiltedRectParams,
-                            WindowParams)
+                            ColourParams, ContourLengthParams, MotionParams, ShuttleScaleParams,
+                            TiltedRectParams, WindowParams)
 from .flight.params import LookaheadParams, TrajectoryParams
 from .param_fields import ParamError, ParamGroup, choice, flag, param
 from .stereo.params import CourtAdaptParams, StereoParams
@@ -29,7 +29,8 @@ from .stereo.params import CourtAdaptParams, StereoParams
 __all__ = ["TrackerParams", "ParamError", "ParamGroup", "param", "choice", "flag", "field_info",
            "BackgroundParams", "BinarizeParams", "ContourLengthParams", "TiltedRectParams",
            "ColourParams", "MotionParams", "AssociationParams", "ClassifierParams", "WindowParams",
-           "StereoParams", "TrajectoryParams", "LookaheadParams", "CourtAdaptParams"]
+           "StereoParams", "TrajectoryParams", "LookaheadParams", "CourtAdaptParams",
+           "ShuttleScaleParams"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,6 +39,7 @@ class TrackerParams:
 
     background: BackgroundParams = field(default_factory=BackgroundParams)
     binarize: BinarizeParams = field(default_factory=BinarizeParams)
+    shuttle_scale: ShuttleScaleParams = field(default_factory=ShuttleScaleParams)
     contour_length: ContourLengthParams = field(default_factory=ContourLengthParams)
     tilted_rect: TiltedRectParams = field(default_factory=TiltedRectParams)
     colour: ColourParams = field(default_factory=ColourParams)

@@ -88,8 +88,8 @@ class StereoTracker:
                  parallel: bool = True) -> None:
         self.rig = rig
         self._params = params or TrackerParams()
-        self.left = CameraDetector(self.params)
-        self.right = CameraDetector(self.params)
+        self.left = CameraDetector(self.params, (rig, 0) if rig.has_court_pose else None)
+        self.right = CameraDetector(self.params, (rig, 1) if rig.has_court_pose else None)
         # ``window.stagger``: the right camera's scheduled whole frames half a period after the left's.
         self.right.set_window_phase(0.5)
         # OpenCV releases the GIL: the two cameras run side by side on two cores.

@@ -22,6 +22,7 @@ from ..params import TrackerParams
 from ..types import REJECT_LENGTH, REJECT_SHORT_SIDE, REJECT_WHITENESS, Candidate, make_candidate
 from .measure import GROW, scaled_boxes, window_maxima
 from .scoring import ShapedBlob
+from .shuttle_scale import GateScale
 
 @dataclasses.dataclass(frozen=True, slots=True)
 class ContourShapes:
@@ -53,32 +54,44 @@ def measure_contours(contours, sx: float, sy: float) -> ContourShapes:
     return ContourShapes(length, short, area, rects, scaled_boxes(rects, sx, sy), sx, sy)
 
 
+def gate_factors(shapes: ContourShapes, scale: GateScale | None) -> np.ndarray | float:
+    """Per contour, the factor of the pixel gates at its centre (``shuttle_scale.enabled``:
+    the shuttle's image scale there against the one the pixel values hold at); 1 without."""
+    if scale is None or not len(shapes.length):
+        return 1.0
+    return scale.at(*shapes.centres)
+
+
 def shape_filters(shapes: ContourShapes, params: TrackerParams, followed: Tracklet | None,
-                  t: float, width: int) -> tuple[np.ndarray, np.ndarray]:
-    """(filter 1 passed, filter 2 passed) per contour.
+                  t: float, width: int, factor: np.ndarray | float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(filter 1 passed, filter 2 passed) per contour; ``factor`` (``gate_factors``) scales
+    each contour's pixel limits.
 
     Guided exception to filter 1 (``contour_length.guided_min_length``): a short blob where the
     followed shuttle is predicted passes it.
     """
     cl, tr = params.contour_length, params.tilted_rect
     length, short = shapes.length, shapes.short_side
-    length_ok = (cl.min_length <= length) & (length <= cl.max_length)
-    short_ok = (tr.min_short_side <= short) & (short <= tr.max_short_side)
+    min_length = cl.min_length * factor
+    length_ok = (min_length <= length) & (length <= cl.max_length * factor)
+    short_ok = (tr.min_short_side * factor <= short) & (short <= tr.max_short_side * factor)
     if 0 < cl.guided_min_length < cl.min_length and len(length):
         if followed is not None and followed.velocity_known:
             px, py = followed.predict(t)
             cx, cy = shapes.centres
-            shorter = (cl.guided_min_length <= length) & (length < cl.min_length)
-            near = np.hypot(cx - px, cy - py) <= cl.guided_radius * width / 1280.0
+            shorter = (cl.guided_min_length * factor <= length) & (length < min_length)
+            # Without geometry the radius is px at 1280 px width, scaled with the width.
+            radius = cl.guided_radius * (factor if params.shuttle_scale.enabled else width / 1280.0)
+            near = np.hypot(cx - px, cy - py) <= radius
             length_ok = length_ok | (shorter & near)
     return length_ok, short_ok
 
 
-def too_large(shapes: ContourShapes, params: TrackerParams) -> np.ndarray:
+def too_large(shapes: ContourShapes, params: TrackerParams, factor: np.ndarray | float = 1.0) -> np.ndarray:
     """Full-resolution boxes of the blobs too large for a shuttle (a player, a racket and what
     touches them): a shuttle merged into one cannot be told apart (``CameraDetector.is_merged``)."""
-    return shapes.boxes[(shapes.length > params.contour_length.max_length)
-                        | (shapes.short_side > params.tilted_rect.max_short_side)]
+    return shapes.boxes[(shapes.length > params.contour_length.max_length * factor)
+                        | (shapes.short_side > params.tilted_rect.max_short_side * factor)]
 
 
 def shape_rejects(shapes: ContourShapes, length_ok: np.ndarray, short_ok: np.ndarray
@@ -165,9 +178,11 @@ class MergedBlobSplitter:
 
     def split(self, params: TrackerParams, associator: TrackletAssociator, gray: np.ndarray,
               mask: np.ndarray, contours, shapes: ContourShapes, t: float, width: int,
-              fresh: tuple[int, int, int, int]) -> tuple[np.ndarray, list[ShapedBlob]] | None:
+              fresh: tuple[int, int, int, int], factor: np.ndarray | float = 1.0
+              ) -> tuple[np.ndarray, list[ShapedBlob]] | None:
         """(mask of the parts, the parts), or None. ``fresh`` (model px x0, y0, x1, y1) is the
-        part of ``gray`` made this frame (the window, when windowed)."""
+        part of ``gray`` made this frame (the window, when windowed); ``factor``: the contours'
+        gate factors (``gate_factors``)."""
         cl = params.contour_length
         prev, self._previous = self._previous, None
         if cl.split_min_length <= 0:
@@ -185,7 +200,9 @@ class MergedBlobSplitter:
             # A track that lost its blob a while ago: its gate has grown, and what brightens
             # in it then is more often part of a player than the shuttle (hidden behind it).
             return None
-        big = np.flatnonzero(shapes.length >= cl.split_min_length * width / 1280.0)
+        factors = np.broadcast_to(np.asarray(factor if params.shuttle_scale.enabled else width / 1280.0,
+                                             dtype=float), shapes.length.shape)
+        big = np.flatnonzero(shapes.length >= cl.split_min_length * factors)
         if not len(big):
             return None
         centre = followed.predict(t)
@@ -193,7 +210,8 @@ class MergedBlobSplitter:
         core_mask = None
         parts: list[ShapedBlob] = []
         for k in big.tolist():
-            found = self._parts_of(params, gray, prev, contours, k, shapes, centre, radius)
+            found = self._parts_of(params, gray, prev, contours, k, shapes, centre, radius,
+                                   float(factors[k]) if params.shuttle_scale.enabled else 1.0)
             for c, x0, y0, length, short_side in found:
                 if core_mask is None:
                     core_mask = np.zeros(mask.shape[:2], np.uint8)
@@ -208,9 +226,9 @@ class MergedBlobSplitter:
 
     @staticmethod
     def _parts_of(params: TrackerParams, gray: np.ndarray, prev, contours, k: int,
-                  shapes: ContourShapes, centre: tuple[float, float], radius: float) -> list:
+                  shapes: ContourShapes, centre: tuple[float, float], radius: float, factor: float) -> list:
         """(contour, x0, y0, length, short side) of the parts of long blob ``k`` that brightened since the previous
-        frame, within filters 1 and 2 and the followed tracklet's gate."""
+        frame, within filters 1 and 2 (their pixel limits × ``factor``) and the followed tracklet's gate."""
         cl, tr = params.contour_length, params.tilted_rect
         sx, sy = shapes.sx, shapes.sy
         px, py = centre
@@ -238,8 +256,8 @@ class MergedBlobSplitter:
         for c in found:
             length = cv2.arcLength(c, True) * s_mean
             short_side = min(cv2.minAreaRect(c)[1]) * s_mean
-            if not (cl.min_length <= length <= min(cl.max_length, 0.5 * shapes.length[k])
-                    and tr.min_short_side <= short_side <= tr.max_short_side):
+            if not (cl.min_length * factor <= length <= min(cl.max_length * factor, 0.5 * shapes.length[k])
+                    and tr.min_short_side * factor <= short_side <= tr.max_short_side * factor):
                 continue
             cx, cy, cw, ch = cv2.boundingRect(c)
             if math.hypot((x0 + cx + cw / 2) * sx - px, (y0 + cy + ch / 2) * sy - py) > radius:

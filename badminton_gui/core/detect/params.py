@@ -77,6 +77,48 @@ class BinarizeParams(ParamGroup):
 
 
 @dataclass(frozen=True, slots=True)
+class ShuttleScaleParams(ParamGroup):
+    """The shuttle in the world's units, and the image gates of filters 1, 2 and 4 derived from
+    them at each image position (core/detect/shuttle_scale.py)."""
+
+    TITLE: ClassVar[str] = "Shuttle in the world"
+    enabled: bool = flag(False, label="Gates from geometry",
+                         help="Filters 1, 2 and 4 take their pixel limits at each image position from the "
+                              "shuttle's size and speed below and the camera's geometry (the rig's court "
+                              "pose; one camera alone: the field of view and distances below); off: the "
+                              "pixel values of 'Contour length', 'Tilted rectangle' and 'Motion' hold "
+                              "everywhere")
+    length: float = param(0.065, 0.02, 0.2, step=0.005, unit="m", label="Shuttle length",
+                          help="Cork tip to the skirt's rim: the largest extent of the shuttle")
+    cork_diameter: float = param(0.025, 0.005, 0.1, step=0.001, unit="m", label="Cork diameter",
+                                 help="The smallest part of the shuttle that still shows when far")
+    max_speed: float = param(110.0, 1.0, 150.0, step=1.0, unit="m/s", label="Top speed",
+                             help="Fastest shuttle (a smash leaves the racket at up to ~110 m/s)")
+    court_margin: float = param(2.0, 0.0, 20.0, step=0.5, unit="m", label="Play volume: margin",
+                                help="The shuttle flies over the court and this far around it")
+    ceiling: float = param(10.0, 1.0, 30.0, step=0.5, unit="m", label="... up to height",
+                           help="Highest shuttle above the floor")
+    nearest: float = param(1.5, 0.1, 50.0, step=0.1, unit="m", label="Nearest shuttle",
+                           help="The shuttle comes no closer to a camera than this")
+    farthest: float = param(20.0, 1.0, 200.0, step=1.0, unit="m", label="One camera: farthest shuttle",
+                            help="Without calibration: the farthest the shuttle gets from the camera")
+    fov: float = param(60.0, 10.0, 170.0, step=1.0, unit="°", label="One camera: field of view",
+                       help="Without calibration: the lens's horizontal field of view")
+    # The pixel values of filters 1, 2 and 4 were tuned on the demo court at 1280×720, whose
+    # cameras see a shuttle at ~185 px/m (the median over the image of the geometric middle of
+    # the nearest and the farthest shuttle's scale), and on the NYCU rig at 2048×1536 (~239
+    # px/m); a rig that sees the shuttle at half the scale gets half the pixel gates.
+    reference_scale: float = param(200.0, 1.0, 10000.0, step=5.0, unit="px/m", label="Pixel values hold at",
+                                   help="The image scale of the shuttle at which the pixel values of 'Contour "
+                                        "length', 'Tilted rectangle', 'Motion' and 'Association' (not its travel) hold; where the "
+                                        "camera sees the shuttle at another scale they grow or shrink with it")
+    per_position: bool = flag(True, label="Scale at each image position",
+                              help="The gates follow the shuttle's scale at the candidate's image position (a "
+                                   "near and a far part of the court differ); off: one factor per camera, the "
+                                   "median over its image")
+
+
+@dataclass(frozen=True, slots=True)
 class ContourLengthParams(ParamGroup):
     """Filter 1: contour length (perimeter)."""
 
@@ -184,7 +226,8 @@ class MotionParams(ParamGroup):
                                help="Allowed distance from the predicted position at zero speed")
     max_image_speed: float = param(15000.0, 0.0, 100000.0, step=100.0, unit="px/s",
                                    label="Maximum image speed",
-                                   help="Fastest shuttle in the image; the gate grows with the time step")
+                                   help="Fastest shuttle in the image; the gate grows with the time step "
+                                        "(with 'Gates from geometry': the top speed in m/s seen from the camera)")
     lost_after: float = param(0.15, 0.0, 5.0, step=0.01, unit="s", label="Lost after",
                               help="Without a hit for this long the track is dropped and any candidate may start a new one")
     coast_blind: int = param(10, 0, 60, step=1, unit="frames", label="Coast through glare",
