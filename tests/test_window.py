@@ -6,6 +6,8 @@ from __future__ import annotations
 import copy
 import math
 
+import threading
+
 import numpy as np
 import pytest
 
@@ -210,30 +212,30 @@ def test_both_cameras_windowed_run_in_turn_else_side_by_side(monkeypatch):
     from badminton_gui.core.tracker import StereoTracker
     from badminton_gui.io.demo_scene import make_rig
 
-    class CountingPool:
-        def __init__(self, pool):
-            self.pool, self.submitted = pool, 0
-
-        def submit(self, *args):
-            self.submitted += 1
-            return self.pool.submit(*args)
-
-        def shutdown(self, wait=True):
-            self.pool.shutdown(wait=wait)
-
     frame = np.zeros((720, 1280, 3), np.uint8)
-    real_plan = CameraDetector.plan_window
-    # (left windowed, right windowed) on this frame → side by side (the right to the pool)?
-    for plans, expected in (((False, False), 2), ((True, False), 2), ((False, True), 2), ((True, True), 0)):
+    real_plan, real_segment = CameraDetector.plan_window, CameraDetector.segment
+    threads: list[str] = []   # the thread each right-camera image half ran on
+
+    def segment(self, *args, **kwargs):
+        if self is tracker.right:
+            threads.append(threading.current_thread().name)
+        return real_segment(self, *args, **kwargs)
+
+    monkeypatch.setattr(CameraDetector, "segment", segment)
+    # (left windowed, right windowed) on this frame → side by side (the right on another thread)?
+    for plans, side_by_side in (((False, False), True), ((True, False), True), ((False, True), True),
+                                ((True, True), False)):
         def plan(self, frame_bgr, t, _plans=plans):
             real_plan(self, frame_bgr, t)
             return _plans[0] if self is tracker.left else _plans[1]
         monkeypatch.setattr(CameraDetector, "plan_window", plan)
         tracker = StereoTracker(make_rig("binocular", (1280, 720)))
-        tracker._pool = CountingPool(tracker._pool)
+        threads.clear()
         for i in range(2):
             tracker.process(frame, frame, i / 120)
-        assert tracker._pool.submitted == expected, plans
+        here = threading.current_thread().name
+        assert len(threads) == 2, plans
+        assert all((name != here) == side_by_side for name in threads), (plans, threads)
         tracker.close()
 
 
