@@ -60,6 +60,16 @@ PLAYER_COLOURS = [
 ]
 
 
+def look_at(centre, target) -> np.ndarray:
+    """Court → camera rotation of a camera at ``centre`` looking at ``target`` (Z up)."""
+    z = np.asarray(target, float) - np.asarray(centre, float)
+    z /= np.linalg.norm(z)
+    x = np.cross(z, [0.0, 0.0, 1.0])
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return np.stack([x, y, z])
+
+
 @dataclass(frozen=True)
 class PinholeCamera:
     """World (court) → camera transform and intrinsics of one camera of the rig."""

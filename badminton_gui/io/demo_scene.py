@@ -66,16 +66,6 @@ class FrameTruth:
 
 # ---- rigs ------------------------------------------------------------------------------------
 
-def _look_at(centre, target) -> np.ndarray:
-    """Court → camera rotation of a camera at ``centre`` looking at ``target`` (Z up)."""
-    z = np.asarray(target, float) - np.asarray(centre, float)
-    z /= np.linalg.norm(z)
-    x = np.cross(z, [0.0, 0.0, 1.0])
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    return np.stack([x, y, z])
-
-
 def _fit_focal(rotations, centres, points, size, margin: float = 0.94) -> float:
     """Largest focal length (px) that keeps every point inside both images."""
     w, h = size
@@ -99,16 +89,16 @@ def _rig_geometry(kind: str) -> tuple[list[np.ndarray], list[np.ndarray], np.nda
         # flight is within 6 m of the rig (see the report of this module's author).
         mid = np.array([-5.0, -3.4, 3.5])
         aim = np.array([1.0, -3.2, 1.5])
-        r_mid = _look_at(mid, aim)
+        r_mid = dr.look_at(mid, aim)
         x_axis = r_mid[0]
         far_aim = mid + 12.0 * (aim - mid) / np.linalg.norm(aim - mid)   # slight toe-in
         centres = [mid - 0.5 * BINOCULAR_BASELINE * x_axis, mid + 0.5 * BINOCULAR_BASELINE * x_axis]
-        rotations = [_look_at(c, far_aim) for c in centres]
+        rotations = [dr.look_at(c, far_aim) for c in centres]
         required = np.array([(-w, -hl, 0), (w, -hl, 0), *net])
         return rotations, centres, required
     if kind == "ends":
         centres = [np.array([0.0, -hl - 3.2, 5.0]), np.array([0.0, hl + 3.2, 5.0])]
-        rotations = [_look_at(centres[0], (0.0, -0.5, 0.0)), _look_at(centres[1], (0.0, 0.5, 0.0))]
+        rotations = [dr.look_at(centres[0], (0.0, -0.5, 0.0)), dr.look_at(centres[1], (0.0, 0.5, 0.0))]
         required = np.array([(-w, -hl, 0), (w, -hl, 0), (-w, hl, 0), (w, hl, 0), *net])
         return rotations, centres, required
     raise ValueError(f"unknown demo rig {kind!r}: choose one of {', '.join(RIG_KINDS)}")

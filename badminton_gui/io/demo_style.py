@@ -144,7 +144,7 @@ class SceneStyle:
         w, h = self.size
         f = (w / 2) / math.tan(math.radians(self.hfov_deg) / 2)
         k = np.array([[f, 0, (w - 1) / 2], [0, f, (h - 1) / 2], [0, 0, 1]])
-        rotations = [_look_at(c, a) for c, a in zip(self.centres, self.aims)]
+        rotations = [dr.look_at(c, a) for c, a in zip(self.centres, self.aims)]
         centres = [np.asarray(c, float) for c in self.centres]
         t = [-r @ c for r, c in zip(rotations, centres)]
         r_rel = rotations[1] @ rotations[0].T
@@ -234,16 +234,6 @@ def _board_in_camera(board: LedBoard, cam, bg, plain):
 
 # ---- geometry --------------------------------------------------------------------------------
 
-def _look_at(centre, target) -> np.ndarray:
-    """Court → camera rotation of a camera at ``centre`` looking at ``target`` (Z up)."""
-    z = np.asarray(target, float) - np.asarray(centre, float)
-    z /= np.linalg.norm(z)
-    x = np.cross(z, [0.0, 0.0, 1.0])
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    return np.stack([x, y, z])
-
-
 def _required(part: str) -> np.ndarray:
     w, hl = court.HALF_WIDTH_DOUBLES, court.HALF_LENGTH
     net = [(-w, 0, 0), (w, 0, 0), (-w, 0, court.NET_HEIGHT_POSTS), (w, 0, court.NET_HEIGHT_POSTS)]
@@ -256,7 +246,7 @@ def _fits(centres, aims, hfov_deg, size, points, margin=0.92) -> bool:
     w, h = size
     f = (w / 2) / math.tan(math.radians(hfov_deg) / 2)
     for c, a in zip(centres, aims):
-        pc = (points - np.asarray(c)) @ _look_at(c, a).T
+        pc = (points - np.asarray(c)) @ dr.look_at(c, a).T
         if np.any(pc[:, 2] <= 0.2):
             return False
         if (np.any(np.abs(pc[:, 0] / pc[:, 2]) * f > margin * (w - 1) / 2)
@@ -296,7 +286,7 @@ def _placement(family: str, rng: np.random.Generator):
 
     def at(d):
         mid = np.array([-(w + d), y0, z])
-        x_axis = _look_at(mid, aim)[0]
+        x_axis = dr.look_at(mid, aim)[0]
         far_aim = mid + 12.0 * (aim - mid) / np.linalg.norm(aim - mid)    # slight toe-in
         centres = [tuple(mid - 0.5 * baseline * x_axis), tuple(mid + 0.5 * baseline * x_axis)]
         return centres, [tuple(far_aim), tuple(far_aim)]
