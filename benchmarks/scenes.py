@@ -1,6 +1,7 @@
 """The tracker on randomised demo courts it was never tuned on: per scene family, with the default.
 
     .venv/bin/python benchmarks/scenes.py [--quick] [--seeds N] [--seconds S] [--jobs J] [--json]
+                                          [--preset NAME_OR_FILE]
 
 Why this file exists: where the project was tuned it meets its goals; an operator in a new hall
 with a new rack is always the unseen case. Each family of ``io/demo_style.py`` (side-near,
@@ -64,12 +65,13 @@ def clip_frames(style, seconds: float, max_frames: int | None = None) -> int:
     return frames if max_frames is None else min(frames, max_frames)
 
 
-def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = None) -> dict:
+def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = None,
+             preset: str | None = None) -> dict:
     """Track one clip of a family and return its raw counts (JSON-friendly)."""
     style = sample_scene(family, seed)
     frames = clip_frames(style, seconds, max_frames)
     scene = DemoScene(seed=seed, style=style, n_frames=frames)
-    params = load_preset(None).with_value("lookahead.frames", FILE_LOOKAHEAD)
+    params = load_preset(preset).with_value("lookahead.frames", FILE_LOOKAHEAD)
     tracker = StereoTracker(scene.rig, params)
     delay = StereoLookahead(scene.rig, params, tracker.epipolar_tolerance)
     tol = tolerance_px(style.size[0])
@@ -189,7 +191,7 @@ def _finite(obj):
     return obj
 
 
-def _print_tables(clips: list[dict], families: dict) -> None:
+def _print_tables(clips: list[dict], families: dict, preset: str | None = None) -> None:
     print(f"{'family':>16} {'seed':>5} {'size':>10} {'fps':>4} {'FOV':>4} {'frames':>6} "
           f"{'acc L':>6} {'acc R':>6} {'3D %':>6} {'med cm':>7} {'landings':>8} {'pairs/s':>7}")
     for c in clips:
@@ -212,15 +214,15 @@ def _print_tables(clips: list[dict], families: dict) -> None:
               f"{100 * f['median_3d']:7.2f} {100 * f['p90_3d']:7.2f} {100 * f['landing_median']:8.1f} "
               f"{100 * f['landing_p95']:8.1f} {f['landings_predicted']:>4}/{f['landings_seen']:<4}  "
               f"{passed}/{len(checks)}")
-    print("\ngoal check (issue 40, scenes), with the default preset:")
+    print(f"\ngoal check (issue 40, scenes), with the {preset or 'default'} preset:")
     for name, f in families.items():
         checks = goal_check(f)
         print(f"  {name:>16}: " + ", ".join(f"{g} {_verdict(ok)}" for g, ok in checks.items()))
 
 
-def _run_one(task) -> dict:
+def _run_one(task, preset: str | None = None) -> dict:
     configure_opencv_threads()
-    return run_clip(*task)
+    return run_clip(*task, preset=preset)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -236,6 +238,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-frames", type=int, default=None, help="at most this many frames a clip")
     ap.add_argument("--jobs", type=int, default=1, help="clips tracked in parallel processes")
     ap.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
+    ap.add_argument("--preset", default=None, help="a preset name or a .json parameter file instead "
+                    "of the default (a --log FILE belongs to one preset: give each its own)")
     ap.add_argument("--log", type=Path, default=None, metavar="FILE",
                     help="append each finished clip's counts to FILE (JSON lines); clips already "
                          "in FILE are not run again, so a stopped run resumes")
@@ -264,12 +268,12 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.jobs > 1:
         with ProcessPoolExecutor(args.jobs) as pool:
-            futures = {pool.submit(_run_one, t): t for t in todo}
+            futures = {pool.submit(_run_one, t, args.preset): t for t in todo}
             for future in as_completed(futures):
                 finished(futures[future], future.result())
     else:
         for task in todo:
-            finished(task, _run_one(task))
+            finished(task, _run_one(task, args.preset))
     clips = [done[t] for t in tasks]
     families = {fam: summarise([c for c in clips if c["family"] == fam]) for fam in args.families}
     if args.json:
@@ -280,8 +284,8 @@ def main(argv: list[str] | None = None) -> int:
             "wall_s": time.perf_counter() - start}), allow_nan=False))
         return 0
     print(f"scene families, seeds {args.first_seed}–{args.first_seed + seeds - 1}, {seconds:g} s of play "
-          f"a clip at 1280x720, default preset, look-ahead {FILE_LOOKAHEAD}")
-    _print_tables(clips, families)
+          f"a clip at 1280x720, preset {args.preset or 'default'}, look-ahead {FILE_LOOKAHEAD}")
+    _print_tables(clips, families, args.preset)
     print(f"\nwall time {time.perf_counter() - start:.0f} s")
     return 0
 

@@ -329,19 +329,60 @@ def test_quarter_scale_model_grey_averages_every_other_row():
     assert np.abs(gray - blocks).max() <= 1.5
 
 
-def test_large_frames_get_the_coarser_model_only_when_asked():
+def test_the_far_shuttle_size_decides_the_coarser_model():
     from badminton_gui.core.detector import model_scale
 
-    p = load_preset("default")
-    assert p.background.coarse_from_width == 0              # off: the default keeps its accuracy
-    assert model_scale(p.background, 2048) == 0.5
-    coarse = p.with_value("background.coarse_from_width", 1600).background
-    assert model_scale(coarse, 2048) == 0.25
-    assert model_scale(coarse, 1280) == 0.5                  # the demo court, broadcast: unchanged
-    fast = load_preset("coarse")                             # the shipped opt-in preset
+    default = load_preset("default").background
+    assert default.coarse_from_width == 0 and default.coarse_shuttle_px == 0   # off: see model_scale
+    assert model_scale(default, 2048, far_shuttle_px=50.0) == 0.5
+    bg = default.__class__(**{**_fields(default), "coarse_shuttle_px": 2.0})
+    # A far shuttle 10 px long at full resolution still spans 2.5 px of a quarter-scale model.
+    assert model_scale(bg, 2048, far_shuttle_px=10.0) == 0.25
+    # NYCU's (5.6 px at 2048) and the demo's keep half scale; no size known: the processing scale.
+    assert model_scale(bg, 2048, far_shuttle_px=5.6) == 0.5
+    assert model_scale(bg, 1280, far_shuttle_px=2.7) == 0.5
+    assert model_scale(bg, 2048) == 0.5
+    assert model_scale(bg.__class__(**{**_fields(bg), "coarse_shuttle_px": 0.0}), 2048, 50.0) == 0.5
+    # The fixed width rule (the coarse preset) replaces the size rule.
+    fixed = bg.__class__(**{**_fields(bg), "coarse_from_width": 1600})
+    assert model_scale(fixed, 2048) == 0.25
+    assert model_scale(fixed, 1280, far_shuttle_px=50.0) == 0.5
+    fast = load_preset("coarse")
     assert model_scale(fast.background, 2048) == 0.25
     assert fast.classifier.model == "candidate_classifier_coarse"
-    CameraDetector(fast)                                     # its classifier file loads
+
+
+def _fields(group) -> dict:
+    import dataclasses
+    return {f.name: getattr(group, f.name) for f in dataclasses.fields(group)}
+
+
+def test_a_camera_far_from_the_court_runs_coarser_with_the_coarse_classifier():
+    from badminton_gui.io.demo_scene import make_rig
+
+    p = load_preset("default")
+    p = (p.with_value("classifier.coarse_model", "candidate_classifier_coarse")
+         .with_value("background.coarse_shuttle_px", 2.0))
+    behind = make_rig("ends", (2048, 1536))        # behind the baselines: far shuttle ≈ 8.8 px
+    beside = make_rig("binocular", (2048, 1536))   # beside the near half: ≈ 6 px
+    far_det, near_det = CameraDetector(p, (behind, 0)), CameraDetector(p, (beside, 0))
+    assert far_det.scale_map(2048, 1536).far_length > near_det.scale_map(2048, 1536).far_length
+    assert far_det.model_scale(2048, 1536) == 0.25 and near_det.model_scale(2048, 1536) == 0.5
+    frame = cv2.resize(_synthetic_frame(6), (2048, 1536))
+    far_result = far_det.find_candidates(frame, 0.0)
+    near_result = near_det.find_candidates(frame, 0.0)
+    assert far_result.mask_scale == 0.25 and near_result.mask_scale == 0.5
+    assert far_det.classifier.name == p.classifier.coarse_model
+    assert near_det.classifier.name == p.classifier.model
+    # A classifier given for this recording (court adaptation) is kept at either scale.
+    given = near_det.classifier
+    far_det.use_classifier(given)
+    far_det.find_candidates(frame, 1 / 120)
+    assert far_det.classifier is given
+
+
+def test_coarse_from_width_halves_the_model_of_wide_frames():
+    p = load_preset("default")
     det = CameraDetector(p.with_value("background.coarse_from_width", 256))
     frame = _synthetic_frame(6)
     for i in range(3):

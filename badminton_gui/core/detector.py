@@ -95,6 +95,7 @@ class CameraDetector:
         # (its parameters, the frame size).
         self._geometry = geometry
         self._scale: tuple[object, ShuttleScaleMap, GateScale] | None = None
+        self._model_scale: tuple[object, float] | None = None   # (what it was made from, scale)
         self._fresh_state()
 
     def _fresh_state(self) -> None:
@@ -116,18 +117,12 @@ class CameraDetector:
         pose) instead of the image alone (``shuttle_scale.enabled``)."""
         self._geometry = (rig, int(camera))
         self._scale = None
+        self._model_scale = None
 
-    def scale_map(self, width: int, height: int) -> ShuttleScaleMap | None:
-        """The shuttle's image sizes and speeds over frames of this size (None:
-        ``shuttle_scale.enabled`` is off)."""
-        scale = self._gate_scale(width, height)
-        return None if scale is None else self._scale[1]
-
-    def _gate_scale(self, width: int, height: int) -> GateScale | None:
-        """The gate factors of filters 1, 2 and 4 for frames of this size (None: off)."""
+    def scale_map(self, width: int, height: int) -> ShuttleScaleMap:
+        """The shuttle's image sizes and speeds over frames of this size: from the camera's
+        view of the court when it has one, else from the image alone (an assumed lens)."""
         sp = self.params.shuttle_scale
-        if not sp.enabled:
-            return None
         key = (sp, int(width), int(height))
         if self._scale is None or self._scale[0] != key:
             shuttle_map = None
@@ -139,6 +134,26 @@ class CameraDetector:
             if shuttle_map is None:
                 shuttle_map = from_image(int(width), int(height), sp)
             self._scale = (key, shuttle_map, shuttle_map.gate_scale(sp.reference_scale, sp.per_position))
+        return self._scale[1]
+
+    def model_scale(self, width: int, height: int) -> float:
+        """The scale this camera's background model runs at for frames of this size
+        (``segmentation.model_scale``: the processing scale, or half of it when the far
+        shuttle still shows there)."""
+        bg = self.params.background
+        key = (bg, self.params.shuttle_scale, int(width), int(height))   # use_rig clears it
+        if self._model_scale is None or self._model_scale[0] != key:
+            far = None
+            if bg.coarse_shuttle_px > 0 and bg.coarse_from_width == 0:
+                far = self.scale_map(width, height).far_length
+            self._model_scale = (key, model_scale(bg, width, far))
+        return self._model_scale[1]
+
+    def _gate_scale(self, width: int, height: int) -> GateScale | None:
+        """The gate factors of filters 1, 2 and 4 for frames of this size (None: off)."""
+        if not self.params.shuttle_scale.enabled:
+            return None
+        self.scale_map(width, height)
         return self._scale[2]
 
     def reset(self) -> None:
@@ -191,7 +206,7 @@ class CameraDetector:
         cameras before it decides whether to run them side by side or in turn."""
         h, w = frame_bgr.shape[:2]
         p = self.params
-        window = (self._window.plan(self._associator, t, w, h, model_scale(p.background, w),
+        window = (self._window.plan(self._associator, t, w, h, self.model_scale(w, h),
                                     self.keep_whole)
                   if p.window.enabled else None)
         self._memory.planned = (t, window)
@@ -219,7 +234,7 @@ class CameraDetector:
         """
         p = self.params
         h, w = frame_bgr.shape[:2]
-        scale = model_scale(p.background, w)
+        scale = self.model_scale(w, h)
         # Windowed tracking (core/window.py): only around the followed shuttle's prediction,
         # as chosen by ``plan_window`` for this frame, or now.
         planned, self._memory.planned = self._memory.planned, None
@@ -247,6 +262,7 @@ class CameraDetector:
         mask = segmented.mask
         sx, sy = w / mask.shape[1], h / mask.shape[0]
         self._mask_scale = mask.shape[1] / w
+        self._scorer.at_scale(self._mask_scale < 0.75 * self.params.background.processing_scale)
         gates = self._gate_scale(w, h)
         self._associator.scale = gates
         rejected, blobs, shapes, shape_counts, factor = self._shape_stage(segmented, t, w, sx, sy, gates)

@@ -44,10 +44,15 @@ FAST_PRESET = "coarse"
 
 def has_faster_preset(params: TrackerParams, width: int) -> bool:
     """True when frames ``width`` px wide would be tracked faster by the coarse preset: wide
-    frames with the background model above a quarter scale, or without windowed tracking."""
+    frames with the background model above a quarter scale, or without windowed tracking.
+    When the far shuttle's size picks the model's scale (``background.coarse_shuttle_px``),
+    that scale is already as coarse as the shuttle allows: only windowing is left to advise."""
     if width < COARSE_FROM_WIDTH:
         return False
-    return model_scale(params.background, width) > 0.25 + 1e-9 or not params.window.enabled
+    bg = params.background
+    sized = int(bg.coarse_from_width) == 0 and bg.coarse_shuttle_px > 0
+    coarse = sized or model_scale(bg, width) <= 0.25 + 1e-9
+    return not coarse or not params.window.enabled
 
 
 @dataclass

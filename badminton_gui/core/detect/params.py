@@ -55,7 +55,16 @@ class BackgroundParams(ParamGroup):
                                         "processing scale (2048 px cameras: a 512 px model, ~45 % less CPU) "
                                         "at some accuracy (NYCU F1 −1.4 to −1.8 points with the shipped "
                                         "classifier); positions and features still come from the full-resolution "
-                                        "windows. 0: never")
+                                        "windows. 0: never, unless 'Coarser when the far shuttle spans' says so")
+    coarse_shuttle_px: float = param(0.0, 0.0, 10.0, step=0.1, unit="px", label="Coarser when the far shuttle spans",
+                                     help="The background model runs at half the processing scale when the "
+                                          "farthest shuttle (its length, the median over the image, from the "
+                                          "camera's view of the court or an assumed lens) still spans at least "
+                                          "this many model pixels there (2: a far shuttle of 8 px or more at "
+                                          "full resolution, as behind the court at 2048 px). Faster, but on "
+                                          "courts it was not trained on it costs 3D coverage, so 0 (never) by "
+                                          "default. Positions and features still come from the full-resolution "
+                                          "windows; 'Model at the coarser scale' scores them")
 
 
 @dataclass(frozen=True, slots=True)
@@ -379,6 +388,13 @@ class ClassifierParams(ParamGroup):
                                                  "candidate_classifier_coarse"),
                         label="Model", help="Classifier file in resources/ (_coarse: trained with "
                                             "background.coarse_from_width on, for the coarse preset)")
+    coarse_model: str = choice("candidate_classifier", ("candidate_classifier",
+                                                        "candidate_classifier_coarse",
+                                                        "candidate_classifier_broadcast"),
+                               label="Model at the coarser scale",
+                               help="Classifier used while the background model runs at half the "
+                                    "processing scale ('Coarser when the far shuttle spans', 'Coarser "
+                                    "from width'): its mask-based features differ from the full scale's")
     # Recorded files only (core/adaptation.py): a first pass over the recording labels its own
     # candidates on long runs of detections and a classifier trained on them scores a second.
     adapt_min_run: int = param(0, 0, 200, step=1, unit="frames", label="Adapt to a file: runs of",

@@ -67,18 +67,34 @@ class BlobScorer:
         self.params = params
         self.classifier = None
         self._score: ScoreFunction | None = None
+        self._coarse = False    # the background model runs at half the processing scale
+        self._given = False     # a classifier given by ``use_classifier`` is kept at any scale
         self.set_params(params)
 
     def set_params(self, params: TrackerParams) -> None:
         self.params = params
-        cp = params.classifier
+        self._given = False
+        self._load()
+
+    def at_scale(self, coarse: bool) -> None:
+        """Score the coming frames' blobs as measured on a mask at the processing scale or at
+        half of it (``classifier.coarse_model``: the mask-based features differ)."""
+        if coarse != self._coarse:
+            self._coarse = coarse
+            if not self._given:
+                self._load()
+
+    def _load(self) -> None:
+        cp = self.params.classifier
+        name = cp.coarse_model if self._coarse else cp.model
         if not cp.enabled:
             self.classifier = None
-        elif self.classifier is None or self.classifier.name != cp.model:
-            self.classifier = load_classifier(cp.model)
+        elif self.classifier is None or self.classifier.name != name:
+            self.classifier = load_classifier(name)
 
     def use_classifier(self, classifier) -> None:
         self.classifier = classifier
+        self._given = True
 
     def use_score(self, score: ScoreFunction | None) -> None:
         """Score with ``score`` instead (None: back to the classifier or the hand-made score)."""

@@ -34,22 +34,27 @@ class Segmented:
         return (0, 0, self.mask.shape[1], self.mask.shape[0])
 
 
-def model_scale(background, width: int) -> float:
+def model_scale(background, width: int, far_shuttle_px: float | None = None) -> float:
     """The scale the background model runs at for frames ``width`` px wide.
 
-    The processing scale, halved for large frames when ``coarse_from_width`` asks for it: at
-    2048×1536 a 512 px model instead of 1024 px cuts the image work ~4× and, with far fewer
-    noise contours to measure, the CPU per camera frame by ~45 % (issue #7). With the default
-    classifier (trained at half scale) it costs accuracy: on rally_11-46-04 the F1 fell from
-    96.9 % to 95.1–95.5 % (the 4× coarser mask lets dilated noise pass the length filter and
-    shifts the mask-based features). The ``coarse`` preset pairs it with a classifier trained
-    on coarse-scale candidates, windowed tracking and the landed hold's protected mask: within
-    0.2 F1 points of the default on the tuned-on rallies and 0.45 on the held-out ones.
-    It stays opt-in: presets are the operator's choice.
+    The processing scale, halved when the frames are wide enough (``coarse_from_width``, the
+    coarse preset's fixed rule) or, otherwise, when the farthest shuttle, ``far_shuttle_px``
+    long in full-resolution pixels, still spans ``coarse_shuttle_px`` model pixels at the halved
+    scale (``CameraDetector.model_scale`` gives it from the camera's view of the court). The
+    model must show the shuttle, not the frame: a camera behind the court at 2048 px needs no
+    1024 px model, a side camera at 1280 px does. A halved model costs about a quarter of the
+    image work, but its mask-based features differ, so the classifier of the coarser scale
+    (``classifier.coarse_model``) scores them. Off by default: measured on randomised courts
+    behind the baselines (tuning seeds) it lost 3D coverage with either shipped classifier —
+    the size rule is ready for a classifier trained at that scale on more than one court.
     """
     scale = float(background.processing_scale)
     if 0 < int(background.coarse_from_width) <= width:
-        scale *= 0.5
+        return scale * 0.5
+    limit = float(background.coarse_shuttle_px)
+    if int(background.coarse_from_width) == 0 and limit > 0 and far_shuttle_px is not None \
+            and far_shuttle_px * scale * 0.5 >= limit:
+        return scale * 0.5
     return scale
 
 

@@ -62,6 +62,13 @@ class ShuttleScaleMap:
         return self.near_scale * self.params.length
 
     @property
+    def far_length(self) -> float:
+        """px: the farthest shuttle's whole length, the median over the cells: what the
+        background model must still show (``segmentation.model_scale``)."""
+        far = self.far_scale[np.isfinite(self.far_scale)]
+        return float(np.median(far)) * self.params.length if far.size else 0.0
+
+    @property
     def max_speed(self) -> np.ndarray:
         """(ny, nx) px/s: the nearest shuttle at the top speed."""
         return self.near_scale * self.params.max_speed
