@@ -64,12 +64,14 @@ def clip_frames(style, seconds: float, max_frames: int | None = None) -> int:
     return frames if max_frames is None else min(frames, max_frames)
 
 
-def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = None) -> dict:
-    """Track one clip of a family and return its raw counts (JSON-friendly)."""
+def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = None,
+             preset: str | None = None) -> dict:
+    """Track one clip of a family and return its raw counts (JSON-friendly); ``preset``: a
+    preset name or parameter file instead of the default."""
     style = sample_scene(family, seed)
     frames = clip_frames(style, seconds, max_frames)
     scene = DemoScene(seed=seed, style=style, n_frames=frames)
-    params = load_preset(None).with_value("lookahead.frames", FILE_LOOKAHEAD)
+    params = load_preset(preset).with_value("lookahead.frames", FILE_LOOKAHEAD)
     tracker = StereoTracker(scene.rig, params)
     delay = StereoLookahead(scene.rig, params, tracker.epipolar_tolerance)
     tol = tolerance_px(style.size[0])
@@ -189,7 +191,7 @@ def _finite(obj):
     return obj
 
 
-def _print_tables(clips: list[dict], families: dict) -> None:
+def _print_tables(clips: list[dict], families: dict, preset: str | None = None) -> None:
     print(f"{'family':>16} {'seed':>5} {'size':>10} {'fps':>4} {'FOV':>4} {'frames':>6} "
           f"{'acc L':>6} {'acc R':>6} {'3D %':>6} {'med cm':>7} {'landings':>8} {'pairs/s':>7}")
     for c in clips:
@@ -212,7 +214,7 @@ def _print_tables(clips: list[dict], families: dict) -> None:
               f"{100 * f['median_3d']:7.2f} {100 * f['p90_3d']:7.2f} {100 * f['landing_median']:8.1f} "
               f"{100 * f['landing_p95']:8.1f} {f['landings_predicted']:>4}/{f['landings_seen']:<4}  "
               f"{passed}/{len(checks)}")
-    print("\ngoal check (issue 40, scenes), with the default preset:")
+    print(f"\ngoal check (issue 40, scenes), with the {preset or 'default'} preset:")
     for name, f in families.items():
         checks = goal_check(f)
         print(f"  {name:>16}: " + ", ".join(f"{g} {_verdict(ok)}" for g, ok in checks.items()))
@@ -236,6 +238,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-frames", type=int, default=None, help="at most this many frames a clip")
     ap.add_argument("--jobs", type=int, default=1, help="clips tracked in parallel processes")
     ap.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
+    ap.add_argument("--preset", default=None, help="a preset name or a .json parameter file (e.g. "
+                    "{\"shuttle_scale\": {\"enabled\": true}}) instead of the default preset")
     ap.add_argument("--log", type=Path, default=None, metavar="FILE",
                     help="append each finished clip's counts to FILE (JSON lines); clips already "
                          "in FILE are not run again, so a stopped run resumes")
@@ -243,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
     seeds = args.seeds if args.seeds is not None else (1 if args.quick else 8)
     seconds = args.seconds if args.seconds is not None else (5.0 if args.quick else 8.0)
     # Seed by seed across the families: a run stopped early has every family.
-    tasks = [(fam, seed, seconds, args.max_frames)
+    tasks = [(fam, seed, seconds, args.max_frames, args.preset)
              for seed in range(args.first_seed, args.first_seed + seeds) for fam in args.families]
     done = {}
     if args.log is not None and args.log.is_file():
@@ -280,8 +284,8 @@ def main(argv: list[str] | None = None) -> int:
             "wall_s": time.perf_counter() - start}), allow_nan=False))
         return 0
     print(f"scene families, seeds {args.first_seed}–{args.first_seed + seeds - 1}, {seconds:g} s of play "
-          f"a clip at 1280x720, default preset, look-ahead {FILE_LOOKAHEAD}")
-    _print_tables(clips, families)
+          f"a clip at 1280x720, {args.preset or 'default'} preset, look-ahead {FILE_LOOKAHEAD}")
+    _print_tables(clips, families, args.preset)
     print(f"\nwall time {time.perf_counter() - start:.0f} s")
     return 0
 
