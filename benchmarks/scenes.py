@@ -1,7 +1,6 @@
 """The tracker on randomised demo courts it was never tuned on: per scene family, with the default.
 
     .venv/bin/python benchmarks/scenes.py [--quick] [--seeds N] [--seconds S] [--jobs J] [--json]
-                                          [--preset NAME_OR_FILE]
 
 Why this file exists: where the project was tuned it meets its goals; an operator in a new hall
 with a new rack is always the unseen case. Each family of ``io/demo_style.py`` (side-near,
@@ -67,7 +66,8 @@ def clip_frames(style, seconds: float, max_frames: int | None = None) -> int:
 
 def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = None,
              preset: str | None = None) -> dict:
-    """Track one clip of a family and return its raw counts (JSON-friendly)."""
+    """Track one clip of a family and return its raw counts (JSON-friendly); ``preset``: a
+    preset name or parameter file instead of the default."""
     style = sample_scene(family, seed)
     frames = clip_frames(style, seconds, max_frames)
     scene = DemoScene(seed=seed, style=style, n_frames=frames)
@@ -220,9 +220,9 @@ def _print_tables(clips: list[dict], families: dict, preset: str | None = None) 
         print(f"  {name:>16}: " + ", ".join(f"{g} {_verdict(ok)}" for g, ok in checks.items()))
 
 
-def _run_one(task, preset: str | None = None) -> dict:
+def _run_one(task) -> dict:
     configure_opencv_threads()
-    return run_clip(*task, preset=preset)
+    return run_clip(*task)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -238,8 +238,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-frames", type=int, default=None, help="at most this many frames a clip")
     ap.add_argument("--jobs", type=int, default=1, help="clips tracked in parallel processes")
     ap.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
-    ap.add_argument("--preset", default=None, help="a preset name or a .json parameter file instead "
-                    "of the default (a --log FILE belongs to one preset: give each its own)")
+    ap.add_argument("--preset", default=None, help="a preset name or a .json parameter file (e.g. "
+                    "{\"shuttle_scale\": {\"enabled\": true}}) instead of the default preset")
     ap.add_argument("--log", type=Path, default=None, metavar="FILE",
                     help="append each finished clip's counts to FILE (JSON lines); clips already "
                          "in FILE are not run again, so a stopped run resumes")
@@ -247,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
     seeds = args.seeds if args.seeds is not None else (1 if args.quick else 8)
     seconds = args.seconds if args.seconds is not None else (5.0 if args.quick else 8.0)
     # Seed by seed across the families: a run stopped early has every family.
-    tasks = [(fam, seed, seconds, args.max_frames)
+    tasks = [(fam, seed, seconds, args.max_frames, args.preset)
              for seed in range(args.first_seed, args.first_seed + seeds) for fam in args.families]
     done = {}
     if args.log is not None and args.log.is_file():
@@ -268,12 +268,12 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.jobs > 1:
         with ProcessPoolExecutor(args.jobs) as pool:
-            futures = {pool.submit(_run_one, t, args.preset): t for t in todo}
+            futures = {pool.submit(_run_one, t): t for t in todo}
             for future in as_completed(futures):
                 finished(futures[future], future.result())
     else:
         for task in todo:
-            finished(task, _run_one(task, args.preset))
+            finished(task, _run_one(task))
     clips = [done[t] for t in tasks]
     families = {fam: summarise([c for c in clips if c["family"] == fam]) for fam in args.families}
     if args.json:
@@ -284,7 +284,7 @@ def main(argv: list[str] | None = None) -> int:
             "wall_s": time.perf_counter() - start}), allow_nan=False))
         return 0
     print(f"scene families, seeds {args.first_seed}–{args.first_seed + seeds - 1}, {seconds:g} s of play "
-          f"a clip at 1280x720, preset {args.preset or 'default'}, look-ahead {FILE_LOOKAHEAD}")
+          f"a clip at 1280x720, {args.preset or 'default'} preset, look-ahead {FILE_LOOKAHEAD}")
     _print_tables(clips, families, args.preset)
     print(f"\nwall time {time.perf_counter() - start:.0f} s")
     return 0

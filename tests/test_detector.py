@@ -602,6 +602,31 @@ def test_a_shuttle_merged_with_a_wide_blob_is_split_off_it(split):
         assert not any(found)      # lost inside the merged blob
 
 
+def test_the_split_length_follows_the_width_not_the_shuttles_scale():
+    """``contour_length.split_min_length`` is the size of what the shuttle merges with (a racket,
+    an arm, a mark on the floor), px at 1280 px width: with the gates from geometry it stays
+    scaled with the width where the camera sees the shuttle small (filters 1 and 2 shrink)."""
+    frames, _truth = _flight_across_a_wide_blob()
+    splits = {}
+    for enabled in (False, True):
+        for split in (100.0, 500.0):     # 50 / 250 px at 640 px width; the merged blob is ~210 px
+            params = (_params().with_value("shuttle_scale.enabled", enabled)
+                      .with_value("shuttle_scale.farthest", 42.0)
+                      .with_value("contour_length.split_min_length", split))
+            det = CameraDetector(params)
+            if enabled:
+                p = params.shuttle_scale
+                factor = det.scale_map(640, 360).gate_scale(p.reference_scale).at([320.0], [180.0])[0]
+                assert factor < 0.4      # the geometric factor would have split at 500
+            n = 0
+            for i, img in enumerate(frames):
+                det.process(img, i / FPS, keep_mask=False)
+                n += det.last_split
+            splits[enabled, split] = n
+    assert splits[False, 100.0] > 0 and splits[True, 100.0] > 0
+    assert splits[False, 500.0] == splits[True, 500.0] == 0
+
+
 @pytest.mark.parametrize("max_misses", [0, 50])
 def test_no_split_around_a_track_that_lost_its_blob(max_misses):
     """A track whose blob has been missing for frames (the shuttle hidden behind a player) has a

@@ -80,8 +80,10 @@ def shape_filters(shapes: ContourShapes, params: TrackerParams, followed: Trackl
             px, py = followed.predict(t)
             cx, cy = shapes.centres
             shorter = (cl.guided_min_length * factor <= length) & (length < min_length)
-            # Without geometry the radius is px at 1280 px width, scaled with the width.
-            radius = cl.guided_radius * (factor if params.shuttle_scale.enabled else width / 1280.0)
+            # px at 1280 px width, scaled with the width, with the camera's geometry too: the
+            # radius covers the prediction's error, pixels of the mask's jitter whatever the
+            # shuttle's scale (as the travel thresholds, core/association.py).
+            radius = cl.guided_radius * width / 1280.0
             near = np.hypot(cx - px, cy - py) <= radius
             length_ok = length_ok | (shorter & near)
     return length_ok, short_ok
@@ -200,18 +202,23 @@ class MergedBlobSplitter:
             # A track that lost its blob a while ago: its gate has grown, and what brightens
             # in it then is more often part of a player than the shuttle (hidden behind it).
             return None
-        factors = np.broadcast_to(np.asarray(factor if params.shuttle_scale.enabled else width / 1280.0,
-                                             dtype=float), shapes.length.shape)
-        big = np.flatnonzero(shapes.length >= cl.split_min_length * factors)
+        # The length a blob must reach to be split is px at 1280 px width, scaled with the width,
+        # with the camera's geometry too: it is the size of what the shuttle merges with (a
+        # racket, an arm, a mark on the floor), not the shuttle's. Scaled down with the shuttle
+        # where a camera sees it small, it split the blob of a landed shuttle rolling over a
+        # floor mark, and the mark's still tracklet took the shuttle from its flight.
+        big = np.flatnonzero(shapes.length >= cl.split_min_length * width / 1280.0)
         if not len(big):
             return None
+        factors = np.broadcast_to(np.asarray(factor, dtype=float), shapes.length.shape)
         centre = followed.predict(t)
         radius = associator.gate(followed, max(t - followed.t, 1e-3))
         core_mask = None
         parts: list[ShapedBlob] = []
         for k in big.tolist():
+            # The parts pass filters 1 and 2 as any blob does (scaled at the blob with geometry).
             found = self._parts_of(params, gray, prev, contours, k, shapes, centre, radius,
-                                   float(factors[k]) if params.shuttle_scale.enabled else 1.0)
+                                   float(factors[k]))
             for c, x0, y0, length, short_side in found:
                 if core_mask is None:
                     core_mask = np.zeros(mask.shape[:2], np.uint8)

@@ -119,7 +119,9 @@ class ShuttleScaleParams(ParamGroup):
     # px/m); a rig that sees the shuttle at half the scale gets half the pixel gates.
     reference_scale: float = param(200.0, 1.0, 10000.0, step=5.0, unit="px/m", label="Pixel values hold at",
                                    help="The image scale of the shuttle at which the pixel values of 'Contour "
-                                        "length', 'Tilted rectangle', 'Motion' and 'Association' (not its travel) hold; where the "
+                                        "length' (not its guided radius and split length: px at 1280 px width), "
+                                        "'Tilted rectangle', 'Motion' and 'Association' (not its travel) hold; "
+                                        "where the "
                                         "camera sees the shuttle at another scale they grow or shrink with it")
     per_position: bool = flag(True, label="Scale at each image position",
                               help="The gates follow the shuttle's scale at the candidate's image position (a "
