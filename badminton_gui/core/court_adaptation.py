@@ -11,21 +11,37 @@ such pair's frame, each camera's candidates near its report as the shuttle and t
 (lights, boards, lines, players' shoes) as not; candidates in between, and frames the flight did
 not take, teach nothing.
 
+Two more kinds of rows come from every step, flight or not: a blob that stays at one pixel for
+``adapt.still_frames`` frames (a light, an LED board, a line's end, a shuttle at rest) and lies
+far from every report of the flights kept is not the shuttle either (``StillBlobs``); and a
+sample of all the court's candidates, unlabelled, is what the training rehearses.
+
+How it trains (``fine_tune_camera``): the camera's shipped classifier is *fine-tuned*, not
+trained anew — a few full-batch Adam steps at a small rate from its own weights
+(``classifier.fine_tune``), on the harvest's labelled rows and on the sample of this court's
+candidates with the starting classifier's probabilities as soft targets, so that what it knew of
+everything the flights do not show stays. Retrained from scratch with pseudo-rehearsal of random
+feature vectors (``core/adaptation.py``'s TV recipe) it lost on the rig: the shipped classifier
+retrained on that rehearsal alone already lost ~3 points on a held-out rally. A guard then
+scores both classifiers on held-back steps of the harvest (every fourth block of 50 steps, left
+out of the training): the fine-tuned one is used only when its weighted cross-entropy is lower
+and it ranks the shuttle above the step's other labelled rows at least as often; otherwise the
+camera keeps the classifier it had.
+
 ``CourtAdaptation`` drives it live: fed every step's result, it reports its progress (a GUI shows
-"adapting: 40 %"), trains each camera's classifier (``adapt_classifier``: the pseudo-labels plus
-pseudo-rehearsal of the classifier it starts from) once the harvest reaches its target, on a
-background thread, and swaps the classifiers into the tracker's detectors between two steps.
+"adapting: 40 %"), fine-tunes each camera's classifier once the harvest reaches its target, on
+a background thread, and swaps the classifiers into the tracker's detectors between two steps.
 ``adapt_to_stereo_recording`` is the offline form: one pass over a recording, the classifiers from
 everything it collected (``track --adapt`` tracks a second pass with them).
 
-What it gains and costs, hence off by default (``adapt.enabled``): on a held-out rally of the
-NYCU rig (rally_11-48-10, first pass: 7 flights, ~720 shuttle candidates a camera) it lost,
-95.02 / 75.99 -> 91.53 / 72.60 % per camera, mostly by new reports where the labels have none;
-on the demo court at 640×360 (seed 5) 97.80 / 96.90 -> 97.70 / 97.90 %
-(``benchmarks/court_adaptation.py``). Most of that loss is the retraining recipe, not the
-labels: the shipped classifier retrained on its pseudo-rehearsal alone (no harvested rows)
-already scores 91.79 / 74.04 % on that rally — the TV recipe's rehearsal does not reproduce the
-two-camera classifier, so a better start (its own weights, fine-tuned) is the next thing to try.
+What it gains and costs, hence still off by default (``adapt.enabled``): on the three held-out
+NYCU rallies (``benchmarks/accuracy.py --track-only --adapt``) it neither wins nor loses
+measurably — all together 91.53 -> 91.43 % (in play 94.99 -> 94.89 %); rally_11-48-10, where the
+old from-scratch recipe fell 95.02 / 75.99 -> 91.53 / 72.60 %, now 95.02 / 75.99 -> 95.09 /
+75.99 %. On randomised courts it never saw (``benchmarks/scenes.py --families side-near --seeds
+4 --seconds 4 --adapt``) 92.69 / 93.33 -> 93.14 / 94.04 % per camera; on the demo court at
+640×360 (seed 5) 97.80 / 96.90 -> 97.70 / 96.90 %. A win on a new hall is not shown yet, and a
+held-out rally loses a few frames, so it stays an option.
 """
 
 from __future__ import annotations
