@@ -354,11 +354,11 @@ def fine_tune_camera(classifier: CandidateClassifier, harvest: StereoHarvest, ca
     train_x = np.vstack([x[~hold]] + ([rehearse] if len(rehearse) else []))
     train_y = np.concatenate([y[~hold].astype(float)]
                              + ([classifier.probability(rehearse)] if len(rehearse) else []))
-    tuned = fine_tune(classifier, train_x, train_y, epochs=epochs, learning_rate=learning_rate,
-                      name=f"{classifier.name} (adapted)", should_stop=should_stop)
     if not np.count_nonzero(hold & y) or not np.count_nonzero(hold & ~y):
         # Nothing held back to judge by (a short harvest): keep what is known to work.
         return classifier, HeldBack(int(np.count_nonzero(hold)), math.nan, math.nan, math.nan, math.nan, True)
+    tuned = fine_tune(classifier, train_x, train_y, epochs=epochs, learning_rate=learning_rate,
+                      name=f"{classifier.name} (adapted)", should_stop=should_stop)
     before = _judge(classifier, x[hold], y[hold], frames[hold])
     after = _judge(tuned, x[hold], y[hold], frames[hold])
     kept = not (after[0] <= before[0] and after[1] >= before[1])
