@@ -2,7 +2,7 @@
 
 Why this file exists: the adaptation must show what it gains, and what it costs, where nothing
 was tuned. For each seed it tracks the demo court once with the preset's classifiers, labels the
-candidates of the flights both cameras agreed on, retrains each camera's classifier on them
+candidates of the flights both cameras agreed on, fine-tunes each camera's classifier on them
 (the offline form, as `track --adapt` does), and scores a second run with them against the
 scene's truth, beside the first run's score. The real footage: `accuracy.py --adapt`.
 
@@ -39,14 +39,20 @@ def main() -> int:
         start = time.perf_counter()
         scene = DemoScene(seed=seed, size=size, rig=args.rig, n_frames=args.frames)
         tracker = StereoTracker(scene.rig, params)
+        judged: list = []
         try:
-            classifiers, harvest = adapt_to_stereo_recording(tracker, iter(scene.read, None))
+            classifiers, harvest = adapt_to_stereo_recording(tracker, iter(scene.read, None), judged=judged)
         finally:
             tracker.close()
             scene.close()
         before = evaluate_demo(seed, args.frames, size, args.rig, params, lookahead=args.lookahead)
         print(f"seed {seed} {args.size} {args.rig}: harvest {harvest.flights} flights, shuttle "
-              f"{harvest.positives}, others {harvest.negatives}")
+              f"{harvest.positives}, others {harvest.negatives}, still blobs "
+              f"{[len(harvest.still_rows(cam)[0]) for cam in (0, 1)]}")
+        for side, h in zip(("left", "right"), judged):
+            print(f"  {side}: {'kept the preset' if h.kept else 'fine-tuned'}; held-back {h.rows} rows, loss "
+                  f"{h.loss_before:.4f} -> {h.loss_after:.4f}, shuttle first {100 * h.top_before:.1f} -> "
+                  f"{100 * h.top_after:.1f} %")
         print(f"  before  left {before.left.summary()}")
         print(f"          right {before.right.summary()}")
         if classifiers is None:

@@ -39,6 +39,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from badminton_gui.core.court_adaptation import adapt_to_stereo_recording  # noqa: E402
 from badminton_gui.core.evaluation import Outcomes, classify, tolerance_px  # noqa: E402
 from badminton_gui.core.track_lookahead import StereoLookahead  # noqa: E402
 from badminton_gui.core.tracker import StereoTracker, configure_opencv_threads  # noqa: E402
@@ -64,15 +65,35 @@ def clip_frames(style, seconds: float, max_frames: int | None = None) -> int:
     return frames if max_frames is None else min(frames, max_frames)
 
 
+def adapted_classifiers(family: str, seed: int, frames: int, params) -> tuple[tuple | None, list]:
+    """`track --adapt`'s first pass over one clip (core/court_adaptation.py): each camera's
+    classifier adapted from the flights both cameras agreed on (None: nothing to learn from),
+    and each camera's held-back comparison."""
+    scene = DemoScene(seed=seed, style=sample_scene(family, seed), n_frames=frames)
+    tracker = StereoTracker(scene.rig, params.with_value("adapt.enabled", False))
+    judged: list = []
+    try:
+        classifiers, _harvest = adapt_to_stereo_recording(tracker, iter(scene.read, None), judged=judged)
+    finally:
+        tracker.close()
+        scene.close()
+    return classifiers, judged
+
+
 def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = None,
-             preset: str | None = None) -> dict:
+             preset: str | None = None, adapt: bool = False) -> dict:
     """Track one clip of a family and return its raw counts (JSON-friendly); ``preset``: a
-    preset name or parameter file instead of the default."""
+    preset name or parameter file instead of the default; ``adapt``: first adapt each camera's
+    classifier to the clip (``adapted_classifiers``), as `track --adapt`."""
     style = sample_scene(family, seed)
     frames = clip_frames(style, seconds, max_frames)
-    scene = DemoScene(seed=seed, style=style, n_frames=frames)
     params = load_preset(preset).with_value("lookahead.frames", FILE_LOOKAHEAD)
+    classifiers, judged = adapted_classifiers(family, seed, frames, params) if adapt else (None, [])
+    scene = DemoScene(seed=seed, style=style, n_frames=frames)
     tracker = StereoTracker(scene.rig, params)
+    if classifiers is not None:
+        tracker.left.use_classifier(classifiers[0])
+        tracker.right.use_classifier(classifiers[1])
     delay = StereoLookahead(scene.rig, params, tracker.epipolar_tolerance)
     tol = tolerance_px(style.size[0])
     codes: list[list[str]] = [[], []]
@@ -118,7 +139,7 @@ def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = No
             "hfov_deg": round(style.hfov_deg, 1), "board": style.board is not None, "frames": frames,
             "pairs_per_s": frames / max(elapsed, 1e-9), "left": counts[0], "right": counts[1],
             "both_visible": both, "both_with_point": both_with_point, "errors_3d": errors,
-            "landings": landings}
+            "landings": landings, "fine_tuned": [not j.kept for j in judged] if adapt else None}
 
 
 def _landings(scene: DemoScene, frames: int, history) -> list[dict]:
@@ -240,6 +261,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     ap.add_argument("--preset", default=None, help="a preset name or a .json parameter file (e.g. "
                     "{\"shuttle_scale\": {\"enabled\": true}}) instead of the default preset")
+    ap.add_argument("--adapt", action="store_true", help="adapt each clip's classifiers to it first "
+                    "(a first pass, as `track --adapt`; core/court_adaptation.py)")
     ap.add_argument("--log", type=Path, default=None, metavar="FILE",
                     help="append each finished clip's counts to FILE (JSON lines); clips already "
                          "in FILE are not run again, so a stopped run resumes")
@@ -247,7 +270,7 @@ def main(argv: list[str] | None = None) -> int:
     seeds = args.seeds if args.seeds is not None else (1 if args.quick else 8)
     seconds = args.seconds if args.seconds is not None else (5.0 if args.quick else 8.0)
     # Seed by seed across the families: a run stopped early has every family.
-    tasks = [(fam, seed, seconds, args.max_frames, args.preset)
+    tasks = [(fam, seed, seconds, args.max_frames, args.preset) + ((True,) if args.adapt else ())
              for seed in range(args.first_seed, args.first_seed + seeds) for fam in args.families]
     done = {}
     if args.log is not None and args.log.is_file():
@@ -284,7 +307,12 @@ def main(argv: list[str] | None = None) -> int:
             "wall_s": time.perf_counter() - start}), allow_nan=False))
         return 0
     print(f"scene families, seeds {args.first_seed}–{args.first_seed + seeds - 1}, {seconds:g} s of play "
-          f"a clip at 1280x720, {args.preset or 'default'} preset, look-ahead {FILE_LOOKAHEAD}")
+          f"a clip at 1280x720, {args.preset or 'default'} preset, look-ahead {FILE_LOOKAHEAD}"
+          + (", classifiers adapted to each clip first (--adapt)" if args.adapt else ""))
+    if args.adapt:
+        tuned = [c["fine_tuned"] for c in clips if c.get("fine_tuned")]
+        print(f"fine-tuned (kept by the held-back guard): left {sum(t[0] for t in tuned)}, right "
+              f"{sum(t[1] for t in tuned)} of {len(clips)} clips")
     _print_tables(clips, families, args.preset)
     print(f"\nwall time {time.perf_counter() - start:.0f} s")
     return 0

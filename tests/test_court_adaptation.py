@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 from badminton_gui.cli import main
-from badminton_gui.core.court_adaptation import AdaptProgress, CourtAdaptation, StereoHarvest, adapt_pair
+from badminton_gui.core.classifier import fine_tune
+from badminton_gui.core.court_adaptation import (AdaptProgress, CourtAdaptation, StereoHarvest, adapt_pair,
+                                                 fine_tune_camera)
 from badminton_gui.core.detector import CameraDetector
 from badminton_gui.core.params import CourtAdaptParams, TrackerParams
 from badminton_gui.core.types import CameraResult, FlightInfo, TrackResult, make_candidate
@@ -20,8 +22,13 @@ WIDTH = 1280
 
 
 def _quick(harvest, classifiers, should_stop):
-    """``adapt_pair`` with a short training (the shipped recipe takes seconds a camera)."""
-    return adapt_pair(harvest, classifiers, should_stop, rehearsal=500, members=1, epochs=20)
+    """A short fine-tuning without the held-back guard (these tests' harvests are too short to
+    hold anything back): the swap is what they check."""
+    if not harvest.usable:
+        return None
+    return tuple(fine_tune(c, harvest.features(cam), harvest.labels(cam), epochs=5,
+                           name=f"{c.name} (adapted)", should_stop=should_stop)
+                 for cam, c in enumerate(classifiers))
 
 
 def _result(t, shot, in_flight=True, det=(100.0, 100.0)):
@@ -74,6 +81,62 @@ def test_steps_the_flight_refused_and_coasting_reports_teach_nothing():
                     _scored())
     harvest.finish()
     assert harvest.flights == 1 and harvest.positives == [0, 5]
+
+
+def _light_steps(harvest, steps, light=(900.0, 500.0)):
+    """Steps without a flight, a light at the same pixel in every one (and a blob moving past)."""
+    for k in range(steps):
+        positions = np.array([light, [100.0 + 7 * k, 300.0]])
+        features = np.array([[5.0, 5.0, 5.0], [1.0, 1.0, 1.0]])
+        harvest.add(_result(k / 100, -1, in_flight=False), ((positions, features), (positions, features)))
+
+
+def test_a_blob_still_for_many_frames_far_from_every_flight_is_not_the_shuttle():
+    harvest = StereoHarvest(CourtAdaptParams(min_flight_points=5, still_frames=40))
+    _light_steps(harvest, 100)
+    frames, still = harvest.still_rows(0)
+    # One row every ten frames once it has stayed 40: frames 40, 50, ..., 100; the moving blob never.
+    assert len(frames) == 7 and np.all(still == 5.0)
+    features, labels, _frames = harvest.dataset(1)
+    assert len(labels) == 7 and not labels.any()
+    # A flight whose report passes over the light: the light is not taken as a negative any more.
+    for k in range(6):
+        scored = (np.array([[900.0, 500.0]]), np.array([[5.0, 5.0, 5.0]]))
+        harvest.add(_result(2 + k / 100, 0, det=(905.0, 500.0)), (scored, scored))
+    harvest.finish()
+    assert harvest.flights == 1 and len(harvest.still_rows(0)[0]) == 0
+    assert StereoHarvest(CourtAdaptParams(still_frames=0)).still_rows(0)[0].size == 0
+
+
+def _guard_harvest(rng, flip_held_back):
+    """A harvest of 200 steps of one long flight: the shuttle's rows stand out by +3 in every
+    feature; with ``flip_held_back`` the held-back steps say the opposite (the report on a plain
+    blob, the standing-out one far from it)."""
+    n = len(CameraDetector(TrackerParams()).classifier.mean)
+    harvest = StereoHarvest(CourtAdaptParams(min_flight_points=5, still_frames=0))
+    for k in range(200):
+        features = rng.normal(size=(4, n))
+        features[0] += 3.0
+        if flip_held_back and (k + 1) // 50 % 4 == 3:
+            features[[0, 1]] = features[[1, 0]]
+        positions = np.array([[100.0, 100.0], [600.0, 300.0], [700.0, 300.0], [800.0, 300.0]])
+        harvest.add(_result(k / 100, 0), ((positions, features), (positions, features)))
+    harvest.finish()
+    return harvest
+
+
+def test_fine_tuning_is_kept_only_when_it_wins_on_the_held_back_steps():
+    shipped = CameraDetector(TrackerParams()).classifier
+    rng = np.random.default_rng(1)
+    tuned, judged = fine_tune_camera(shipped, _guard_harvest(rng, False), 0, epochs=60, learning_rate=3e-3)
+    assert not judged.kept and tuned is not shipped and "(adapted)" in tuned.name
+    assert judged.loss_after < judged.loss_before and judged.rows == 200
+    kept, judged = fine_tune_camera(shipped, _guard_harvest(rng, True), 0, epochs=60, learning_rate=3e-3)
+    assert judged.kept and kept is shipped
+    pair = []
+    assert adapt_pair(_guard_harvest(rng, True), (shipped, shipped), judged=pair, epochs=60,
+                      learning_rate=3e-3) == (shipped, shipped)
+    assert [j.kept for j in pair] == [True, True]
 
 
 class _Tracker:

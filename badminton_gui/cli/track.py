@@ -109,9 +109,10 @@ def _adapted_classifiers(args, params):
     rig, source, total = open_stereo_videos(args)
     configure_opencv_threads()
     progress = Progress(total, "adapt")
+    judged: list = []
     try:
         classifiers, harvest = adapt_to_pair(source, rig, params, max_frames=args.max_frames,
-                                             progress=None if args.quiet else progress.update)
+                                             progress=None if args.quiet else progress.update, judged=judged)
     finally:
         source.close()
         if not args.quiet:
@@ -122,6 +123,10 @@ def _adapted_classifiers(args, params):
         _log.warning("adaptation: nothing to learn from (%s); the preset's classifiers are kept", said)
     elif not args.quiet:
         print(f"adapted to the court: {said}", file=sys.stderr)
+        for side, h in zip(("left", "right"), judged):
+            print(f"  {side}: {'kept the preset' if h.kept else 'fine-tuned'}; held-back {h.rows} rows, "
+                  f"loss {h.loss_before:.4f} -> {h.loss_after:.4f}, shuttle first {100 * h.top_before:.1f} -> "
+                  f"{100 * h.top_after:.1f} %", file=sys.stderr)
     return classifiers
 
 

@@ -25,7 +25,7 @@ pseudo-labels. Only the broadcast preset turns it on (``classifier.adapt_min_run
 Offline only: it needs the recording twice (CLI ``detect``; broadcast_census.py, accuracy.py).
 The live readout and the GUI keep the shipped classifier. Two cameras have surer evidence than a
 run of one camera's detections — the flights both agree on — and ``core/court_adaptation.py``
-adapts from that (its ``StereoHarvest`` reuses ``adapt_classifier``). On the
+adapts from that (fine-tuning the shipped weights instead of this file's retraining). On the
 two-camera rig this file's runs were measured and not used (``train_classifier.py --kind stereo
 --leave-one-out --scan classifier.adapt_min_run=25,60``): each camera adapted from its own
 runs, every tuned-on rally tracked with a classifier trained without it went 97.58 -> 96.08 /

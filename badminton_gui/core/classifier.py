@@ -159,3 +159,53 @@ def train_ensemble(features: np.ndarray, labels: np.ndarray, members: int = 3, h
         (np.hstack([n.weights[0] for n in nets]), np.vstack([n.weights[1] for n in nets]) / members),
         (np.concatenate([n.biases[0] for n in nets]), np.mean([n.biases[1] for n in nets], axis=0)),
         tuple(feature_names))
+
+
+def fine_tune(classifier: CandidateClassifier, features: np.ndarray, targets: np.ndarray,
+              epochs: int = 40, learning_rate: float = 1e-3, positive_weight: float | None = None,
+              weight_decay: float = 1e-4, name: str | None = None, dtype=np.float32,
+              should_stop: Callable[[], bool] | None = None) -> CandidateClassifier:
+    """``classifier`` (one hidden layer, as ``train_mlp`` and ``train_ensemble`` write it) trained
+    further on ``features`` / ``targets`` (labels or soft probabilities): full-batch Adam from its
+    own weights, its standardisation kept.
+
+    Why not train anew: a new court's evidence is a few thousand candidates, while the shipped
+    weights learnt from every tuned-on clip; started from random weights, even the shipped
+    classifier's own outputs (rehearsed) do not bring that back. A few small steps from its
+    weights move it towards the new court and stay near what it knew. ``weight_decay`` pulls
+    towards the *starting* weights, not towards zero, for the same reason. Rows are weighted as
+    ``train_mlp`` weights them (positives by the square root of the imbalance)."""
+    if len(classifier.weights) != 2:
+        raise ValueError("fine_tune takes a classifier with one hidden layer")
+    xs = ((np.asarray(features, float) - classifier.mean) / classifier.scale).astype(dtype, copy=False)
+    y = np.asarray(targets, float)
+    if positive_weight is None:
+        positive_weight = max((1 - y.mean()) / max(y.mean(), 1e-6), 1.0) ** 0.5
+    sw = np.where(y > 0.5, positive_weight, 1.0)
+    sw = (sw / sw.mean()).astype(dtype, copy=False)
+    y = y.astype(dtype, copy=False)
+    start = [classifier.weights[0], classifier.biases[0], classifier.weights[1], classifier.biases[1]]
+    start = [np.asarray(p, dtype) for p in start]
+    params = [p.copy() for p in start]
+    m = [np.zeros_like(p) for p in params]
+    v = [np.zeros_like(p) for p in params]
+    for step in range(1, epochs + 1):
+        if should_stop is not None and step % _STOP_CHECK_EPOCHS == 1 and should_stop():
+            raise TrainingStopped("training stopped on request")
+        w1, b1, w2, b2 = params
+        a1 = np.tanh(xs @ w1 + b1)
+        z = (a1 @ w2 + b2)[:, 0]
+        prob = 1 / (1 + np.exp(-np.clip(z, -30, 30)))
+        dz = (prob - y) * sw / len(y)
+        da1 = dz[:, None] @ w2.T * (1 - a1 ** 2)
+        grads = [xs.T @ da1, da1.sum(axis=0), a1.T @ dz[:, None], np.array([dz.sum()], dtype)]
+        for k, g in enumerate(grads):
+            g = g + weight_decay * (params[k] - start[k])
+            m[k] = 0.9 * m[k] + 0.1 * g
+            v[k] = 0.999 * v[k] + 0.001 * g * g
+            mh = m[k] / (1 - 0.9 ** step)
+            vh = v[k] / (1 - 0.999 ** step)
+            params[k] = params[k] - learning_rate * mh / (np.sqrt(vh) + 1e-8)
+    w1, b1, w2, b2 = (p.astype(np.float64) for p in params)
+    return CandidateClassifier(name or f"{classifier.name} (fine-tuned)", classifier.mean, classifier.scale,
+                               (w1, w2), (b1, b2), classifier.feature_names)

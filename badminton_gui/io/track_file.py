@@ -201,12 +201,14 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
 
 def adapt_to_pair(source, rig: StereoRig, params: TrackerParams, *, max_frames: int | None = None,
                   progress: Callable[[int], None] | None = None,
-                  should_stop: Callable[[], bool] | None = None) -> tuple[tuple | None, StereoHarvest]:
+                  should_stop: Callable[[], bool] | None = None,
+                  judged: list | None = None) -> tuple[tuple | None, StereoHarvest]:
     """The first pass of `track --adapt`: the recording tracked once with the preset's classifiers,
     the candidates of every flight both cameras agree on labelled (core/court_adaptation.py), and
     each camera's classifier trained on them: ((left, right) or None when the pass found nothing
     to learn from or was stopped, the harvest). ``track_to_csv(classifiers=...)`` then tracks
-    a second pass with them. The source is not closed here."""
+    a second pass with them. ``judged`` receives each camera's held-back comparison
+    (core/court_adaptation.py ``HeldBack``). The source is not closed here."""
     tracker = StereoTracker(rig, params.with_value("adapt.enabled", False))
 
     def frames():
@@ -221,6 +223,7 @@ def adapt_to_pair(source, rig: StereoRig, params: TrackerParams, *, max_frames: 
                 progress(n)
 
     try:
-        return adapt_to_stereo_recording(tracker, frames(), should_stop or (lambda: False), params.adapt)
+        return adapt_to_stereo_recording(tracker, frames(), should_stop or (lambda: False), params.adapt,
+                                         judged)
     finally:
         tracker.close()

@@ -247,3 +247,7 @@ class CourtAdaptParams(ParamGroup):
     far_radius: float = param(40.0, 5.0, 2000.0, step=5.0, unit="px", label="Not the shuttle beyond",
                               help="A candidate this far from that report is not the shuttle; those in "
                                    "between are not used (px at 1280 wide)")
+    still_frames: int = param(120, 0, 10000, step=10, unit="frames", label="Still blobs after",
+                              help="A candidate that stays within 3 px (at 1280 wide) for this many frames, "
+                                   "far from every flight both cameras agreed on, is not the shuttle "
+                                   "(lights, boards, lines, a shuttle at rest; 0: not used)")
