@@ -28,6 +28,9 @@ TENTATIVE_FLOOR = 0.01      # m: noise added to the points of a tentative track 
                             # model says ≈ 2 mm, and the tentative track restarted at each
 MIN_SHOT_TIME = 0.1         # s: no two hits closer together (a flight younger is re-synchronised)
 HIT_SLACK = 0.05            # m: at a hit the blob's centroid swaps sides of the cork (skirt lag ~2 cm)
+HIT_REACH = 1.0             # m: a new track whose path passes farther from the followed flight's is
+                            # not that shuttle hit (``_within_reach``): a hit's first points are
+                            # off by the racket's blob, centimetres to decimetres, not metres
 STARVED_MIN_SPEED = 5.0     # m/s: a track that takes over a starved flight (``starved_takeover``) is a
                             # shot; a hand carrying a caught shuttle moves slower (≤ 2.6 m/s: the
                             # tracker's caught rule needs the flight to refuse those points)
@@ -82,7 +85,8 @@ class ShotTakeover:
             self._apart = 0
             self._drop_oldest(tent)
             return
-        if old is not None and not self._continuous(old, tent):
+        gap, gate = self._paths_gap(old, tent) if old is not None else (0.0, 0.0)
+        if gap > gate:
             # It is not where the followed shuttle is or could have been hit (a racket, a shoe,
             # the skirt for a few frames): the same, until it has gone on as a flight for
             # ``starved_takeover`` more points while the followed flight took none — a flight
@@ -90,9 +94,12 @@ class ShotTakeover:
             # drag-model path for that long. After a hit whose first points are off (the blob
             # merged with the racket: rally_11-46-04 549–555) the new shot otherwise waited
             # for the old flight to run out (``max_gap``), 27 frames without a 3D point.
+            # A track that does not even pass within reach of the flight's path is another object
+            # (``_within_reach``): it waits for the flight to end, however long it goes on.
             self._apart += 1
             limit = self.params.starved_takeover
-            if limit <= 0 or self._apart < limit or tent.speed < STARVED_MIN_SPEED:
+            if (limit <= 0 or self._apart < limit or tent.speed < STARVED_MIN_SPEED
+                    or gap > max(gate, HIT_REACH)):
                 self._drop_oldest(tent)
                 return
         self._apart = 0
@@ -169,6 +176,23 @@ class ShotTakeover:
         ``outlier_sigma`` standard deviations of the two position estimates and the point noise,
         plus ``HIT_SLACK``.
         """
+        gap, gate = self._paths_gap(old, tent)
+        return gap <= gate
+
+    def _within_reach(self, old: _Filter, tent: _Filter) -> bool:
+        """Could the new track be the followed shuttle, hit where its first points were off?
+
+        The paths come within ``HIT_REACH`` of each other (or meet, ``_continuous``) somewhere
+        between the flight's last point and the track's first one. Farther apart, the track is
+        another object (an LED board's moving dot, a second shuttle): the followed shuttle does
+        not jump metres between two frames.
+        """
+        gap, gate = self._paths_gap(old, tent)
+        return gap <= max(gate, HIT_REACH)
+
+    def _paths_gap(self, old: _Filter, tent: _Filter) -> tuple[float, float]:
+        """(closest approach (m) of the flight's path and the track's between the flight's last
+        point and the track's first one, the gate (m) within which they meet)."""
         t_first = tent.points[0][0]
         t_from = min(old.t, t_first)
         var = (float(np.trace(tent.noises[0])) / 3.0 + float(np.trace(old.P[0:3, 0:3])) / 3.0
@@ -183,7 +207,7 @@ class ShotTakeover:
             po = old.predicted(ts)
             pn = _propagate(new_state, k_new, ts - tent.t)
             best = min(best, math.sqrt((po[0] - pn[0]) ** 2 + (po[1] - pn[1]) ** 2 + (po[2] - pn[2]) ** 2))
-        return best <= gate
+        return best, gate
 
     def _consistent(self, tent: _Filter) -> bool:
         """Do the track's points lie on the path its final state implies (χ² test at 99.9 %)?

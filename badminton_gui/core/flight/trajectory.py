@@ -101,6 +101,7 @@ class Trajectory(ShotTakeover, LandingReadout):
         # Consecutive promotions of the tentative track refused only because it does not meet the
         # followed flight's path (``params.starved_takeover``).
         self._apart = 0
+        self._elsewhere_cache: tuple = (None, False)   # (key, result) of _tentative_elsewhere
         self._shot_index = -1
         self._peak_speed: float | None = None
         self._launch_speed: float | None = None
@@ -310,6 +311,8 @@ class Trajectory(ShotTakeover, LandingReadout):
         tent = self._tentative
         if not self._extended_tentative or tent is None or len(tent.points) < TENTATIVE_REPORT_POINTS:
             return None
+        if self._tentative_elsewhere():
+            return None     # not the followed shuttle hit: another object's track
         if not self._consistent(tent):
             # Its first point is often the hit itself (the blob merged with the racket): the
             # track's latest points alone may still lie on one path — all but its first when
@@ -322,6 +325,18 @@ class Trajectory(ShotTakeover, LandingReadout):
             return None
         return tuple(float(v) for v in tent.x[:3])
 
+    def _tentative_elsewhere(self) -> bool:
+        """The tentative track cannot be the followed shuttle: an established flight is followed
+        and the track's path does not pass within reach of its path (``_within_reach``). Asked
+        several times a step (guide, report), computed once per change of either."""
+        f, tent = self._flight, self._tentative
+        if f is None or tent is None or len(f.points) < self.params.min_points or len(tent.points) < 3:
+            return False
+        key = (id(tent), tent.t, len(tent.points), id(f), f.t)
+        if self._elsewhere_cache[0] != key:
+            self._elsewhere_cache = (key, not self._within_reach(f, tent))
+        return self._elsewhere_cache[1]
+
     def guide(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
         """Where the followed flight puts the shuttle at time t: (position (3,), its covariance
         (3, 3)), or None when there is no established flight to trust (fewer than ``min_points``
@@ -329,6 +344,10 @@ class Trajectory(ShotTakeover, LandingReadout):
         f = self._flight
         p = self.params
         tent = self._tentative
+        if tent is not None and self._tentative_elsewhere():
+            # Another object's track (an LED board's dot): the followed flight stays the guide,
+            # or the cameras' search would hand the shuttle over to it.
+            tent = None
         if (p.guide_tentative_points > 0 and tent is not None
                 and len(tent.points) >= p.guide_tentative_points and t - tent.t <= p.max_gap):
             # A new shot being confirmed after a hit: the old flight is wrong there, but the
