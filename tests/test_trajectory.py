@@ -621,3 +621,52 @@ def test_the_shown_track_is_the_filtered_path_the_robot_was_given():
     raw_err = np.linalg.norm(raw[1:][later, 1:] - truth[at[later]], axis=1)
     track_err = np.linalg.norm(track[later, 1:] - truth[at[later]], axis=1)
     assert np.sqrt(np.mean(track_err ** 2)) < 0.5 * np.sqrt(np.mean(raw_err ** 2))
+
+
+def _clear_then_another_object(offset_m: float):
+    """The clear towards +Y, seen up to 0.8 s; then, for 0.15 s (less than ``max_gap``), the
+    points come from another fast object on a drag-model path whose start lies ``offset_m``
+    beside the clear's path (an LED board's moving dot both cameras pair; at 0.3 m, the clear
+    hit while its first points were off). Returns (times, points, the switch time, the clear's
+    landing point)."""
+    p0, v0 = np.array([0.0, -5.0, 2.5]), np.array([0.5, 22.0, 18.0])
+    t1, pos1, _ = physics.simulate(p0, v0, 5.0, dt=1e-3, aero_length=4.8)
+    switch = 0.8
+    start = pos1[np.searchsorted(t1, switch)] + np.array([offset_m, 0.0, 0.0])
+    t2, pos2, _ = physics.simulate(start, np.array([0.0, -9.0, 4.0]), 1.0, dt=1e-3, aero_length=4.8)
+    times = np.arange(0.0, switch + 0.15, 1 / 120)
+    clear = np.stack([np.interp(times, t1, pos1[:, i]) for i in range(3)], axis=1)
+    other = np.stack([np.interp(times - switch, t2, pos2[:, i]) for i in range(3)], axis=1)
+    points = np.where((times >= switch)[:, None], other, clear)
+    points += np.random.default_rng(3).normal(0, 0.005, points.shape)
+    return times, [tuple(p) for p in points], switch, pos1[-1]
+
+
+def test_a_fast_track_metres_from_the_followed_flight_does_not_replace_it():
+    """scenes side-far 1007: an LED board's moving dot, 13 m from the followed clear, lies on a
+    short drag-model path and both cameras pair it in place of the shuttle. It took the flight
+    over two refusals after it could have (``starved_takeover``, meant for a hit whose first
+    points are off by decimetres), guided the cameras' search away from the shuttle and had its
+    landing predicted on the board, 14.6 m off. The shuttle does not jump metres between two
+    frames: the flight keeps its shot and its landing, stays the guide, and the other track
+    gives no position."""
+    times, points, switch, landing_point = _clear_then_another_object(offset_m=6.0)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    for t, p in zip(times, points):
+        info = traj.update(t, p)
+        if t < switch:
+            continue
+        assert info.shot_index == 0 and info.prediction is not None
+        assert math.hypot(info.prediction.x - landing_point[0], info.prediction.y - landing_point[1]) < 0.1
+        assert traj.tentative_position() is None
+        guide = traj.guide(t)
+        assert guide is not None and np.linalg.norm(guide[0] - np.asarray(p)) > 3.0
+
+
+def test_a_track_within_reach_of_the_followed_flight_still_takes_over_when_it_starves():
+    """The same switch 0.3 m beside the clear's path is the clear hit with its first points off:
+    it still replaces the starving flight as a new shot."""
+    times, points, switch, _ = _clear_then_another_object(offset_m=0.3)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    shots = [info.shot_index for _, info in fly(traj, times, points)]
+    assert shots[-1] == 1

@@ -22,7 +22,9 @@ How (court frame, Z up):
   (χ² test), are surely moving (speed − 2σ ≥ 1 m/s) and start above the floor. While a flight is
   being followed it takes more: ``TAKEOVER_POINTS`` points, and a path that meets the flight's
   where the shuttle could have been hit (the shuttle does not jump), so a few wrong points in a
-  row (a racket, a shoe) cannot replace a good flight. If the new track's velocity differs from
+  row (a racket, a shoe) cannot replace a good flight. A track whose path passes metres from the
+  flight's (``HIT_REACH``: an LED board's moving dot both cameras pair) is another object: it
+  neither replaces the flight before that ends nor guides the cameras' search. If the new track's velocity differs from
   the flight's by more than ``hit_acceleration`` × the time step, that is a hit: a new shot
   starts. Otherwise the flight was only re-synchronised (model mismatch) and keeps its shot
   number and its L.
