@@ -652,15 +652,19 @@ def test_a_fast_track_metres_from_the_followed_flight_does_not_replace_it():
     gives no position."""
     times, points, switch, landing_point = _clear_then_another_object(offset_m=6.0)
     traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    elsewhere = []
     for t, p in zip(times, points):
         info = traj.update(t, p)
         if t < switch:
+            assert not traj.point_elsewhere
             continue
+        elsewhere.append(traj.point_elsewhere)
         assert info.shot_index == 0 and info.prediction is not None
         assert math.hypot(info.prediction.x - landing_point[0], info.prediction.y - landing_point[1]) < 0.1
         assert traj.tentative_position() is None
         guide = traj.guide(t)
         assert guide is not None and np.linalg.norm(guide[0] - np.asarray(p)) > 3.0
+    assert sum(elsewhere) >= len(elsewhere) - 4     # said from the track's third point on (the trace)
 
 
 def test_a_track_within_reach_of_the_followed_flight_still_takes_over_when_it_starves():

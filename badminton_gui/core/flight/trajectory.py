@@ -393,6 +393,13 @@ class Trajectory(ShotTakeover, LandingReadout):
         return self._last_t
 
     @property
+    def point_elsewhere(self) -> bool:
+        """The last update's point, refused by the flight being followed, extended a track whose
+        path passes metres from the flight's (``HIT_REACH``): another object's, which neither
+        replaces the flight nor guides the cameras' search."""
+        return self._rejected_now and self._extended_tentative and self._tentative_elsewhere()
+
+    @property
     def point_rejected(self) -> bool:
         """The last update's point was refused by the flight being followed (an outlier: a wrong
         pair, a racket) and did not start a new one."""
