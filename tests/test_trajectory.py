@@ -674,3 +674,45 @@ def test_a_track_within_reach_of_the_followed_flight_still_takes_over_when_it_st
     traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
     shots = [info.shot_index for _, info in fly(traj, times, points)]
     assert shots[-1] == 1
+
+
+def _clear_lost_then(offset_m: float):
+    """The clear towards +Y seen up to 0.6 s, then unseen for 0.3 s (longer than ``max_gap``: it
+    is lost in the air, its landing ≈ 2 s away), then for 0.3 s a fast track whose start lies
+    ``offset_m`` beside where the clear is then (0: the clear itself seen again)."""
+    p0, v0 = np.array([0.0, -5.0, 2.5]), np.array([0.5, 22.0, 18.0])
+    t1, pos1, _ = physics.simulate(p0, v0, 5.0, dt=1e-3, aero_length=4.8)
+    lost, back = 0.6, 0.9
+    times = np.concatenate([np.arange(0.0, lost, 1 / 120), np.arange(back, back + 0.3, 1 / 120)])
+    clear = np.stack([np.interp(times, t1, pos1[:, i]) for i in range(3)], axis=1)
+    if offset_m > 0:
+        start = pos1[np.searchsorted(t1, back)] + np.array([offset_m, 0.0, -2.0])
+        t2, pos2, _ = physics.simulate(start, np.array([0.0, -9.0, 4.0]), 1.0, dt=1e-3, aero_length=4.8)
+        other = np.stack([np.interp(times - back, t2, pos2[:, i]) for i in range(3)], axis=1)
+        clear = np.where((times >= back)[:, None], other, clear)
+    clear += np.random.default_rng(5).normal(0, 0.005, clear.shape)
+    return times, [tuple(p) for p in clear], back
+
+
+def test_a_new_shot_apart_from_a_flight_lost_in_the_air_has_its_landing_withheld():
+    """scenes side-far 1007: the followed clear lost (its points starved by an LED board's dot
+    both cameras paired), the dot's track became the next shot 0.3 s later, 13 m away, while
+    the clear was still 0.6 s from landing, and its landing on the board was predicted 14.6 m
+    off. A shot that starts beyond reach of a flight lost in the air, before that flight is
+    down by its model, has its landing withheld until then, and says why."""
+    times, points, back = _clear_lost_then(offset_m=6.0)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    after = [info for t, info in fly(traj, times, points) if t >= back]
+    new_shot = [info for info in after if info.shot_index == 1]
+    assert len(new_shot) >= 20 and all(info.prediction is None for info in new_shot)
+    said = [info.withheld_reason for info in new_shot if not info.withheld_reason.startswith("collecting")]
+    assert len(said) >= 20 and all("apart from the lost shuttle" in reason for reason in said)
+
+
+def test_the_lost_flight_seen_again_has_its_landing_predicted():
+    """The same clear seen again after the gap lies on the lost flight's path: its landing is
+    predicted as soon as the new shot has its points."""
+    times, points, back = _clear_lost_then(offset_m=0.0)
+    traj = Trajectory(TrajectoryParams(measurement_noise=0.01), court_frame=True)
+    history = fly(traj, times, points)
+    assert history[-1][1].prediction is not None and history[-1][1].withheld_reason == ""

@@ -15,6 +15,8 @@ import numpy as np
 
 from .shot_filter import MIN_FLIGHT_SPEED, _chi2_999, _Filter, _propagate, position_on_path
 
+LANDING_GRACE_S = 0.03      # s: a flight past its predicted landing time by this much has landed
+
 CONFIRM_POINTS = 4          # consecutive agreeing points that start a flight
 TAKEOVER_POINTS = 6         # ... that replace a flight being followed (a hit, or a re-synchronisation):
                             # the demo pipeline makes runs of 4 wrong points (centroid on the skirt
@@ -103,6 +105,7 @@ class ShotTakeover:
                 self._drop_oldest(tent)
                 return
         self._apart = 0
+        apart_from_lost = old is None and self._started_apart_from_lost(tent)
         # Its own points' times, before a re-synchronised shot takes the old flight's in front of
         # them, each with where the track's path puts the shuttle then (its final state carried
         # back by the drag model: the fit through all its points, steadier than each point).
@@ -138,10 +141,44 @@ class ShotTakeover:
         self._seed = None
         self._rest_anchor = None
         if new_shot:
-            self._shot_index += 1
-            self._peak_speed = None
-            self._launch_speed = None
+            self._next_shot(old is not None, apart_from_lost)
+        self._lost = None
         self._after_flight_update()
+
+    def _next_shot(self, hit: bool, apart_from_lost: bool) -> None:
+        """Number the new shot; it inherits the doubt of the shot it was hit from (the same
+        object's track re-synchronised as a "hit", as an LED board's dot, which obeys no drag
+        model, is), or starts apart from a flight lost in the air (``_started_apart_from_lost``)."""
+        apart = self._apart_shot if hit and self._apart_shot is not None \
+            and self._apart_shot[0] == self._shot_index else None
+        self._shot_index += 1
+        self._peak_speed = None
+        self._launch_speed = None
+        if apart_from_lost:
+            apart = (self._shot_index, self._lost[1] + LANDING_GRACE_S)
+        self._apart_shot = None if apart is None else (self._shot_index, apart[1])
+
+    def _started_apart_from_lost(self, tent: _Filter) -> bool:
+        """Does the track start before the flight lost in the air is down by its model, and
+        pass beyond reach of its path (``_within_reach``)? Then it is another object (an LED
+        board's dot the cameras paired once the shuttle was lost), or the shuttle hit where it
+        was hidden and its path too far back to tell: either way its landing is not one the
+        model can stand behind until the lost flight would have landed."""
+        if self._lost is None:
+            return False
+        lost, t_down = self._lost
+        t_first = tent.points[0][0]
+        if t_first >= t_down:
+            return False
+        gap, gate = self._paths_gap(lost, tent)
+        # Unseen since its last point, the lost flight is known less well the longer ago that
+        # was: its position's spread then (the filter's covariance carried over the gap) widens
+        # the reach.
+        saved = (lost.x, lost.P, lost.t)
+        lost.predict(t_first, self.params.model_noise)
+        spread = self.params.outlier_sigma * math.sqrt(max(float(np.trace(lost.P[0:3, 0:3])) / 3.0, 0.0))
+        lost.x, lost.P, lost.t = saved
+        return gap > max(gate, HIT_REACH + spread)
 
     def _drop_oldest(self, tent: _Filter) -> None:
         """The tentative track without its oldest point, refitted; its last point seeds the next."""

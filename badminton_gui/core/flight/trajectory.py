@@ -34,6 +34,10 @@ How (court frame, Z up):
 * A flight ends when the shuttle reaches the floor (a point, or the model's landing time, says
   so), or after ``max_gap`` seconds without a usable point; its last landing prediction stays
   available (``in_flight`` False) until the next shot starts.
+  A shot that starts beyond reach of a flight lost in the air, before that flight is down by
+  its model, may be another object the cameras took up once the shuttle was lost (an LED
+  board's dot): its landing, and that of shots hit from it, is withheld until then, with the
+  reason.
 * The landing point is the drag model integrated (RK4, adaptive step) from the current state down
   to Z = 0; its uncertainty is the filter covariance carried along that path by the linearised
   dynamics (state-transition matrices) and projected onto the floor. The in/out call uses
@@ -60,12 +64,11 @@ from ..params import TrajectoryParams
 from ..types import FlightInfo
 from .landing import LandingReadout, _Landing
 from .shot_filter import K_MAX, K_MIN, MIN_FLIGHT_SPEED, _Filter, _points_travel, _propagate
-from .takeover import STARVED_MIN_SPEED, TAKEOVER_POINTS, ShotTakeover
+from .takeover import LANDING_GRACE_S, STARVED_MIN_SPEED, TAKEOVER_POINTS, ShotTakeover
 
 LANDED_HEIGHT = 0.03        # m: a flight whose estimate is this low has landed (cork radius ≈ 1.3 cm)
 REST_MAX_HEIGHT = 0.10      # m: a point this low next to the last landing is the shuttle lying there
 REST_RADIUS = 0.6           # m: ... within this distance of the predicted landing (it may bounce)
-LANDING_GRACE_S = 0.03      # s: a flight past its predicted landing time by this much has landed
 NOISE_WINDOW = 120          # innovations kept for the measured-noise estimate (~1 s at 120 fps)
 NOISE_MIN_SAMPLES = 30      # before that many, the parameter alone sets the noise
 TENTATIVE_REPORT_POINTS = 4  # a tentative track this long, consistent and fast, gives the robot its
@@ -104,6 +107,11 @@ class Trajectory(ShotTakeover, LandingReadout):
         # followed flight's path (``params.starved_takeover``).
         self._apart = 0
         self._elsewhere_cache: tuple = (None, False)   # (key, result) of _tentative_elsewhere
+        # The last flight when it was lost in the air, and its predicted landing time.
+        self._lost: tuple[_Filter, float] | None = None
+        # A shot that started apart from a flight lost in the air: (its index, until when (s)
+        # its landing is withheld — that flight's landing time).
+        self._apart_shot: tuple[int, float] | None = None
         self._shot_index = -1
         self._peak_speed: float | None = None
         self._launch_speed: float | None = None
@@ -283,7 +291,12 @@ class Trajectory(ShotTakeover, LandingReadout):
                 # The model says it is on the floor by now even if the last points were not usable.
                 self._end_flight(keep_landing=True)
             elif t - self._flight.t > p.max_gap:
+                lost = self._flight
                 self._end_flight(keep_landing=True)   # lost: the robot keeps the last prediction
+                if self._landing is not None and self._landing.prediction.t > t:
+                    # Still in the air by its model: a track that starts elsewhere before it is
+                    # down did not come from it (``_promote``).
+                    self._lost = (lost, self._landing.prediction.t)
         if self._tentative is not None and t - self._tentative.t > p.max_gap:
             self._tentative = None
         if self._seed is not None and t - self._seed[0] > p.max_gap:
