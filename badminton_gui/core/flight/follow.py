@@ -47,6 +47,8 @@ class FlightFollower:
             head = np.eye(3) * m.head_variance if m.head_variance > 0 else None
             info = self.trajectory.update(step.t, m.point, m.noise_shape, head)
             step.in_flight = m.point is not None and self.trajectory.filtered_position() is not None
+            if self.trajectory.point_elsewhere:
+                step.fired("flight_kept_from_track_elsewhere")
             return info, None
         # The right image's own time when its clock lags (``align_pairs``), never earlier
         # than the last step (the trajectory would take that for a replay and reset).

@@ -103,6 +103,8 @@ class LandingReadout:
         if f is None:
             reason = "no shuttle in flight"
             pred = self._landing.prediction if self._landing is not None else None
+            if pred is not None and self._apart_reason(t):
+                pred, reason = None, self._apart_reason(t)
             return FlightInfo(shot_index=self._shot_index, velocity=None,
                               peak_speed=self._peak_speed_value(), prediction=pred,
                               withheld_reason="" if pred is not None else reason,
@@ -126,10 +128,21 @@ class LandingReadout:
         elif pred.radius > MAX_RADIUS:
             reason = f"landing too uncertain yet (±{pred.radius:.1f} m)"
             pred = None
+        elif self._apart_reason(t):
+            reason, pred = self._apart_reason(t), None
         return FlightInfo(shot_index=self._shot_index, velocity=vel,
                           peak_speed=self._peak_speed_value(), prediction=pred,
                           withheld_reason=reason, in_flight=True, confirmed=self._confirmed_now,
                           confirmed_path=self._confirmed_path)
+
+    def _apart_reason(self, t: float) -> str:
+        """Why this shot's landing is withheld at time t because it started apart from a flight
+        lost in the air (``_started_apart_from_lost``), or "" when it is not."""
+        apart = self._apart_shot
+        if apart is None or apart[0] != self._shot_index or t >= apart[1]:
+            return ""
+        return (f"a track apart from the lost shuttle's path (another object?): landing withheld "
+                f"until that shuttle is down ({apart[1] - t:.2f} s)")
 
     def _peak_speed_value(self) -> float | None:
         values = [v for v in (self._peak_speed, self._launch_speed) if v is not None]

@@ -50,7 +50,8 @@ class TrajectoryParams(ParamGroup):
     starved_takeover: int = param(2, 0, 100, step=1, unit="points", label="New shot after a hidden hit",
                                   help="A new track that lies on one flight path but does not meet the followed "
                                        "flight's path replaces it after this many more agreeing points while the "
-                                       "followed flight takes none (0 = only once that flight is lost: 'Longest gap')")
+                                       "followed flight takes none, if it passes within 1 m of that path (0 = only "
+                                       "once that flight is lost: 'Longest gap')")
     min_points: int = param(6, 3, 100, step=1, label="Points before predicting",
                             help="3D points of a shot needed before a landing is predicted")
 

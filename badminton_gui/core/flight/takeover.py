@@ -15,6 +15,8 @@ import numpy as np
 
 from .shot_filter import MIN_FLIGHT_SPEED, _chi2_999, _Filter, _propagate, position_on_path
 
+LANDING_GRACE_S = 0.03      # s: a flight past its predicted landing time by this much has landed
+
 CONFIRM_POINTS = 4          # consecutive agreeing points that start a flight
 TAKEOVER_POINTS = 6         # ... that replace a flight being followed (a hit, or a re-synchronisation):
                             # the demo pipeline makes runs of 4 wrong points (centroid on the skirt
@@ -28,6 +30,9 @@ TENTATIVE_FLOOR = 0.01      # m: noise added to the points of a tentative track 
                             # model says ≈ 2 mm, and the tentative track restarted at each
 MIN_SHOT_TIME = 0.1         # s: no two hits closer together (a flight younger is re-synchronised)
 HIT_SLACK = 0.05            # m: at a hit the blob's centroid swaps sides of the cork (skirt lag ~2 cm)
+HIT_REACH = 1.0             # m: a new track whose path passes farther from the followed flight's is
+                            # not that shuttle hit (``_within_reach``): a hit's first points are
+                            # off by the racket's blob, centimetres to decimetres, not metres
 STARVED_MIN_SPEED = 5.0     # m/s: a track that takes over a starved flight (``starved_takeover``) is a
                             # shot; a hand carrying a caught shuttle moves slower (≤ 2.6 m/s: the
                             # tracker's caught rule needs the flight to refuse those points)
@@ -82,7 +87,8 @@ class ShotTakeover:
             self._apart = 0
             self._drop_oldest(tent)
             return
-        if old is not None and not self._continuous(old, tent):
+        gap, gate = self._paths_gap(old, tent) if old is not None else (0.0, 0.0)
+        if gap > gate:
             # It is not where the followed shuttle is or could have been hit (a racket, a shoe,
             # the skirt for a few frames): the same, until it has gone on as a flight for
             # ``starved_takeover`` more points while the followed flight took none — a flight
@@ -90,12 +96,16 @@ class ShotTakeover:
             # drag-model path for that long. After a hit whose first points are off (the blob
             # merged with the racket: rally_11-46-04 549–555) the new shot otherwise waited
             # for the old flight to run out (``max_gap``), 27 frames without a 3D point.
+            # A track that does not even pass within reach of the flight's path is another object
+            # (``_within_reach``): it waits for the flight to end, however long it goes on.
             self._apart += 1
             limit = self.params.starved_takeover
-            if limit <= 0 or self._apart < limit or tent.speed < STARVED_MIN_SPEED:
+            if (limit <= 0 or self._apart < limit or tent.speed < STARVED_MIN_SPEED
+                    or gap > max(gate, HIT_REACH)):
                 self._drop_oldest(tent)
                 return
         self._apart = 0
+        apart_from_lost = old is None and self._started_apart_from_lost(tent)
         # Its own points' times, before a re-synchronised shot takes the old flight's in front of
         # them, each with where the track's path puts the shuttle then (its final state carried
         # back by the drag model: the fit through all its points, steadier than each point).
@@ -131,10 +141,44 @@ class ShotTakeover:
         self._seed = None
         self._rest_anchor = None
         if new_shot:
-            self._shot_index += 1
-            self._peak_speed = None
-            self._launch_speed = None
+            self._next_shot(old is not None, apart_from_lost)
+        self._lost = None
         self._after_flight_update()
+
+    def _next_shot(self, hit: bool, apart_from_lost: bool) -> None:
+        """Number the new shot; it inherits the doubt of the shot it was hit from (the same
+        object's track re-synchronised as a "hit", as an LED board's dot, which obeys no drag
+        model, is), or starts apart from a flight lost in the air (``_started_apart_from_lost``)."""
+        apart = self._apart_shot if hit and self._apart_shot is not None \
+            and self._apart_shot[0] == self._shot_index else None
+        self._shot_index += 1
+        self._peak_speed = None
+        self._launch_speed = None
+        if apart_from_lost:
+            apart = (self._shot_index, self._lost[1] + LANDING_GRACE_S)
+        self._apart_shot = None if apart is None else (self._shot_index, apart[1])
+
+    def _started_apart_from_lost(self, tent: _Filter) -> bool:
+        """Does the track start before the flight lost in the air is down by its model, and
+        pass beyond reach of its path (``_within_reach``)? Then it is another object (an LED
+        board's dot the cameras paired once the shuttle was lost), or the shuttle hit where it
+        was hidden and its path too far back to tell: either way its landing is not one the
+        model can stand behind until the lost flight would have landed."""
+        if self._lost is None:
+            return False
+        lost, t_down = self._lost
+        t_first = tent.points[0][0]
+        if t_first >= t_down:
+            return False
+        gap, gate = self._paths_gap(lost, tent)
+        # Unseen since its last point, the lost flight is known less well the longer ago that
+        # was: its position's spread then (the filter's covariance carried over the gap) widens
+        # the reach.
+        saved = (lost.x, lost.P, lost.t)
+        lost.predict(t_first, self.params.model_noise)
+        spread = self.params.outlier_sigma * math.sqrt(max(float(np.trace(lost.P[0:3, 0:3])) / 3.0, 0.0))
+        lost.x, lost.P, lost.t = saved
+        return gap > max(gate, HIT_REACH + spread)
 
     def _drop_oldest(self, tent: _Filter) -> None:
         """The tentative track without its oldest point, refitted; its last point seeds the next."""
@@ -169,6 +213,23 @@ class ShotTakeover:
         ``outlier_sigma`` standard deviations of the two position estimates and the point noise,
         plus ``HIT_SLACK``.
         """
+        gap, gate = self._paths_gap(old, tent)
+        return gap <= gate
+
+    def _within_reach(self, old: _Filter, tent: _Filter) -> bool:
+        """Could the new track be the followed shuttle, hit where its first points were off?
+
+        The paths come within ``HIT_REACH`` of each other (or meet, ``_continuous``) somewhere
+        between the flight's last point and the track's first one. Farther apart, the track is
+        another object (an LED board's moving dot, a second shuttle): the followed shuttle does
+        not jump metres between two frames.
+        """
+        gap, gate = self._paths_gap(old, tent)
+        return gap <= max(gate, HIT_REACH)
+
+    def _paths_gap(self, old: _Filter, tent: _Filter) -> tuple[float, float]:
+        """(closest approach (m) of the flight's path and the track's between the flight's last
+        point and the track's first one, the gate (m) within which they meet)."""
         t_first = tent.points[0][0]
         t_from = min(old.t, t_first)
         var = (float(np.trace(tent.noises[0])) / 3.0 + float(np.trace(old.P[0:3, 0:3])) / 3.0
@@ -183,7 +244,7 @@ class ShotTakeover:
             po = old.predicted(ts)
             pn = _propagate(new_state, k_new, ts - tent.t)
             best = min(best, math.sqrt((po[0] - pn[0]) ** 2 + (po[1] - pn[1]) ** 2 + (po[2] - pn[2]) ** 2))
-        return best <= gate
+        return best, gate
 
     def _consistent(self, tent: _Filter) -> bool:
         """Do the track's points lie on the path its final state implies (χ² test at 99.9 %)?

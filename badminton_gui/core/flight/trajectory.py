@@ -22,7 +22,9 @@ How (court frame, Z up):
   (χ² test), are surely moving (speed − 2σ ≥ 1 m/s) and start above the floor. While a flight is
   being followed it takes more: ``TAKEOVER_POINTS`` points, and a path that meets the flight's
   where the shuttle could have been hit (the shuttle does not jump), so a few wrong points in a
-  row (a racket, a shoe) cannot replace a good flight. If the new track's velocity differs from
+  row (a racket, a shoe) cannot replace a good flight. A track whose path passes metres from the
+  flight's (``HIT_REACH``: an LED board's moving dot both cameras pair) is another object: it
+  neither replaces the flight before that ends nor guides the cameras' search. If the new track's velocity differs from
   the flight's by more than ``hit_acceleration`` × the time step, that is a hit: a new shot
   starts. Otherwise the flight was only re-synchronised (model mismatch) and keeps its shot
   number and its L.
@@ -32,6 +34,10 @@ How (court frame, Z up):
 * A flight ends when the shuttle reaches the floor (a point, or the model's landing time, says
   so), or after ``max_gap`` seconds without a usable point; its last landing prediction stays
   available (``in_flight`` False) until the next shot starts.
+  A shot that starts beyond reach of a flight lost in the air, before that flight is down by
+  its model, may be another object the cameras took up once the shuttle was lost (an LED
+  board's dot): its landing, and that of shots hit from it, is withheld until then, with the
+  reason.
 * The landing point is the drag model integrated (RK4, adaptive step) from the current state down
   to Z = 0; its uncertainty is the filter covariance carried along that path by the linearised
   dynamics (state-transition matrices) and projected onto the floor. The in/out call uses
@@ -58,12 +64,11 @@ from ..params import TrajectoryParams
 from ..types import FlightInfo
 from .landing import LandingReadout, _Landing
 from .shot_filter import K_MAX, K_MIN, MIN_FLIGHT_SPEED, _Filter, _points_travel, _propagate
-from .takeover import STARVED_MIN_SPEED, TAKEOVER_POINTS, ShotTakeover
+from .takeover import LANDING_GRACE_S, STARVED_MIN_SPEED, TAKEOVER_POINTS, ShotTakeover
 
 LANDED_HEIGHT = 0.03        # m: a flight whose estimate is this low has landed (cork radius ≈ 1.3 cm)
 REST_MAX_HEIGHT = 0.10      # m: a point this low next to the last landing is the shuttle lying there
 REST_RADIUS = 0.6           # m: ... within this distance of the predicted landing (it may bounce)
-LANDING_GRACE_S = 0.03      # s: a flight past its predicted landing time by this much has landed
 NOISE_WINDOW = 120          # innovations kept for the measured-noise estimate (~1 s at 120 fps)
 NOISE_MIN_SAMPLES = 30      # before that many, the parameter alone sets the noise
 TENTATIVE_REPORT_POINTS = 4  # a tentative track this long, consistent and fast, gives the robot its
@@ -101,6 +106,12 @@ class Trajectory(ShotTakeover, LandingReadout):
         # Consecutive promotions of the tentative track refused only because it does not meet the
         # followed flight's path (``params.starved_takeover``).
         self._apart = 0
+        self._elsewhere_cache: tuple = (None, False)   # (key, result) of _tentative_elsewhere
+        # The last flight when it was lost in the air, and its predicted landing time.
+        self._lost: tuple[_Filter, float] | None = None
+        # A shot that started apart from a flight lost in the air: (its index, until when (s)
+        # its landing is withheld — that flight's landing time).
+        self._apart_shot: tuple[int, float] | None = None
         self._shot_index = -1
         self._peak_speed: float | None = None
         self._launch_speed: float | None = None
@@ -280,7 +291,12 @@ class Trajectory(ShotTakeover, LandingReadout):
                 # The model says it is on the floor by now even if the last points were not usable.
                 self._end_flight(keep_landing=True)
             elif t - self._flight.t > p.max_gap:
+                lost = self._flight
                 self._end_flight(keep_landing=True)   # lost: the robot keeps the last prediction
+                if self._landing is not None and self._landing.prediction.t > t:
+                    # Still in the air by its model: a track that starts elsewhere before it is
+                    # down did not come from it (``_promote``).
+                    self._lost = (lost, self._landing.prediction.t)
         if self._tentative is not None and t - self._tentative.t > p.max_gap:
             self._tentative = None
         if self._seed is not None and t - self._seed[0] > p.max_gap:
@@ -310,6 +326,8 @@ class Trajectory(ShotTakeover, LandingReadout):
         tent = self._tentative
         if not self._extended_tentative or tent is None or len(tent.points) < TENTATIVE_REPORT_POINTS:
             return None
+        if self._tentative_elsewhere():
+            return None     # not the followed shuttle hit: another object's track
         if not self._consistent(tent):
             # Its first point is often the hit itself (the blob merged with the racket): the
             # track's latest points alone may still lie on one path — all but its first when
@@ -322,6 +340,18 @@ class Trajectory(ShotTakeover, LandingReadout):
             return None
         return tuple(float(v) for v in tent.x[:3])
 
+    def _tentative_elsewhere(self) -> bool:
+        """The tentative track cannot be the followed shuttle: an established flight is followed
+        and the track's path does not pass within reach of its path (``_within_reach``). Asked
+        several times a step (guide, report), computed once per change of either."""
+        f, tent = self._flight, self._tentative
+        if f is None or tent is None or len(f.points) < self.params.min_points or len(tent.points) < 3:
+            return False
+        key = (id(tent), tent.t, len(tent.points), id(f), f.t)
+        if self._elsewhere_cache[0] != key:
+            self._elsewhere_cache = (key, not self._within_reach(f, tent))
+        return self._elsewhere_cache[1]
+
     def guide(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
         """Where the followed flight puts the shuttle at time t: (position (3,), its covariance
         (3, 3)), or None when there is no established flight to trust (fewer than ``min_points``
@@ -329,6 +359,10 @@ class Trajectory(ShotTakeover, LandingReadout):
         f = self._flight
         p = self.params
         tent = self._tentative
+        if tent is not None and self._tentative_elsewhere():
+            # Another object's track (an LED board's dot): the followed flight stays the guide,
+            # or the cameras' search would hand the shuttle over to it.
+            tent = None
         if (p.guide_tentative_points > 0 and tent is not None
                 and len(tent.points) >= p.guide_tentative_points and t - tent.t <= p.max_gap):
             # A new shot being confirmed after a hit: the old flight is wrong there, but the
@@ -370,6 +404,13 @@ class Trajectory(ShotTakeover, LandingReadout):
         """The time (s) of the last update, or None before the first (a later update may not be
         earlier: a clock that goes back resets the trajectory)."""
         return self._last_t
+
+    @property
+    def point_elsewhere(self) -> bool:
+        """The last update's point, refused by the flight being followed, extended a track whose
+        path passes metres from the flight's (``HIT_REACH``): another object's, which neither
+        replaces the flight nor guides the cameras' search."""
+        return self._rejected_now and self._extended_tentative and self._tentative_elsewhere()
 
     @property
     def point_rejected(self) -> bool:
