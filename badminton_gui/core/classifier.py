@@ -85,6 +85,35 @@ def load_classifier(name_or_path: str) -> CandidateClassifier:
         raise ClassifierError(f"candidate classifier {path} is malformed: {exc}") from None
 
 
+def _adam(params: list, xs: np.ndarray, y: np.ndarray, sw: np.ndarray, epochs: int, learning_rate: float,
+          anchors: list, decay: float, should_stop: Callable[[], bool] | None) -> list:
+    """Full-batch Adam on the weighted cross-entropy of the one-hidden-layer MLP ``params``
+    (w1, b1, w2, b2), each parameter pulled by ``decay`` towards its anchor (None: not pulled):
+    zero for training from scratch, the shipped weights for fine-tuning."""
+    params = list(params)
+    m = [np.zeros_like(p) for p in params]
+    v = [np.zeros_like(p) for p in params]
+    for step in range(1, epochs + 1):
+        if should_stop is not None and step % _STOP_CHECK_EPOCHS == 1 and should_stop():
+            raise TrainingStopped("training stopped on request")
+        w1, b1, w2, b2 = params
+        a1 = np.tanh(xs @ w1 + b1)
+        z = (a1 @ w2 + b2)[:, 0]
+        prob = 1 / (1 + np.exp(-np.clip(z, -30, 30)))
+        dz = (prob - y) * sw / len(y)
+        da1 = dz[:, None] @ w2.T * (1 - a1 ** 2)
+        grads = [xs.T @ da1, da1.sum(axis=0), a1.T @ dz[:, None], np.array([dz.sum()], dz.dtype)]
+        for k, g in enumerate(grads):
+            if anchors[k] is not None:
+                g = g + decay * (params[k] - anchors[k])
+            m[k] = 0.9 * m[k] + 0.1 * g
+            v[k] = 0.999 * v[k] + 0.001 * g * g
+            mh = m[k] / (1 - 0.9 ** step)
+            vh = v[k] / (1 - 0.999 ** step)
+            params[k] = params[k] - learning_rate * mh / (np.sqrt(vh) + 1e-8)
+    return params
+
+
 def train_mlp(features: np.ndarray, labels: np.ndarray, hidden: int = 16, epochs: int = 300,
               learning_rate: float = 0.05, positive_weight: float | None = None,
               seed: int = 0, name: str = "candidate_classifier",
@@ -112,28 +141,8 @@ def train_mlp(features: np.ndarray, labels: np.ndarray, hidden: int = 16, epochs
     params = [p.astype(dtype, copy=False) for p in params]
     y = y.astype(dtype, copy=False)
     sw = sw.astype(dtype, copy=False)
-    m = [np.zeros_like(p) for p in params]
-    v = [np.zeros_like(p) for p in params]
-    for step in range(1, epochs + 1):
-        if should_stop is not None and step % _STOP_CHECK_EPOCHS == 1 and should_stop():
-            raise TrainingStopped("training stopped on request")
-        w1, b1, w2, b2 = params
-        a1 = np.tanh(xs @ w1 + b1)
-        z = (a1 @ w2 + b2)[:, 0]
-        prob = 1 / (1 + np.exp(-np.clip(z, -30, 30)))
-        dz = (prob - y) * sw / len(y)
-        g_w2 = a1.T @ dz[:, None]
-        g_b2 = np.array([dz.sum()])
-        da1 = dz[:, None] @ w2.T * (1 - a1 ** 2)
-        g_w1 = xs.T @ da1
-        g_b1 = da1.sum(axis=0)
-        grads = [g_w1 + 1e-4 * w1, g_b1, g_w2 + 1e-4 * w2, g_b2]
-        for k, g in enumerate(grads):
-            m[k] = 0.9 * m[k] + 0.1 * g
-            v[k] = 0.999 * v[k] + 0.001 * g * g
-            mh = m[k] / (1 - 0.9 ** step)
-            vh = v[k] / (1 - 0.999 ** step)
-            params[k] = params[k] - learning_rate * mh / (np.sqrt(vh) + 1e-8)
+    # Weight decay towards zero on the two weight matrices (not the biases).
+    params = _adam(params, xs, y, sw, epochs, learning_rate, [0.0, None, 0.0, None], 1e-4, should_stop)
     w1, b1, w2, b2 = (p.astype(np.float64, copy=False) for p in params)
     return CandidateClassifier(name, mean, scale, (w1, w2), (b1, b2), tuple(feature_names))
 
@@ -187,25 +196,7 @@ def fine_tune(classifier: CandidateClassifier, features: np.ndarray, targets: np
     start = [classifier.weights[0], classifier.biases[0], classifier.weights[1], classifier.biases[1]]
     start = [np.asarray(p, dtype) for p in start]
     params = [p.copy() for p in start]
-    m = [np.zeros_like(p) for p in params]
-    v = [np.zeros_like(p) for p in params]
-    for step in range(1, epochs + 1):
-        if should_stop is not None and step % _STOP_CHECK_EPOCHS == 1 and should_stop():
-            raise TrainingStopped("training stopped on request")
-        w1, b1, w2, b2 = params
-        a1 = np.tanh(xs @ w1 + b1)
-        z = (a1 @ w2 + b2)[:, 0]
-        prob = 1 / (1 + np.exp(-np.clip(z, -30, 30)))
-        dz = (prob - y) * sw / len(y)
-        da1 = dz[:, None] @ w2.T * (1 - a1 ** 2)
-        grads = [xs.T @ da1, da1.sum(axis=0), a1.T @ dz[:, None], np.array([dz.sum()], dtype)]
-        for k, g in enumerate(grads):
-            g = g + weight_decay * (params[k] - start[k])
-            m[k] = 0.9 * m[k] + 0.1 * g
-            v[k] = 0.999 * v[k] + 0.001 * g * g
-            mh = m[k] / (1 - 0.9 ** step)
-            vh = v[k] / (1 - 0.999 ** step)
-            params[k] = params[k] - learning_rate * mh / (np.sqrt(vh) + 1e-8)
+    params = _adam(params, xs, y, sw, epochs, learning_rate, start, weight_decay, should_stop)
     w1, b1, w2, b2 = (p.astype(np.float64) for p in params)
     return CandidateClassifier(name or f"{classifier.name} (fine-tuned)", classifier.mean, classifier.scale,
                                (w1, w2), (b1, b2), classifier.feature_names)
