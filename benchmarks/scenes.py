@@ -175,7 +175,16 @@ def summarise(clips: list[dict]) -> dict:
     lead = np.array([math.inf if lnd["error"] is None else lnd["error"] for lnd in seen])
 
     def pct(values, q):
-        return float(np.percentile(values, q)) if len(values) else math.nan
+        """numpy's percentile, but infinite where it interpolates towards a missing landing
+        (numpy's interpolation gives NaN there: inf − inf)."""
+        if not len(values):
+            return math.nan
+        ranked = np.sort(values)
+        pos = (len(ranked) - 1) * q / 100.0
+        lo = int(math.floor(pos))
+        if np.isinf(ranked[lo]) or (pos > lo and np.isinf(ranked[lo + 1])):
+            return math.inf
+        return float(np.percentile(values, q))
 
     return {"clips": len(clips), "frames": sum(c["frames"] for c in clips),
             "acc_left": left.accuracy, "acc_right": right.accuracy, "f1_left": left.f1,

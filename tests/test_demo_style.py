@@ -163,3 +163,20 @@ def test_a_tiny_scenes_benchmark_run(capsys):
     assert scenes.main(["--families", "side-far", "--seeds", "1", "--first-seed", str(seed),
                         "--seconds", "0.5", "--max-frames", "20"]) == 0
     assert "goal check" in capsys.readouterr().out
+
+
+def test_a_seen_landing_without_prediction_makes_the_p95_infinite_not_nan():
+    scenes = _bench("scenes")
+    counts = {"tp": 1, "tn": 0, "fp1": 0, "fp2": 0, "fn": 0}
+
+    def clip(errors):
+        return {"left": counts, "right": counts, "errors_3d": [0.01], "both_visible": 1,
+                "both_with_point": 1, "frames": 1, "pairs_per_s": 1.0,
+                "landings": [{"seen": True, "error": e} for e in errors]}
+
+    missing = scenes.summarise([clip([0.01, 0.02, 0.03, None])])
+    assert missing["landing_p95"] == math.inf and missing["landing_median"] == pytest.approx(0.025)
+    assert missing["landings_predicted"] == 3 and missing["landings_seen"] == 4
+    assert scenes.goal_check(missing)["landing p95 ≤ 15 cm"] is False
+    found = scenes.summarise([clip([0.01, 0.02, 0.03, 0.04])])
+    assert found["landing_p95"] == pytest.approx(np.percentile([0.01, 0.02, 0.03, 0.04], 95))
