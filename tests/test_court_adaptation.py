@@ -191,19 +191,12 @@ def test_training_runs_beside_the_tracker_and_its_classifiers_go_in_at_a_later_s
 
 
 def test_live_adaptation_swaps_both_classifiers_between_steps():
-    params = (TrackerParams().with_value("adapt.enabled", True).with_value("adapt.min_flight_points", 5)
-              .with_value("adapt.target_flights", 2).with_value("adapt.target_positives", 10))
+    params = _live_params()
     tracker = _Tracker(params)
     shipped = tracker.left.classifier
     adaptation = CourtAdaptation(params.adapt, background=False, train=_quick)
     assert adaptation.progress.state == "collecting" and adaptation.progress.fraction == 0
-    rng = np.random.default_rng(0)
-    t = 0.0
-    for shot in (0, 1, 2):
-        for _ in range(8):
-            tracker.left.last_scored = tracker.right.last_scored = _learnable_scored(rng)
-            adaptation.observe(tracker, _result(t, shot))
-            t += 0.01
+    t = _three_flights(adaptation, tracker, np.random.default_rng(0))
     progress = adaptation.progress
     assert progress.state in ("training", "adapted") and progress.flights == 2
     adaptation.observe(tracker, _result(t, -1, in_flight=False))      # the swap, between two steps
