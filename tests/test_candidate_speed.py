@@ -127,3 +127,26 @@ def test_score_blobs_judges_as_the_per_blob_loop(preset, seed):
     assert np.array_equal(got.shape_features, shape_features) and np.array_equal(got.features, features)
     if n >= 40:
         assert {"whiteness", "motion"} <= set(reasons) and len(set(reasons)) >= 3   # the rules were reached
+
+
+def test_classifier_probability_is_the_clipped_logistic():
+    from badminton_gui.core.classifier import CandidateClassifier, load_classifier
+
+    rng = np.random.default_rng(5)
+    # A linear one (logits far beyond the clip, NaN too) and the shipped ones.
+    linear = CandidateClassifier("linear", np.zeros(3), np.ones(3), (rng.normal(0, 20, (3, 1)),), (np.zeros(1),))
+    for clf in [linear] + [load_classifier(name) for name in
+                           ("candidate_classifier", "candidate_classifier_coarse", "candidate_classifier_broadcast")]:
+        n_features = len(clf.mean)
+        features = rng.normal(0, 1, (200, n_features)) * clf.scale + clf.mean
+        features[:20] *= rng.choice([-1e4, 1e4], (20, 1))
+        features[20, 0] = np.nan
+        h = (features - clf.mean) / clf.scale
+        for k, (w, b) in enumerate(zip(clf.weights, clf.biases)):
+            h = h @ w + b
+            if k < len(clf.weights) - 1:
+                h = np.tanh(h)
+        expected = 1.0 / (1.0 + np.exp(-np.clip(h[:, 0], -30, 30)))
+        got = clf.probability(features)
+        assert np.array_equal(got, expected, equal_nan=True)
+    assert (np.abs(linear.probability(np.full((1, 3), 1e4)) - 0.5) > 0.49).all()

@@ -313,7 +313,7 @@ def measure_blobs(frame: np.ndarray, mask: np.ndarray, boxes, sx: float, sy: flo
     x, y, blob_excess, total = _head_positions(cv, excess, peak, windows, head_fraction)
     pos_x[blobs] = x
     pos_y[blobs] = y
-    for k in np.flatnonzero((peak <= 0) | (total <= 0)).tolist():
+    for k in ((peak <= 0) | (total <= 0)).nonzero()[0].tolist():
         i = blobs[k]
         pos_x[i], pos_y[i] = _rare_position(cv, k, windows[k], boxes[i], blob_excess, peak[k])
     return BlobMeasurements(pos_x, pos_y, whiteness, saturation, features)

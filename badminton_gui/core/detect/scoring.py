@@ -173,7 +173,7 @@ def score_blobs(params: TrackerParams, scorer: BlobScorer, frame_bgr: np.ndarray
     xs, ys = m.x, m.y
     _, lengths, short_sides, areas, _ = zip(*blobs)
     if scorer.needs_patches:
-        features = np.hstack([shape_features, patch_features(frame_bgr, xs, ys)])
+        features = np.concatenate((shape_features, patch_features(frame_bgr, xs, ys)), axis=1)
     qualities = scorer.qualities(xs, ys, np.array(lengths), shape_features[:, 4], features).tolist()
     min_quality = params.association.min_quality
     reasons = [REJECT_SCORE if reason is None and q < min_quality else reason
