@@ -100,7 +100,7 @@ def shape_rejects(shapes: ContourShapes, length_ok: np.ndarray, short_ok: np.nda
                   ) -> tuple[list[Candidate], list[ShapedBlob]]:
     """(the candidates filter 1 or 2 rejected, each naming its filter; the blobs that passed)."""
     passed = length_ok & short_ok
-    rejected = np.flatnonzero(~passed)
+    rejected = (~passed).nonzero()[0]
     out: list[Candidate] = []
     if len(rejected):
         cx, cy = shapes.centres
@@ -109,7 +109,7 @@ def shape_rejects(shapes: ContourShapes, length_ok: np.ndarray, short_ok: np.nda
                 cx[rejected].tolist(), cy[rejected].tolist(), shapes.length[rejected].tolist(),
                 shapes.short_side[rejected].tolist(), shapes.area[rejected].tolist(), reasons):
             out.append(make_candidate(x, y, length, short_side, math.nan, area, math.nan, 0.0, reason))
-    kept = np.flatnonzero(passed)
+    kept = passed.nonzero()[0]
     blobs = [ShapedBlob(k, length, short_side, area, tuple(box)) for k, length, short_side, area, box
              in zip(kept.tolist(), shapes.length[kept].tolist(), shapes.short_side[kept].tolist(),
                     shapes.area[kept].tolist(), shapes.boxes[kept].tolist())]

@@ -123,38 +123,41 @@ class BlobScorer:
         return 0.7 * bright + 0.3 * size
 
 
-def is_still(previous: np.ndarray, x: float, y: float, min_displacement: float) -> bool:
-    """A blob within ``min_displacement`` px of one of the previous frame's blobs."""
-    if len(previous) == 0:
-        return False
-    d = np.hypot(previous[:, 0] - x, previous[:, 1] - y)
-    return bool(d.min() < min_displacement)
+def still_blobs(previous: np.ndarray, xs: np.ndarray, ys: np.ndarray, min_displacement: float) -> np.ndarray:
+    """Per blob (xs, ys): within ``min_displacement`` px of one of the previous frame's blobs."""
+    if len(previous) == 0 or len(xs) == 0:
+        return np.zeros(len(xs), dtype=bool)
+    d = np.hypot(previous[None, :, 0] - xs[:, None], previous[None, :, 1] - ys[:, None])
+    return d.min(axis=1) < min_displacement
 
 
 def judge_blobs(params: TrackerParams, blobs: list[ShapedBlob], m: BlobMeasurements,
-                previous: np.ndarray) -> tuple[list[list], np.ndarray]:
+                previous: np.ndarray) -> tuple[list[str | None], np.ndarray]:
     """Filter 3 and the still-blob rule per blob, and the shape + appearance features:
-    ([x, y, length, short_side, whiteness, area, reason] per blob, features (N, FEATURE_NAMES)).
-    ``previous``: the previous frame's measured positions."""
+    (the reason each blob is rejected or None, features (N, FEATURE_NAMES)), for all blobs at
+    once. ``previous``: the previous frame's measured positions."""
     p = params
-    features = np.empty((len(blobs), len(FEATURE_NAMES)))
+    n = len(blobs)
+    features = np.empty((n, len(FEATURE_NAMES)))
     features[:, 4:] = m.appearance
-    judged = []
-    for row, (blob, x, y, whiteness, saturation, contrast) in enumerate(zip(
-            blobs, m.x.tolist(), m.y.tolist(), m.whiteness.tolist(),
-            m.saturation.tolist(), features[:, 4].tolist())):
-        length, short_side, area = blob.length, blob.short_side, blob.area
-        reason = None
-        if (whiteness < p.colour.min_whiteness or saturation > p.colour.max_saturation
-                or contrast < p.colour.min_contrast):
-            reason = REJECT_WHITENESS
-        elif p.motion.min_displacement > 0 and is_still(previous, x, y, p.motion.min_displacement):
-            reason = REJECT_MOTION
-        long_side = max(length / 2.0 - short_side, short_side)
-        features[row, :4] = (math.log1p(length), math.log1p(short_side), math.log1p(area),
-                             long_side / max(short_side, 1e-3))
-        judged.append([x, y, length, short_side, whiteness, area, reason])
-    return judged, features
+    if n == 0:
+        return [], features
+    _, lengths, short_sides, areas, _ = zip(*blobs)
+    contrast = features[:, 4]
+    white = ((m.whiteness < p.colour.min_whiteness) | (m.saturation > p.colour.max_saturation)
+             | (contrast < p.colour.min_contrast))
+    reasons: list[str | None] = [REJECT_WHITENESS if w else None for w in white.tolist()]
+    if p.motion.min_displacement > 0:
+        for k in np.flatnonzero(~white & still_blobs(previous, m.x, m.y, p.motion.min_displacement)).tolist():
+            reasons[k] = REJECT_MOTION
+    # math.log1p, not np.log1p: numpy's SIMD logarithm may differ from the C library's in the
+    # last bit, and the classifiers were trained on these values.
+    features[:, 0] = [math.log1p(v) for v in lengths]
+    features[:, 1] = [math.log1p(v) for v in short_sides]
+    features[:, 2] = [math.log1p(v) for v in areas]
+    short = np.array(short_sides)
+    features[:, 3] = np.maximum(np.array(lengths) / 2.0 - short, short) / np.maximum(short, 1e-3)
+    return reasons, features
 
 
 def score_blobs(params: TrackerParams, scorer: BlobScorer, frame_bgr: np.ndarray,
@@ -162,20 +165,18 @@ def score_blobs(params: TrackerParams, scorer: BlobScorer, frame_bgr: np.ndarray
     """The verdicts of a frame's measured blobs (``judge_blobs``), then their qualities in one
     call; a blob not rejected yet whose quality is below ``association.min_quality`` is
     rejected by its score."""
-    judged, shape_features = judge_blobs(params, blobs, m, previous)
+    reasons, shape_features = judge_blobs(params, blobs, m, previous)
     features = shape_features
     qualities: list[float] = []
-    reasons = [j[6] for j in judged]
-    if judged:
-        xs = np.array([j[0] for j in judged])
-        ys = np.array([j[1] for j in judged])
-        if scorer.needs_patches:
-            features = np.hstack([shape_features, patch_features(frame_bgr, xs, ys)])
-        qualities = scorer.qualities(xs, ys, np.array([j[2] for j in judged]), shape_features[:, 4],
-                                     features).tolist()
-        min_quality = params.association.min_quality
-        reasons = [REJECT_SCORE if reason is None and q < min_quality else reason
-                   for reason, q in zip(reasons, qualities)]
-    return ScoredBlobs([j[0] for j in judged], [j[1] for j in judged], [j[2] for j in judged],
-                       [j[3] for j in judged], [j[4] for j in judged], [j[5] for j in judged],
-                       qualities, reasons, shape_features, features)
+    if not blobs:
+        return ScoredBlobs([], [], [], [], [], [], qualities, reasons, shape_features, features)
+    xs, ys = m.x, m.y
+    _, lengths, short_sides, areas, _ = zip(*blobs)
+    if scorer.needs_patches:
+        features = np.concatenate((shape_features, patch_features(frame_bgr, xs, ys)), axis=1)
+    qualities = scorer.qualities(xs, ys, np.array(lengths), shape_features[:, 4], features).tolist()
+    min_quality = params.association.min_quality
+    reasons = [REJECT_SCORE if reason is None and q < min_quality else reason
+               for reason, q in zip(reasons, qualities)]
+    return ScoredBlobs(xs.tolist(), ys.tolist(), list(lengths), list(short_sides), m.whiteness.tolist(),
+                       list(areas), qualities, reasons, shape_features, features)
