@@ -12,6 +12,7 @@ leaves out the labelled frames whose shuttle is at rest (core/evaluation.py ``at
     .venv/bin/python benchmarks/generalise.py --venues                  # five folds: three MLPs on ≈ 170,000 candidates each
     .venv/bin/python benchmarks/generalise.py --venues --only odense    # one fold
     .venv/bin/python benchmarks/generalise.py --venues --shipped        # the shipped classifier instead (no training)
+    .venv/bin/python benchmarks/generalise.py --venues --no-adapt       # without adapting to each clip (before -> after)
     .venv/bin/python benchmarks/generalise.py --rest                    # labelled frames at rest, per clip
 
 The fold classifiers are written to the cache (``clips.cache_dir("venue-folds")``), never to
@@ -65,9 +66,9 @@ def counts_of(o: Outcomes) -> str:
 def _score(task: tuple):
     """Census counts of one clip with one classifier (None: the preset's)."""
     from broadcast_census import census
-    clip, classifier, rest = task
+    clip, classifier, rest, adapt = task
     cv2.setNumThreads(1)
-    return census(clip, "broadcast", 4, None, classifier=classifier, at_rest=rest)
+    return census(clip, "broadcast", 4, None, classifier=classifier, adapt=adapt, at_rest=rest)
 
 
 def fold_classifier(venue: str, jobs: list[tuple], parts: list, place: dict[str, str], seed: int):
@@ -101,6 +102,7 @@ def leave_venue_out(args) -> int:
         with ProcessPoolExecutor(args.jobs) as pool:
             parts = list(pool.map(dump, jobs))
     who = "the shipped classifier" if args.shipped else "trained without its venue"
+    who += ", not adapted to each clip" if args.no_adapt else ", adapted to each clip"
     print(f"TV clips, `detect --preset broadcast`, {who}; protocol, then in play "
           f"(frames at rest left out):", flush=True)
     per_venue: dict[str, tuple[Outcomes, Outcomes, int, int]] = {}
@@ -110,10 +112,11 @@ def leave_venue_out(args) -> int:
             model, seconds, rows = fold_classifier(venue, jobs, parts, place, args.seed)
             print(f"\nclassifier without {venue}: {rows} candidates, "
                   f"{'cached' if not seconds else f'trained in {seconds:.0f} s'}", flush=True)
-        tasks = [(c, model, rest_frames(c.labels, 1280, c.video)) for c in clips if place[c.name] == venue]
+        tasks = [(c, model, rest_frames(c.labels, 1280, c.video), False if args.no_adapt else None)
+                 for c in clips if place[c.name] == venue]
         total, play, at_rest = Outcomes(), Outcomes(), 0
         with ProcessPoolExecutor(args.jobs) as pool:
-            for (clip, _m, rest), counts in zip(tasks, pool.map(_score, tasks)):
+            for (clip, _m, rest, _a), counts in zip(tasks, pool.map(_score, tasks)):
                 o, p = outcomes(counts), outcomes(counts, "in-play ")
                 total, play, at_rest = total + o, play + p, at_rest + len(rest)
                 print(f"  {clip.name:12s} {venue:13s} {'held-out' if clip.held_out else 'tuned-on':8s} "
@@ -169,6 +172,9 @@ def main() -> int:
     ap.add_argument("--only", nargs="*", default=None, metavar="VENUE", help="these folds only")
     ap.add_argument("--shipped", action="store_true",
                     help="--venues: score every venue with the shipped classifier (no training)")
+    ap.add_argument("--no-adapt", action="store_true",
+                    help="--venues: score without adapting the classifier to each clip first (the "
+                         "preset adapts; this gives the adaptation's before -> after on unseen venues)")
     ap.add_argument("--seed", type=int, default=0, help="the MLPs' random start")
     ap.add_argument("--jobs", type=int, default=1)
     args = ap.parse_args()

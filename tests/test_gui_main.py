@@ -184,6 +184,20 @@ def test_screenshot_mode_exits_zero(tmp_path):
     assert "results shown" in proc.stdout
 
 
+def test_screenshot_mode_waits_for_the_first_result(tmp_path):
+    """``--quit-after 0`` ends before any result can arrive: the run waits for the first one (a
+    loaded machine opens the source late) instead of failing a run that tracks."""
+    shot = tmp_path / "window.png"
+    env = dict(os.environ, QT_QPA_PLATFORM=os.environ.get("QT_QPA_PLATFORM", "xcb"))
+    proc = subprocess.run([sys.executable, "-m", "badminton_gui.gui.app", "--source", "demo",
+                           "--screenshot", str(shot), "--quit-after", "0"],
+                          env=env, capture_output=True, text=True, timeout=120,
+                          cwd=Path(__file__).resolve().parents[1])
+    assert proc.returncode == 0, proc.stderr
+    assert "nothing tracked" not in proc.stderr
+    assert "results shown" in proc.stdout and "results shown 0" not in proc.stdout
+
+
 def test_screenshot_mode_fails_when_nothing_is_tracked(tmp_path):
     env = dict(os.environ, QT_QPA_PLATFORM=os.environ.get("QT_QPA_PLATFORM", "xcb"))
     proc = subprocess.run([sys.executable, "-m", "badminton_gui.gui.app", "--source", "video",

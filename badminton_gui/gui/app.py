@@ -24,6 +24,8 @@ from ..io.logging_setup import configure_logging, default_log_file, describe_env
 
 PROG = "badminton-gui"
 _log = logging.getLogger(__name__)
+# --quit-after: how much longer to wait for the first result when none arrived in time.
+FIRST_RESULT_GRACE_MS = 60_000
 
 
 # The tracker's Python parts hold the GIL; a 1 ms switch interval (default 5 ms) lets the
@@ -51,7 +53,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--preset", help="parameter preset name or .json file")
     p.add_argument("--fast", action="store_true", help="process files as fast as possible (no real-time pacing)")
     p.add_argument("--screenshot", metavar="PATH", help="save a screenshot of the window before quitting")
-    p.add_argument("--quit-after", type=float, metavar="SECONDS", help="quit after this many seconds")
+    p.add_argument("--quit-after", type=float, metavar="SECONDS",
+                   help="quit after this many seconds (or at the first result, if none arrived by then)")
     verbosity = p.add_mutually_exclusive_group()
     verbosity.add_argument("-v", "--verbose", action="count", default=0,
                            help="more detail on stderr (-vv: debugging detail); the log file gets "
@@ -128,7 +131,17 @@ def main(argv: list[str] | None = None) -> int:
     status = {"code": 0}
     if args.quit_after is not None:
 
+        waited = {"extra_ms": 0}
+
         def finish() -> None:
+            if window.results_seen == 0 and waited["extra_ms"] < FIRST_RESULT_GRACE_MS \
+                    and not (window.banner.text and window.banner.kind == "error"):
+                # A loaded machine can take longer than SECONDS to open the source and load the
+                # classifier: wait for the first result (not for ever) rather than fail a run
+                # that would have tracked. A banner means the source failed: no use waiting.
+                waited["extra_ms"] += 500
+                QTimer.singleShot(500, finish)
+                return
             if window.results_seen == 0:
                 # Unattended runs must fail loudly when nothing was tracked.
                 reason = window.banner.text or "no result arrived in time"
