@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..detect.shuttle_scale import play_volume
 from ..detector import CameraDetector
 from ..params import TrackerParams
 from ..rig import StereoRig
@@ -34,6 +35,22 @@ FLIGHT_VOUCH_SLACK = 0.1     # m: ... and how near the flight's prediction (+ 3�
 PAIR_CONTINUITY_AGE = 0.03   # s: the last pair at most this old (a frame or two)
 PAIR_CONTINUITY_STEP = 0.005  # × image width: its epipolar error moved by at most this since (10 px at 2048)
 PAIR_CONTINUITY_GATE = 2.0   # × the epipolar gate: and is at most this
+
+
+def in_play_volume(rig: StereoRig, params: TrackerParams, point) -> bool:
+    """Could a triangulated point (left-camera frame) be the shuttle's by where it is? With a
+    court pose and ``stereo.play_volume``, only inside the play volume (``shuttle_scale``'s
+    court margin and height; not bounded below, where a lying shuttle's point scatters around
+    the floor); without, anywhere.
+
+    Both cameras see an object off the court where it is, so its pair meets the epipolar gate
+    like the shuttle's: an LED board's moving dot beside the court, paired whenever the
+    shuttle was out of one camera's view, took both cameras' reports for seconds."""
+    if not params.stereo.play_volume or not rig.has_court_pose:
+        return True
+    lo, hi = play_volume(params.shuttle_scale)
+    x, y, z = (float(v) for v in rig.to_output(point)[0])
+    return abs(x) <= hi[0] and abs(y) <= hi[1] and z <= hi[2]
 
 
 @dataclass(frozen=True, slots=True)
@@ -129,7 +146,8 @@ class StereoPairing:
             point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
             dist = float(np.linalg.norm(point))
             depth_ok = point[2] > 0 and self.rig.depth(1, self.rig.to_output(point))[0] > 0
-            if not depth_ok or not (sp.min_distance <= dist <= sp.max_distance):
+            if (not depth_ok or not (sp.min_distance <= dist <= sp.max_distance)
+                    or not in_play_volume(self.rig, self.params, point)):
                 continue
             # Prefer shuttle-like blobs; the epipolar error breaks near ties.
             merit = left[i].score + right[j].score - epi[i, j] / max(tolerance, 1e-6)
@@ -156,7 +174,8 @@ class StereoPairing:
             return None, None
         point = self.rig.triangulate(pl, pr)[0]
         dist = float(np.linalg.norm(point))
-        if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
+        if (point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance)
+                or not in_play_volume(self.rig, self.params, point)):
             return None, None
         return point, err
 
@@ -210,7 +229,8 @@ class StereoPairing:
         point = self.rig.triangulate(pl, pr)[0]
         dist = float(np.linalg.norm(point))
         sp = self.params.stereo
-        if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
+        if (point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance)
+                or not in_play_volume(self.rig, self.params, point)):
             return None, None
         return point, err
 
