@@ -11,6 +11,7 @@ first moved along their tracks to the left image's time (``stereo.align_pairs``)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -21,7 +22,7 @@ from ..detector import CameraDetector
 from ..params import TrackerParams
 from ..rig import StereoRig
 from ..step import Step
-from ..types import CameraResult, Candidate
+from ..types import REJECT_STEREO, CameraResult, Candidate
 from .epipolar import EpipolarGate
 
 # s: the least time between a pair's two images for the right camera's detections to be moved
@@ -121,6 +122,45 @@ class StereoPairing:
             return
         err = float(self.rig.epipolar_errors([[own_left.x, own_left.y]], [list(self.right_xy(own_right))])[0, 0])
         self.gate.add_sample(err)
+
+    def reject_off_volume(self, res_left: CameraResult, res_right: CameraResult
+                          ) -> tuple[CameraResult, CameraResult, tuple[bool, bool]]:
+        """Each camera's surviving candidates that meet a partner on the other camera only
+        outside the play volume (``in_play_volume``), both of them, rejected (``REJECT_STEREO``):
+        both cameras see that object off the court, so neither is the shuttle, and a camera
+        left without a pair would otherwise keep it as its own choice and follow it. Returns the
+        two results and whether each lost a candidate."""
+        if not self.params.stereo.play_volume or not self.rig.has_court_pose:
+            return res_left, res_right, (False, False)
+        sp = self.params.stereo
+        k = int(sp.max_candidates)
+        left = sorted((c for c in res_left.candidates if c.rejected_by is None and not c.predicted),
+                      key=lambda c: -c.score)[:k]
+        right = sorted((c for c in res_right.candidates if c.rejected_by is None and not c.predicted),
+                       key=lambda c: -c.score)[:k]
+        if not left or not right:
+            return res_left, res_right, (False, False)
+        pl = np.array([[c.x, c.y] for c in left])
+        pr = np.array([self.right_xy(c) for c in right])
+        epi = self.rig.epipolar_errors(pl, pr)
+        inside = np.zeros(epi.shape, dtype=bool)
+        outside = np.zeros(epi.shape, dtype=bool)
+        for i, j in zip(*np.nonzero(epi <= self.gate.tolerance())):
+            point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
+            dist = float(np.linalg.norm(point))
+            if (point[2] <= 0 or self.rig.depth(1, self.rig.to_output(point))[0] <= 0
+                    or not (sp.min_distance <= dist <= sp.max_distance)):
+                continue
+            if in_play_volume(self.rig, self.params, point):
+                inside[i, j] = True
+            else:
+                outside[i, j] = True
+        off = outside & ~inside.any(axis=1)[:, None] & ~inside.any(axis=0)[None, :]
+        if not off.any():
+            return res_left, res_right, (False, False)
+        gone_left = {id(left[i]) for i in np.flatnonzero(off.any(axis=1))}
+        gone_right = {id(right[j]) for j in np.flatnonzero(off.any(axis=0))}
+        return _rejected(res_left, gone_left), _rejected(res_right, gone_right), (True, True)
 
     def choose_pair(self, res_left: CameraResult, res_right: CameraResult) -> StereoPair:
         """The most plausible stereo-consistent pair of surviving candidates, if any."""
@@ -247,3 +287,9 @@ class StereoPairing:
         step.point, step.epi = self.continued_pair(left, right, step.t)
         if step.point is not None:
             step.fired("pair_continuity")
+
+
+def _rejected(result: CameraResult, gone: set[int]) -> CameraResult:
+    """``result`` with the candidates whose ids are in ``gone`` rejected (``REJECT_STEREO``)."""
+    return dataclasses.replace(result, candidates=tuple(
+        dataclasses.replace(c, rejected_by=REJECT_STEREO) if id(c) in gone else c for c in result.candidates))
