@@ -4,7 +4,8 @@ An LED board's moving dot beside the court is seen by both cameras where it is, 
 blobs meet the epipolar gate like the shuttle's. On the demo court's rig behind the baselines a
 dot 5.6 m from the centre line (2.55 m outside the doubles sideline, beyond the play volume's
 2 m margin) that scores higher than the shuttle in both cameras is not paired, and the shuttle
-is; with the switch off the dot wins, as it did on the randomised courts.
+is; with the switch off the dot wins, as it did on the randomised courts. A camera whose
+shuttle is out of the other camera's view does not keep the dot as its own choice either.
 """
 
 import numpy as np
@@ -63,3 +64,27 @@ def test_the_margin_is_the_play_volume_one():
     params = TrackerParams().with_value("shuttle_scale.court_margin", 3.0)
     rig, pair, _ = _pair(params)
     assert np.allclose(rig.to_output(pair.point)[0], BOARD_DOT, atol=0.05)
+
+
+def test_a_camera_left_without_a_pair_does_not_keep_the_board_dot():
+    # The shuttle out of the right camera's view (above its picture): the right camera sees
+    # only the dot, the left both. The dot pairs only outside the play volume, so it is
+    # rejected in both cameras and the left camera's own choice is the shuttle.
+    rig = make_rig("ends", (1280, 720))
+    tracker = StereoTracker(rig, TrackerParams(), parallel=False)
+    try:
+        left, right = _results(rig)
+        right = CameraResult(None, right.candidates[:1], image_size=rig.image_size)
+        left, right, off = tracker.pairing.reject_off_volume(left, right)
+        assert off == (True, True)
+        assert [c.rejected_by for c in left.candidates] == ["stereo", None]
+        assert [c.rejected_by for c in right.candidates] == ["stereo"]
+        assert tracker.left.choose(left.candidates).score == 0.6
+        assert tracker.right.choose(right.candidates) is None
+        # Inside a play volume wide enough to hold the board, the dot may be the shuttle.
+        inside = TrackerParams().with_value("shuttle_scale.court_margin", 3.0)
+        tracker.set_params(inside)
+        left, right = _results(rig)
+        assert tracker.pairing.reject_off_volume(left, right)[2] == (False, False)
+    finally:
+        tracker.close()
