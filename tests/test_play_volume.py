@@ -75,8 +75,7 @@ def test_a_camera_left_without_a_pair_does_not_keep_the_board_dot():
     try:
         left, right = _results(rig)
         right = CameraResult(None, right.candidates[:1], image_size=rig.image_size)
-        left, right, off = tracker.pairing.reject_off_volume(left, right)
-        assert off == (True, True)
+        left, right = tracker.pairing.reject_off_volume(left, right)
         assert [c.rejected_by for c in left.candidates] == ["stereo", None]
         assert [c.rejected_by for c in right.candidates] == ["stereo"]
         assert tracker.left.choose(left.candidates).score == 0.6
@@ -85,6 +84,7 @@ def test_a_camera_left_without_a_pair_does_not_keep_the_board_dot():
         inside = TrackerParams().with_value("shuttle_scale.court_margin", 3.0)
         tracker.set_params(inside)
         left, right = _results(rig)
-        assert tracker.pairing.reject_off_volume(left, right)[2] == (False, False)
+        kept = tracker.pairing.reject_off_volume(left, right)
+        assert kept[0] is left and kept[1] is right
     finally:
         tracker.close()

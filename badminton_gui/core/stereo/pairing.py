@@ -124,14 +124,14 @@ class StereoPairing:
         self.gate.add_sample(err)
 
     def reject_off_volume(self, res_left: CameraResult, res_right: CameraResult
-                          ) -> tuple[CameraResult, CameraResult, tuple[bool, bool]]:
+                          ) -> tuple[CameraResult, CameraResult]:
         """Each camera's surviving candidates that meet a partner on the other camera only
         outside the play volume (``in_play_volume``), both of them, rejected (``REJECT_STEREO``):
         both cameras see that object off the court, so neither is the shuttle, and a camera
         left without a pair would otherwise keep it as its own choice and follow it. Returns the
-        two results and whether each lost a candidate."""
+        two results (the same objects where nothing was rejected)."""
         if not self.params.stereo.play_volume or not self.rig.has_court_pose:
-            return res_left, res_right, (False, False)
+            return res_left, res_right
         sp = self.params.stereo
         k = int(sp.max_candidates)
         left = sorted((c for c in res_left.candidates if c.rejected_by is None and not c.predicted),
@@ -139,7 +139,7 @@ class StereoPairing:
         right = sorted((c for c in res_right.candidates if c.rejected_by is None and not c.predicted),
                        key=lambda c: -c.score)[:k]
         if not left or not right:
-            return res_left, res_right, (False, False)
+            return res_left, res_right
         pl = np.array([[c.x, c.y] for c in left])
         pr = np.array([self.right_xy(c) for c in right])
         epi = self.rig.epipolar_errors(pl, pr)
@@ -157,10 +157,10 @@ class StereoPairing:
                 outside[i, j] = True
         off = outside & ~inside.any(axis=1)[:, None] & ~inside.any(axis=0)[None, :]
         if not off.any():
-            return res_left, res_right, (False, False)
+            return res_left, res_right
         gone_left = {id(left[i]) for i in np.flatnonzero(off.any(axis=1))}
         gone_right = {id(right[j]) for j in np.flatnonzero(off.any(axis=0))}
-        return _rejected(res_left, gone_left), _rejected(res_right, gone_right), (True, True)
+        return _rejected(res_left, gone_left), _rejected(res_right, gone_right)
 
     def choose_pair(self, res_left: CameraResult, res_right: CameraResult) -> StereoPair:
         """The most plausible stereo-consistent pair of surviving candidates, if any."""
