@@ -4,8 +4,9 @@ An LED board's moving dot beside the court is seen by both cameras where it is, 
 blobs meet the epipolar gate like the shuttle's. On the demo court's rig behind the baselines a
 dot 5.6 m from the centre line (2.55 m outside the doubles sideline, beyond the play volume's
 2 m margin) that scores higher than the shuttle in both cameras is not paired, and the shuttle
-is; with the switch off the dot wins, as it did on the randomised courts. A camera whose
-shuttle is out of the other camera's view does not keep the dot as its own choice either.
+is; with the switch off (the default) the dot wins, as it did on the randomised courts. A
+camera whose shuttle is out of the other camera's view does not keep the dot as its own choice
+either.
 """
 
 import numpy as np
@@ -15,6 +16,7 @@ from badminton_gui.core.tracker import StereoTracker
 from badminton_gui.core.types import CameraResult, Candidate
 from badminton_gui.io.demo_scene import make_rig
 
+ON = TrackerParams().with_value("stereo.play_volume", True)
 SHUTTLE = (0.5, 2.0, 3.0)     # court frame, m: over the far half
 BOARD_DOT = (5.6, 1.0, 0.5)   # on a board standing beside the court
 
@@ -45,7 +47,7 @@ def _pair(params):
 
 
 def test_a_pair_outside_the_play_volume_is_not_the_shuttle():
-    rig, pair, board_alone = _pair(TrackerParams())
+    rig, pair, board_alone = _pair(ON)
     assert pair.point is not None
     assert np.allclose(rig.to_output(pair.point)[0], SHUTTLE, atol=0.05)
     assert pair.left.score == 0.6 and pair.right.score == 0.6
@@ -53,15 +55,14 @@ def test_a_pair_outside_the_play_volume_is_not_the_shuttle():
 
 
 def test_switched_off_the_board_dot_pairs():
-    params = TrackerParams().with_value("stereo.play_volume", False)
-    rig, pair, board_alone = _pair(params)
+    rig, pair, board_alone = _pair(TrackerParams())
     assert np.allclose(rig.to_output(pair.point)[0], BOARD_DOT, atol=0.05)
     assert board_alone is not None
 
 
 def test_the_margin_is_the_play_volume_one():
     # A margin wide enough to hold the board takes the dot back.
-    params = TrackerParams().with_value("shuttle_scale.court_margin", 3.0)
+    params = ON.with_value("shuttle_scale.court_margin", 3.0)
     rig, pair, _ = _pair(params)
     assert np.allclose(rig.to_output(pair.point)[0], BOARD_DOT, atol=0.05)
 
@@ -71,7 +72,7 @@ def test_a_camera_left_without_a_pair_does_not_keep_the_board_dot():
     # only the dot, the left both. The dot pairs only outside the play volume, so it is
     # rejected in both cameras and the left camera's own choice is the shuttle.
     rig = make_rig("ends", (1280, 720))
-    tracker = StereoTracker(rig, TrackerParams(), parallel=False)
+    tracker = StereoTracker(rig, ON, parallel=False)
     try:
         left, right = _results(rig)
         right = CameraResult(None, right.candidates[:1], image_size=rig.image_size)
@@ -81,7 +82,7 @@ def test_a_camera_left_without_a_pair_does_not_keep_the_board_dot():
         assert tracker.left.choose(left.candidates).score == 0.6
         assert tracker.right.choose(right.candidates) is None
         # Inside a play volume wide enough to hold the board, the dot may be the shuttle.
-        inside = TrackerParams().with_value("shuttle_scale.court_margin", 3.0)
+        inside = ON.with_value("shuttle_scale.court_margin", 3.0)
         tracker.set_params(inside)
         left, right = _results(rig)
         kept = tracker.pairing.reject_off_volume(left, right)
