@@ -6,7 +6,9 @@ distance in range, each camera's own choice preferred), triangulates it, and tak
 as a pair although they miss the gate when the followed flight puts the shuttle where they
 triangulate (``stereo.flight_vouch``) or when the same two tracks were the last step's pair and
 their miss moved little (``stereo.pair_continuity``). Free-running cameras' right detections are
-first moved along their tracks to the left image's time (``stereo.align_pairs``).
+first moved along their tracks to the left image's time (``stereo.align_pairs``). With
+``stereo.play_volume`` a pair must lie inside the play volume, and what pairs only outside it
+(an LED board's moving dot) is rejected in both cameras.
 """
 
 from __future__ import annotations
@@ -49,7 +51,7 @@ def in_play_volume(rig: StereoRig, params: TrackerParams, point) -> bool:
     shuttle was out of one camera's view, took both cameras' reports for seconds."""
     if not params.stereo.play_volume or not rig.has_court_pose:
         return True
-    lo, hi = play_volume(params.shuttle_scale)
+    _, hi = play_volume(params.shuttle_scale)
     x, y, z = (float(v) for v in rig.to_output(point)[0])
     return abs(x) <= hi[0] and abs(y) <= hi[1] and z <= hi[2]
 
