@@ -47,6 +47,13 @@ class Step:
         for rule, cam in fired:
             self.fired(rule, cam)
 
+    def take(self, rule: str, results: tuple[CameraResult, CameraResult]) -> None:
+        """The cameras' results become ``results``; ``rule`` fired on each whose result changed."""
+        for cam in (0, 1):
+            if results[cam] is not self.results[cam]:
+                self.fired(rule, cam)
+        self.results[0], self.results[1] = results
+
     def add(self, cam: int, found: Candidate) -> None:
         """``found`` becomes camera ``cam``'s report and joins its candidates."""
         self.dets[cam] = found

@@ -22,6 +22,7 @@ import numpy as np
 from .flight.shot_filter import position_on_path
 from .lookahead import CameraLookahead
 from .params import TrackerParams
+from .stereo.pairing import in_play_volume
 from .types import CameraResult, TrackResult
 
 
@@ -163,7 +164,8 @@ class StereoLookahead:
                 p = self.rig.triangulate(pl, pr)[0]
                 dist = float(np.linalg.norm(p))
                 sp = self.params.stereo
-                if p[2] > 0 and sp.min_distance <= dist <= sp.max_distance:
+                if (p[2] > 0 and sp.min_distance <= dist <= sp.max_distance
+                        and in_play_volume(self.rig, self.params, p)):
                     point = tuple(float(v) for v in self.rig.to_output(p)[0])
                     distance, epi = dist, err
                     self.retriangulated += 1

@@ -243,11 +243,8 @@ class StereoTracker:
     def _pair(self, step: Step) -> None:
         res = step.results
         if self.params.stereo.stereo_vouch:
-            vouched = self.vouch.apply(res[0], res[1])
-            for cam in (0, 1):
-                if vouched[cam] is not res[cam]:
-                    step.fired("stereo_vouch", cam)
-            res[0], res[1] = vouched
+            step.take("stereo_vouch", self.vouch.apply(res[0], res[1]))
+        step.take("off_volume", self.pairing.reject_off_volume(res[0], res[1]))
         self.pairing.learn(res[0], res[1])
         pair = self.pairing.choose_pair(res[0], res[1])
         step.dets, step.point, step.epi = [pair.left, pair.right], pair.point, pair.epipolar_error

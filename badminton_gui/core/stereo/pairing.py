@@ -6,21 +6,25 @@ distance in range, each camera's own choice preferred), triangulates it, and tak
 as a pair although they miss the gate when the followed flight puts the shuttle where they
 triangulate (``stereo.flight_vouch``) or when the same two tracks were the last step's pair and
 their miss moved little (``stereo.pair_continuity``). Free-running cameras' right detections are
-first moved along their tracks to the left image's time (``stereo.align_pairs``).
+first moved along their tracks to the left image's time (``stereo.align_pairs``). With
+``stereo.play_volume`` a pair must lie inside the play volume, and what pairs only outside it
+(an LED board's moving dot) is rejected in both cameras.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..detect.shuttle_scale import play_volume
 from ..detector import CameraDetector
 from ..params import TrackerParams
 from ..rig import StereoRig
 from ..step import Step
-from ..types import CameraResult, Candidate
+from ..types import REJECT_STEREO, CameraResult, Candidate
 from .epipolar import EpipolarGate
 
 # s: the least time between a pair's two images for the right camera's detections to be moved
@@ -34,6 +38,22 @@ FLIGHT_VOUCH_SLACK = 0.1     # m: ... and how near the flight's prediction (+ 3�
 PAIR_CONTINUITY_AGE = 0.03   # s: the last pair at most this old (a frame or two)
 PAIR_CONTINUITY_STEP = 0.005  # × image width: its epipolar error moved by at most this since (10 px at 2048)
 PAIR_CONTINUITY_GATE = 2.0   # × the epipolar gate: and is at most this
+
+
+def in_play_volume(rig: StereoRig, params: TrackerParams, point) -> bool:
+    """Could a triangulated point (left-camera frame) be the shuttle's by where it is? With a
+    court pose and ``stereo.play_volume``, only inside the play volume (``shuttle_scale``'s
+    court margin and height; not bounded below, where a lying shuttle's point scatters around
+    the floor); without, anywhere.
+
+    Both cameras see an object off the court where it is, so its pair meets the epipolar gate
+    like the shuttle's: an LED board's moving dot beside the court, paired whenever the
+    shuttle was out of one camera's view, took both cameras' reports for seconds."""
+    if not params.stereo.play_volume or not rig.has_court_pose:
+        return True
+    _, hi = play_volume(params.shuttle_scale)
+    x, y, z = (float(v) for v in rig.to_output(point)[0])
+    return abs(x) <= hi[0] and abs(y) <= hi[1] and z <= hi[2]
 
 
 @dataclass(frozen=True, slots=True)
@@ -105,6 +125,45 @@ class StereoPairing:
         err = float(self.rig.epipolar_errors([[own_left.x, own_left.y]], [list(self.right_xy(own_right))])[0, 0])
         self.gate.add_sample(err)
 
+    def reject_off_volume(self, res_left: CameraResult, res_right: CameraResult
+                          ) -> tuple[CameraResult, CameraResult]:
+        """Each camera's surviving candidates that meet a partner on the other camera only
+        outside the play volume (``in_play_volume``), both of them, rejected (``REJECT_STEREO``):
+        both cameras see that object off the court, so neither is the shuttle, and a camera
+        left without a pair would otherwise keep it as its own choice and follow it. Returns the
+        two results (the same objects where nothing was rejected)."""
+        if not self.params.stereo.play_volume or not self.rig.has_court_pose:
+            return res_left, res_right
+        sp = self.params.stereo
+        k = int(sp.max_candidates)
+        left = sorted((c for c in res_left.candidates if c.rejected_by is None and not c.predicted),
+                      key=lambda c: -c.score)[:k]
+        right = sorted((c for c in res_right.candidates if c.rejected_by is None and not c.predicted),
+                       key=lambda c: -c.score)[:k]
+        if not left or not right:
+            return res_left, res_right
+        pl = np.array([[c.x, c.y] for c in left])
+        pr = np.array([self.right_xy(c) for c in right])
+        epi = self.rig.epipolar_errors(pl, pr)
+        inside = np.zeros(epi.shape, dtype=bool)
+        outside = np.zeros(epi.shape, dtype=bool)
+        for i, j in zip(*np.nonzero(epi <= self.gate.tolerance())):
+            point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
+            dist = float(np.linalg.norm(point))
+            if (point[2] <= 0 or self.rig.depth(1, self.rig.to_output(point))[0] <= 0
+                    or not (sp.min_distance <= dist <= sp.max_distance)):
+                continue
+            if in_play_volume(self.rig, self.params, point):
+                inside[i, j] = True
+            else:
+                outside[i, j] = True
+        off = outside & ~inside.any(axis=1)[:, None] & ~inside.any(axis=0)[None, :]
+        if not off.any():
+            return res_left, res_right
+        gone_left = {id(left[i]) for i in np.flatnonzero(off.any(axis=1))}
+        gone_right = {id(right[j]) for j in np.flatnonzero(off.any(axis=0))}
+        return _rejected(res_left, gone_left), _rejected(res_right, gone_right)
+
     def choose_pair(self, res_left: CameraResult, res_right: CameraResult) -> StereoPair:
         """The most plausible stereo-consistent pair of surviving candidates, if any."""
         sp = self.params.stereo
@@ -129,7 +188,8 @@ class StereoPairing:
             point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
             dist = float(np.linalg.norm(point))
             depth_ok = point[2] > 0 and self.rig.depth(1, self.rig.to_output(point))[0] > 0
-            if not depth_ok or not (sp.min_distance <= dist <= sp.max_distance):
+            if (not depth_ok or not (sp.min_distance <= dist <= sp.max_distance)
+                    or not in_play_volume(self.rig, self.params, point)):
                 continue
             # Prefer shuttle-like blobs; the epipolar error breaks near ties.
             merit = left[i].score + right[j].score - epi[i, j] / max(tolerance, 1e-6)
@@ -156,7 +216,8 @@ class StereoPairing:
             return None, None
         point = self.rig.triangulate(pl, pr)[0]
         dist = float(np.linalg.norm(point))
-        if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
+        if (point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance)
+                or not in_play_volume(self.rig, self.params, point)):
             return None, None
         return point, err
 
@@ -210,7 +271,8 @@ class StereoPairing:
         point = self.rig.triangulate(pl, pr)[0]
         dist = float(np.linalg.norm(point))
         sp = self.params.stereo
-        if point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
+        if (point[2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance)
+                or not in_play_volume(self.rig, self.params, point)):
             return None, None
         return point, err
 
@@ -227,3 +289,9 @@ class StereoPairing:
         step.point, step.epi = self.continued_pair(left, right, step.t)
         if step.point is not None:
             step.fired("pair_continuity")
+
+
+def _rejected(result: CameraResult, gone: set[int]) -> CameraResult:
+    """``result`` with the candidates whose ids are in ``gone`` rejected (``REJECT_STEREO``)."""
+    return dataclasses.replace(result, candidates=tuple(
+        dataclasses.replace(c, rejected_by=REJECT_STEREO) if id(c) in gone else c for c in result.candidates))

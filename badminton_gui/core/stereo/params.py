@@ -22,6 +22,13 @@ class StereoParams(ParamGroup):
     min_distance: float = param(0.3, 0.0, 100.0, step=0.1, unit="m", label="Nearest",
                                 help="Triangulated points closer to the left camera are rejected")
     max_distance: float = param(40.0, 0.5, 500.0, step=0.5, unit="m", label="Farthest")
+    play_volume: bool = flag(False, label="Pairs inside the play volume",
+                             help="With a court pose, two detections whose 3D point lies outside the play "
+                                  "volume (the court plus 'Play volume: margin' around it, up to its height; "
+                                  "Shuttle scale group) are not a pair, and both are rejected when they pair "
+                                  "nowhere else: an LED board's moving dot beside the court, which both cameras "
+                                  "see where it is. Off by default: it lifts every scene family's 2D accuracy "
+                                  "but costs one family a little 3D coverage (docs/findings.md)")
     max_candidates: int = param(6, 1, 50, step=1, label="Candidates per camera",
                                 help="How many best candidates per camera are tried for a stereo pair")
     adaptive_epipolar: bool = flag(True, label="Learn the epipolar tolerance",

@@ -19,6 +19,7 @@ from ..params import TrackerParams
 from ..rig import StereoRig
 from ..types import CameraResult, Candidate
 from .epipolar import EpipolarGate
+from .pairing import in_play_volume
 
 # s: how far back the two tracks' image velocities are followed to check that a held-back pair
 # moves consistently in 3D: a few frames at 120 fps, long enough for a slow shuttle to move a few px.
@@ -161,7 +162,8 @@ class StereoVouch:
             dist = float(np.linalg.norm(pts[0]))
             if pts[0][2] <= 0 or not (sp.min_distance <= dist <= sp.max_distance):
                 continue
-            if self.rig.depth(1, self.rig.to_output(pts[:1]))[0] <= 0:
+            if (self.rig.depth(1, self.rig.to_output(pts[:1]))[0] <= 0
+                    or not in_play_volume(self.rig, self.params, pts[0])):
                 continue
             speed = float(np.linalg.norm(pts[0] - pts[1])) / VOUCH_DT
             if moving and not (sp.vouch_min_speed <= speed <= VOUCH_MAX_SPEED):
