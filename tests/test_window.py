@@ -297,6 +297,30 @@ def test_staggered_cameras_never_take_a_scheduled_whole_frame_together():
     assert together >= 5
 
 
+@pytest.mark.parametrize("flight_travel", [0.0, 100.0, 5000.0])
+def test_a_window_only_around_a_tracklet_that_has_flown(flight_travel):
+    """The window follows a flight: a followed tracklet that has not travelled
+    ``association.flight_travel`` px (a held shuttle, clutter taken up after the shuttle was
+    lost, a path just struck) keeps the frames whole, so the tracklets outside a window are
+    not starved of their candidates (the lost shuttle's own ends after ``max_misses``
+    windowed frames, and its history with it)."""
+    frames, truth = _scene(120)
+    det = CameraDetector(_params(window__full_every=8, association__flight_travel=flight_travel))
+    travel_before = None   # the followed tracklet's travel when this frame's window was chosen
+    windowed = 0
+    for i, img in enumerate(frames):
+        det.process(img, i / FPS, keep_mask=False)
+        if det.window_tracker.last_window is not None:
+            windowed += 1
+            assert travel_before is not None and travel_before >= flight_travel, i
+        followed = followed_tracklet(det.associator)
+        travel_before = None if followed is None else followed.travel
+    if flight_travel < 5000:
+        assert windowed >= 0.6 * len(frames)   # the dot flies ~6 px a frame: windowed soon
+    else:
+        assert windowed == 0
+
+
 def test_the_result_says_which_box_was_processed():
     """CameraResult.window is the window of a windowed frame (the views draw it) and None on a
     whole frame, so an empty mask outside it is not read as "nothing moved"."""
