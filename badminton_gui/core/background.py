@@ -320,19 +320,23 @@ class BackgroundModel:
             # is absorbed eventually.
             cv2.accumulateWeighted(gray, self._average, alpha * 0.1, mask=slow)
             if self._catch_up is not None and self._catch_up[0].shape == gray.shape:
-                # Each missed pixel learns what the missed frames would have taught it, at the
-                # rate it learns at now: the still ones at α, the foreground at α/10 too. A
-                # ghost (the court where a player stood) is foreground; caught up at α only,
-                # it faded ``full_every`` × slower outside the windows than on whole frames
-                # and merged with a landed shuttle beside the player into one blob too long
-                # for filter 1.
-                missed, frames = self._catch_up
-                cv2.accumulateWeighted(gray, self._average, 1.0 - (1.0 - alpha) ** frames,
-                                       mask=cv2.bitwise_and(self._still, missed))
-                cv2.accumulateWeighted(gray, self._average, 1.0 - (1.0 - alpha * 0.1) ** frames,
-                                       mask=cv2.bitwise_and(slow, missed))
+                self._learn_missed(gray, slow, alpha)
         self._catch_up = None
         return mask
+
+    def _learn_missed(self, gray: np.ndarray, slow: np.ndarray, alpha: float) -> None:
+        """``catch_up``: each missed pixel learns what the missed frames would have taught it,
+        at the rate it learns at now: the still ones at α, the foreground (``slow``) at α/10.
+
+        A ghost (the court where a player stood) is foreground; caught up at α only where
+        still, it faded ``full_every`` × slower outside the windows than on whole frames, and
+        beside a landed shuttle merged with it into one blob too long for filter 1.
+        """
+        missed, frames = self._catch_up
+        cv2.accumulateWeighted(gray, self._average, 1.0 - (1.0 - alpha) ** frames,
+                               mask=cv2.bitwise_and(self._still, missed))
+        cv2.accumulateWeighted(gray, self._average, 1.0 - (1.0 - alpha * 0.1) ** frames,
+                               mask=cv2.bitwise_and(slow, missed))
 
     def catch_up(self, missed: np.ndarray, frames: int) -> None:
         """The next ``apply`` also teaches the pixels where ``missed`` is 255 what the
