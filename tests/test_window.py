@@ -203,6 +203,30 @@ def test_catch_up_teaches_the_missed_pixels_what_the_missed_frames_would_have(k)
     assert not np.allclose(slow.average[0, 0], whole.average[0, 0], atol=1e-3)
 
 
+@pytest.mark.parametrize("k", [1, 3, 7])
+def test_catch_up_fades_a_ghost_outside_the_windows_as_whole_frames_do(k):
+    """A dark player stood long enough to be learnt, then left: the court where he stood is
+    brighter than the average, foreground (a ghost), learning at α/10. Outside the windows for
+    k frames, then a whole frame with ``catch_up``: the ghost has faded as far as on k + 1
+    whole frames, not k + 1 times less (it would outlast the whole frames' masks by
+    ``full_every`` × and merge with a shuttle landing beside it)."""
+    p = _params(background__compensate_gain=False)
+    whole, part = BackgroundModel(p.background, p.binarize), BackgroundModel(p.background, p.binarize)
+    player = np.full((96, 128), 40, np.uint8)
+    court = np.full((96, 128), 100, np.uint8)   # brighter by far more than diff_threshold
+    for m in (whole, part):
+        m.apply(player)
+    for _ in range(k + 1):
+        assert whole.apply(court)[0, 0] == 255    # the ghost stays foreground throughout
+    missed = np.full(court.shape, 255, np.uint8)
+    for _ in range(k):
+        part.apply_window(court[16:48, 32:80], 32, 16)
+    missed[16:48, 32:80] = 0
+    part.catch_up(missed, k)
+    assert part.apply(court)[0, 0] == 255
+    assert np.allclose(part.average, whole.average, atol=1e-3)
+
+
 def test_both_cameras_windowed_run_in_turn_else_side_by_side(monkeypatch):
     """When both cameras process this frame in a window the tracker runs them in turn on its own
     thread (windowed frames are mostly Python holding the GIL); when either takes a whole frame
@@ -271,6 +295,30 @@ def test_staggered_cameras_never_take_a_scheduled_whole_frame_together():
             det.process(img, i / FPS)
         together += i >= following[0] and left.window_tracker.last_window is None and right.window_tracker.last_window is None
     assert together >= 5
+
+
+@pytest.mark.parametrize("flight_travel", [0.0, 100.0, 5000.0])
+def test_a_window_only_around_a_tracklet_that_has_flown(flight_travel):
+    """The window follows a flight: a followed tracklet that has not travelled
+    ``association.flight_travel`` px (a held shuttle, clutter taken up after the shuttle was
+    lost, a path just struck) keeps the frames whole, so the tracklets outside a window are
+    not starved of their candidates (the lost shuttle's own ends after ``max_misses``
+    windowed frames, and its history with it)."""
+    frames, truth = _scene(120)
+    det = CameraDetector(_params(window__full_every=8, association__flight_travel=flight_travel))
+    travel_before = None   # the followed tracklet's travel when this frame's window was chosen
+    windowed = 0
+    for i, img in enumerate(frames):
+        det.process(img, i / FPS, keep_mask=False)
+        if det.window_tracker.last_window is not None:
+            windowed += 1
+            assert travel_before is not None and travel_before >= flight_travel, i
+        followed = followed_tracklet(det.associator)
+        travel_before = None if followed is None else followed.travel
+    if flight_travel < 5000:
+        assert windowed >= 0.6 * len(frames)   # the dot flies ~6 px a frame: windowed soon
+    else:
+        assert windowed == 0
 
 
 def test_the_result_says_which_box_was_processed():

@@ -37,9 +37,9 @@ class BackgroundModel:
         self._kernel: np.ndarray | None = None
         self._shake_kernel: np.ndarray | None = None
         self._raw_mask: np.ndarray | None = None
-        # Windowed tracking: pixels (255) that missed updates, and the extra learning rate they
-        # get on the next whole frame (``catch_up``); used once.
-        self._catch_up: tuple[np.ndarray, float] | None = None
+        # Windowed tracking: pixels (255) that missed updates, and how many updates they missed,
+        # caught up on the next whole frame (``catch_up``); used once.
+        self._catch_up: tuple[np.ndarray, int] | None = None
         # Model pixels (x0, y0, x1, y1) thresholded lower in the next update only: around a
         # held landed shuttle (``protect``).
         self._protected: tuple[int, int, int, int] | None = None
@@ -320,17 +320,30 @@ class BackgroundModel:
             # is absorbed eventually.
             cv2.accumulateWeighted(gray, self._average, alpha * 0.1, mask=slow)
             if self._catch_up is not None and self._catch_up[0].shape == gray.shape:
-                missed, extra = self._catch_up
-                cv2.accumulateWeighted(gray, self._average, extra,
-                                       mask=cv2.bitwise_and(self._still, missed))
+                self._learn_missed(gray, slow, alpha)
         self._catch_up = None
         return mask
 
+    def _learn_missed(self, gray: np.ndarray, slow: np.ndarray, alpha: float) -> None:
+        """``catch_up``: each missed pixel learns what the missed frames would have taught it,
+        at the rate it learns at now: the still ones at α, the foreground (``slow``) at α/10.
+
+        A ghost (the court where a player stood) is foreground; caught up at α only where
+        still, it faded ``full_every`` × slower outside the windows than on whole frames, and
+        beside a landed shuttle merged with it into one blob too long for filter 1.
+        """
+        missed, frames = self._catch_up
+        cv2.accumulateWeighted(gray, self._average, 1.0 - (1.0 - alpha) ** frames,
+                               mask=cv2.bitwise_and(self._still, missed))
+        cv2.accumulateWeighted(gray, self._average, 1.0 - (1.0 - alpha * 0.1) ** frames,
+                               mask=cv2.bitwise_and(slow, missed))
+
     def catch_up(self, missed: np.ndarray, frames: int) -> None:
-        """The next ``apply`` also teaches the still pixels where ``missed`` is 255 what the
-        ``frames`` updates they missed would have (extra rate 1 − (1 − α)^frames)."""
+        """The next ``apply`` also teaches the pixels where ``missed`` is 255 what the
+        ``frames`` updates they missed would have: an extra rate 1 − (1 − r)^frames, r the
+        pixel's own rate in that update (α, or α/10 under the foreground)."""
         alpha = float(self._bg.learning_rate)
-        self._catch_up = (missed, 1.0 - (1.0 - alpha) ** frames) if frames > 0 and alpha > 0 else None
+        self._catch_up = (missed, int(frames)) if frames > 0 and alpha > 0 else None
 
     def _three_frame_difference(self, gray: np.ndarray) -> np.ndarray:
         """Pixels that differ from *both* of the two previous frames: the object now, no ghosts."""

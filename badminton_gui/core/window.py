@@ -14,9 +14,11 @@ followed one is lost are found at most ``full_every − 1`` frames late.
 Consequences, by design:
 - the running average outside the window learns only on whole frames: at the same learning
   rate, so ``full_every`` × slower in time there (a player's ghost outside the window lasts
-  longer in the whole frames' masks), unless ``window.catch_up`` gives the still pixels no
-  window covered the weight of the k updates they missed, 1 − (1 − α)^k, on the next whole
-  frame (coarse preset: tuned-on F1 94.47 → 94.53 %); the flicker gain of a windowed frame is
+  longer in the whole frames' masks), unless ``window.catch_up`` gives the pixels no window
+  covered the weight of the k updates they missed on the next whole frame, 1 − (1 − α)^k, and
+  1 − (1 − α/10)^k under the foreground (a ghost fades as on whole frames; caught up at α
+  only for the still pixels, a player's ghost outlasted the whole frames' by ``full_every`` ×
+  and swallowed a shuttle landing beside it); the flicker gain of a windowed frame is
   estimated on the window's part of the sparse grid (a finer grid when it holds too few points);
 - on windowed frames the mask (and the GUI's mask preview) is empty outside the window, so
   ``is_merged`` sees nothing there; ``is_blind`` reads the running average, stale outside;
@@ -37,6 +39,11 @@ Consequences, by design:
   for up to ``full_every`` frames at a time, so its tracklet was confirmed ≈ 10 frames late
   (rally_11-46-04 left 300–311). Coarse, tuned-on rallies online: F1 96.41 → 96.62 % (default
   96.93), windowed share in play 71.3 → 67.7 %;
+- no window while the followed tracklet has not travelled ``association.flight_travel`` px (a
+  held shuttle, clutter taken up after the shuttle was lost, a path just struck, whose travel
+  the association restarts): windowing on clutter starved the tracklets outside the window,
+  the lost shuttle's own among them, which ended after ``max_misses`` frames with the history
+  that lets a shuttle pause (rally_11-49-21 left 1452–1465);
 - after a whole frame on which a rival tracklet (not followed, not confirmed, running quality
   ≥ ``window.watch_quality``) was seen, the next frame is whole too, so a new serve gets its
   confirming frames in a row.
@@ -159,6 +166,11 @@ class WindowTracker:
         followed = followed_tracklet(associator)
         if (followed is None or not followed.hit_now or not followed.velocity_known
                 or associator.merit(followed) < 0 or followed.quality < wp.min_quality):
+            return None
+        if followed.travel < associator.params.flight_travel:
+            # Not a flight yet (a held shuttle, clutter taken up after the shuttle was lost, a
+            # path just struck): windowed, the tracklets outside would starve, the lost
+            # shuttle's own among them, which ends after max_misses frames with its history.
             return None
         if self._since_full == 0 and self._rival_seen(associator, followed):
             return None
