@@ -249,11 +249,16 @@ class StereoTracker:
                     step.fired("stereo_vouch", cam)
             res[0], res[1] = vouched
         self.pairing.learn(res[0], res[1])
-        pair = self.pairing.choose_pair(res[0], res[1])
+        pair = self.pairing.choose_pair(res[0], res[1], step.guide)
+        if pair.beyond_reach:
+            step.fired("pair_beyond_reach")
         step.dets, step.point, step.epi = [pair.left, pair.right], pair.point, pair.epipolar_error
         if step.point is None:
-            # No stereo pair: each camera keeps its own best guess for the 2D readout.
-            step.dets = [self.left.choose(res[0].candidates), self.right.choose(res[1].candidates)]
+            # No stereo pair: each camera keeps its own best guess for the 2D readout, within
+            # the followed flight's reach.
+            step.dets, moved = self.pairing.own_choices(res, step.guide)
+            for cam in moved:
+                step.fired("sight_beyond_reach", cam)
         self.left.commit(step.dets[0], step.t, res[0].candidates)
         self.right.commit(step.dets[1], step.t_right, res[1].candidates)
 
