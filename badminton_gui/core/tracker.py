@@ -6,8 +6,8 @@ A pair step runs these stages, in this order (``StereoTracker.process``):
 1. segmentation and candidates, per camera (:class:`CameraDetector`, the two cameras side by
    side on two threads);
 2. stereo vouch and pairing (``stereo/vouch.py``, ``stereo/pairing.py``): a young track the other
-   camera confirms passes; the stereo-consistent pair is chosen, else each camera's own choice;
-   each detector commits its report;
+   camera confirms passes; the stereo-consistent pair within the followed flight's reach is
+   chosen, else each camera's own choice (within that reach); each detector commits its report;
 3. the flight's look (``flight/look.py``, ``stereo/look.py``): a camera that lost the shuttle
    looks where the flight projects, or where its own image path continues on the other
    detection's epipolar line; two reports just off the gate pair when the flight or the last
@@ -249,16 +249,7 @@ class StereoTracker:
                     step.fired("stereo_vouch", cam)
             res[0], res[1] = vouched
         self.pairing.learn(res[0], res[1])
-        pair = self.pairing.choose_pair(res[0], res[1], step.guide)
-        if pair.beyond_reach:
-            step.fired("pair_beyond_reach")
-        step.dets, step.point, step.epi = [pair.left, pair.right], pair.point, pair.epipolar_error
-        if step.point is None:
-            # No stereo pair: each camera keeps its own best guess for the 2D readout, within
-            # the followed flight's reach.
-            step.dets, moved = self.pairing.own_choices(res, step.guide)
-            for cam in moved:
-                step.fired("sight_beyond_reach", cam)
+        self.pairing.pair(step)
         self.left.commit(step.dets[0], step.t, res[0].candidates)
         self.right.commit(step.dets[1], step.t_right, res[1].candidates)
 

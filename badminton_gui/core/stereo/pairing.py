@@ -2,7 +2,8 @@
 
 Why this file exists: the pairing stage of the tracker. Among the surviving candidates of the two
 cameras it chooses the stereo-consistent pair (epipolar gate, depth in front of both cameras,
-distance in range, each camera's own choice preferred), triangulates it, and takes two reports
+distance in range, within the followed flight's reach and where it puts the shuttle first, each
+camera's own choice preferred; ``stereo.flight_reach``), triangulates it, and takes two reports
 as a pair although they miss the gate when the followed flight puts the shuttle where they
 triangulate (``stereo.flight_vouch``) or when the same two tracks were the last step's pair and
 their miss moved little (``stereo.pair_continuity``). Free-running cameras' right detections are
@@ -175,6 +176,20 @@ class StereoPairing:
         if off > radius:
             return 0
         return 2 if off <= self.params.trajectory.outlier_distance else 1
+
+    def pair(self, step: Step) -> None:
+        """The stage: the pair of the step's candidates (``choose_pair``) as its reports and
+        point; without one, each camera's own choice within the followed flight's reach
+        (``own_choices``) for the 2D readout."""
+        res = step.results
+        pair = self.choose_pair(res[0], res[1], step.guide)
+        if pair.beyond_reach:
+            step.fired("pair_beyond_reach")
+        step.dets, step.point, step.epi = [pair.left, pair.right], pair.point, pair.epipolar_error
+        if step.point is None:
+            step.dets, moved = self.own_choices(res, step.guide)
+            for cam in moved:
+                step.fired("sight_beyond_reach", cam)
 
     def own_choices(self, results: list[CameraResult], guide: StepGuide | None
                     ) -> tuple[list[Candidate | None], list[int]]:
