@@ -6,8 +6,9 @@ A pair step runs these stages, in this order (``StereoTracker.process``):
 1. segmentation and candidates, per camera (:class:`CameraDetector`, the two cameras side by
    side on two threads);
 2. stereo vouch and pairing (``stereo/vouch.py``, ``stereo/pairing.py``): a young track the other
-   camera confirms passes; the stereo-consistent pair within the followed flight's reach is
-   chosen, else each camera's own choice (within that reach); each detector commits its report;
+   camera confirms passes; the stereo-consistent pair is chosen (within the followed flight's
+   reach with ``stereo.flight_reach``), else each camera's own choice; each detector commits
+   its report;
 3. the flight's look (``flight/look.py``, ``stereo/look.py``): a camera that lost the shuttle
    looks where the flight projects, or where its own image path continues on the other
    detection's epipolar line; two reports just off the gate pair when the flight or the last

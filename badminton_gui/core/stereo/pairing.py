@@ -2,8 +2,8 @@
 
 Why this file exists: the pairing stage of the tracker. Among the surviving candidates of the two
 cameras it chooses the stereo-consistent pair (epipolar gate, depth in front of both cameras,
-distance in range, within the followed flight's reach and where it puts the shuttle first, each
-camera's own choice preferred; ``stereo.flight_reach``), triangulates it, and takes two reports
+distance in range, each camera's own choice preferred; with ``stereo.flight_reach`` within the
+followed flight's reach, where it puts the shuttle first), triangulates it, and takes two reports
 as a pair although they miss the gate when the followed flight puts the shuttle where they
 triangulate (``stereo.flight_vouch``) or when the same two tracks were the last step's pair and
 their miss moved little (``stereo.pair_continuity``). Free-running cameras' right detections are
