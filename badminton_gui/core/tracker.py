@@ -6,8 +6,9 @@ A pair step runs these stages, in this order (``StereoTracker.process``):
 1. segmentation and candidates, per camera (:class:`CameraDetector`, the two cameras side by
    side on two threads);
 2. stereo vouch and pairing (``stereo/vouch.py``, ``stereo/pairing.py``): a young track the other
-   camera confirms passes; the stereo-consistent pair is chosen, else each camera's own choice;
-   each detector commits its report;
+   camera confirms passes; the stereo-consistent pair is chosen (within the followed flight's
+   reach with ``stereo.flight_reach``), else each camera's own choice; each detector commits
+   its report;
 3. the flight's look (``flight/look.py``, ``stereo/look.py``): a camera that lost the shuttle
    looks where the flight projects, or where its own image path continues on the other
    detection's epipolar line; two reports just off the gate pair when the flight or the last
@@ -246,11 +247,7 @@ class StereoTracker:
             step.take("stereo_vouch", self.vouch.apply(res[0], res[1]))
         step.take("off_volume", self.pairing.reject_off_volume(res[0], res[1]))
         self.pairing.learn(res[0], res[1])
-        pair = self.pairing.choose_pair(res[0], res[1])
-        step.dets, step.point, step.epi = [pair.left, pair.right], pair.point, pair.epipolar_error
-        if step.point is None:
-            # No stereo pair: each camera keeps its own best guess for the 2D readout.
-            step.dets = [self.left.choose(res[0].candidates), self.right.choose(res[1].candidates)]
+        self.pairing.pair(step)
         self.left.commit(step.dets[0], step.t, res[0].candidates)
         self.right.commit(step.dets[1], step.t_right, res[1].candidates)
 

@@ -64,7 +64,7 @@ from ..params import TrajectoryParams
 from ..types import FlightInfo
 from .landing import LandingReadout, _Landing
 from .shot_filter import K_MAX, K_MIN, MIN_FLIGHT_SPEED, _Filter, _points_travel, _propagate
-from .takeover import LANDING_GRACE_S, STARVED_MIN_SPEED, TAKEOVER_POINTS, ShotTakeover
+from .takeover import HIT_REACH, LANDING_GRACE_S, STARVED_MIN_SPEED, TAKEOVER_POINTS, ShotTakeover
 
 LANDED_HEIGHT = 0.03        # m: a flight whose estimate is this low has landed (cork radius ≈ 1.3 cm)
 REST_MAX_HEIGHT = 0.10      # m: a point this low next to the last landing is the shuttle lying there
@@ -356,6 +356,12 @@ class Trajectory(ShotTakeover, LandingReadout):
         """Where the followed flight puts the shuttle at time t: (position (3,), its covariance
         (3, 3)), or None when there is no established flight to trust (fewer than ``min_points``
         points, lost for longer than ``max_gap``, or a new track is being confirmed: a hit)."""
+        motion = self.guide_motion(t)
+        return None if motion is None else (motion[0], motion[1])
+
+    def guide_motion(self, t: float) -> tuple[np.ndarray, np.ndarray, float, float] | None:
+        """``guide(t)``'s (position, covariance) with the guiding flight's speed (m/s) there and
+        the time (s) of its last point (None: no guide)."""
         f = self._flight
         p = self.params
         tent = self._tentative
@@ -384,9 +390,19 @@ class Trajectory(ShotTakeover, LandingReadout):
             return None
         saved = (f.x, f.P, f.t)
         f.predict(t, p.model_noise)
-        position, covariance = f.x[:3].copy(), f.P[0:3, 0:3].copy()
+        position, covariance, speed = f.x[:3].copy(), f.P[0:3, 0:3].copy(), f.speed
         f.x, f.P, f.t = saved
-        return position, covariance
+        return position, covariance, speed, float(f.t)
+
+    def reach(self, motion: tuple[np.ndarray, np.ndarray, float, float], t: float,
+              top_speed: float) -> float:
+        """How far (m) from the guide's position (``guide_motion(t)``) the followed shuttle can
+        be at ``t``: ``HIT_REACH`` (a hit's first points off by the racket's blob) plus
+        ``outlier_sigma`` of the guide's spread, plus the way a shuttle hit since the flight's
+        last point at ``top_speed`` (m/s) and the flight itself can have gone apart since."""
+        _, covariance, speed, t_last = motion
+        spread = self.params.outlier_sigma * math.sqrt(max(float(np.trace(covariance)) / 3.0, 0.0))
+        return HIT_REACH + spread + (top_speed + speed) * max(t - t_last, 0.0)
 
     def resting_direction(self, point) -> tuple[float, float] | None:
         """The horizontal direction (unit x, y) of the flight that came down next to ``point``, when

@@ -2,7 +2,8 @@
 
 Why this file exists: the pairing stage of the tracker. Among the surviving candidates of the two
 cameras it chooses the stereo-consistent pair (epipolar gate, depth in front of both cameras,
-distance in range, each camera's own choice preferred), triangulates it, and takes two reports
+distance in range, each camera's own choice preferred; with ``stereo.flight_reach`` within the
+followed flight's reach, where it puts the shuttle first), triangulates it, and takes two reports
 as a pair although they miss the gate when the followed flight puts the shuttle where they
 triangulate (``stereo.flight_vouch``) or when the same two tracks were the last step's pair and
 their miss moved little (``stereo.pair_continuity``). Free-running cameras' right detections are
@@ -21,6 +22,7 @@ import numpy as np
 
 from ..detect.shuttle_scale import play_volume
 from ..detector import CameraDetector
+from ..flight.guide import StepGuide
 from ..params import TrackerParams
 from ..rig import StereoRig
 from ..step import Step
@@ -65,6 +67,8 @@ class StereoPair:
     right: Candidate | None
     point: np.ndarray | None = None
     epipolar_error: float | None = None
+    # A stereo-consistent pair was left out: beyond the followed flight's reach (``reach_level``).
+    beyond_reach: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -164,8 +168,10 @@ class StereoPairing:
         gone_right = {id(right[j]) for j in np.flatnonzero(off.any(axis=0))}
         return _rejected(res_left, gone_left), _rejected(res_right, gone_right)
 
-    def choose_pair(self, res_left: CameraResult, res_right: CameraResult) -> StereoPair:
-        """The most plausible stereo-consistent pair of surviving candidates, if any."""
+    def choose_pair(self, res_left: CameraResult, res_right: CameraResult,
+                    guide: StepGuide | None = None) -> StereoPair:
+        """The most plausible stereo-consistent pair of surviving candidates within the followed
+        flight's reach (``guide``, ``reach_level``), those where it puts the shuttle first, if any."""
         sp = self.params.stereo
         tolerance = self.gate.tolerance()
         k = int(sp.max_candidates)
@@ -180,6 +186,7 @@ class StereoPairing:
         pr = np.array([self.right_xy(c) for c in right])
         epi = self.rig.epipolar_errors(pl, pr)
         best = None
+        beyond = False
         order = np.argsort(epi, axis=None)
         for flat in order:
             i, j = np.unravel_index(flat, epi.shape)
@@ -191,18 +198,91 @@ class StereoPairing:
             if (not depth_ok or not (sp.min_distance <= dist <= sp.max_distance)
                     or not in_play_volume(self.rig, self.params, point)):
                 continue
+            level = self.reach_level(point, guide)
+            if level == 0:
+                beyond = True
+                continue
             # Prefer shuttle-like blobs; the epipolar error breaks near ties.
             merit = left[i].score + right[j].score - epi[i, j] / max(tolerance, 1e-6)
             # Each camera's own choice (index 0: best score, hysteresis included) wins
             # whenever it is stereo-consistent: the pair overrides it only to reject a
             # candidate that has no partner on the other camera.
             merit += sp.own_choice_bonus * ((i == 0) + (j == 0))
-            if best is None or merit > best[0]:
-                best = (merit, i, j, point, float(epi[i, j]))
+            # A pair where the followed flight puts the shuttle comes before any other.
+            if best is None or (level, merit) > best[0]:
+                best = ((level, merit), i, j, point, float(epi[i, j]))
         if best is None:
-            return StereoPair(None, None)
+            return StereoPair(None, None, beyond_reach=beyond)
         _, i, j, point, err = best
-        return StereoPair(left[i], right[j], point, err)
+        return StereoPair(left[i], right[j], point, err, beyond_reach=beyond)
+
+    def reach_level(self, point: np.ndarray, guide: StepGuide | None) -> int:
+        """Could the followed shuttle be at ``point`` (left-camera frame)? 1 without a flight to
+        ask (``guide`` None, no guide now, or ``stereo.flight_reach`` 0); else 0 beyond the
+        flight's reach (``StepGuide.reach``: the shuttle does not jump, and one hit since the
+        flight's last point leaves from its path), 2 where the flight puts the shuttle (within
+        ``trajectory.outlier_distance`` of it), 1 in between. An LED board's dot both cameras
+        see pairs into a consistent 3D track metres from the flight; chosen over the shuttle for
+        a frame (it scored higher, or the other camera had lost the shuttle), it became each
+        camera's followed track and kept both cameras off the shuttle for the rest of the flight."""
+        speed = self.params.stereo.flight_reach
+        if guide is None or speed <= 0.0:
+            return 1
+        reach = guide.reach(speed)
+        if reach is None:
+            return 1
+        position, radius = reach
+        off = float(np.linalg.norm(self.rig.to_output(point[None])[0] - position))
+        if off > radius:
+            return 0
+        return 2 if off <= self.params.trajectory.outlier_distance else 1
+
+    def pair(self, step: Step) -> None:
+        """The stage: the pair of the step's candidates (``choose_pair``) as its reports and
+        point; without one, each camera's own choice within the followed flight's reach
+        (``own_choices``) for the 2D readout."""
+        res = step.results
+        pair = self.choose_pair(res[0], res[1], step.guide)
+        if pair.beyond_reach:
+            step.fired("pair_beyond_reach")
+        step.dets, step.point, step.epi = [pair.left, pair.right], pair.point, pair.epipolar_error
+        if step.point is None:
+            step.dets, moved = self.own_choices(res, step.guide)
+            for cam in moved:
+                step.fired("sight_beyond_reach", cam)
+
+    def own_choices(self, results: list[CameraResult], guide: StepGuide | None
+                    ) -> tuple[list[Candidate | None], list[int]]:
+        """Each camera's own choice, when no pair was made; and the cameras whose choice gave way:
+        a choice whose line of sight passes beyond the followed flight's reach (``sight_within_reach``)
+        cannot be the shuttle, and that camera's best survivor within reach is its report
+        instead, or none (the flight's look then searches where the flight projects)."""
+        dets: list[Candidate | None] = []
+        moved: list[int] = []
+        for cam, (detector, res) in enumerate(zip(self.detectors, results)):
+            choice = detector.choose(res.candidates)
+            if choice is not None and not choice.predicted and not self.sight_within_reach(cam, choice, guide):
+                within = [c for c in res.candidates if c.rejected_by is None and not c.predicted
+                          and c is not choice and self.sight_within_reach(cam, c, guide)]
+                choice = max(within, key=lambda c: c.score, default=None)
+                moved.append(cam)
+            dets.append(choice)
+        return dets, moved
+
+    def sight_within_reach(self, cam: int, c: Candidate, guide: StepGuide | None) -> bool:
+        """Does camera ``cam``'s line of sight through ``c`` pass within the followed flight's reach
+        (``reach_level``; True without a flight to ask)?"""
+        speed = self.params.stereo.flight_reach
+        if guide is None or speed <= 0.0:
+            return True
+        reach = guide.reach(speed)
+        if reach is None:
+            return True
+        position, radius = reach
+        centre, dirs = self.rig.rays(cam, [list(self.right_xy(c)) if cam == 1 else [c.x, c.y]])
+        offset = position - centre
+        along = max(float(offset @ dirs[0]), 0.0)
+        return float(np.linalg.norm(offset - along * dirs[0])) <= radius
 
     def pair_point(self, det_left: Candidate | None, det_right: Candidate | None
                    ) -> tuple[np.ndarray | None, float | None]:

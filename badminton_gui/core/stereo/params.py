@@ -134,6 +134,13 @@ class StereoParams(ParamGroup):
                                  help="... or when the same two tracks were the last step's pair and their "
                                       "epipolar miss moved by at most 0.5 % of the image width since, up to 2 × "
                                       "the tolerance (rally_11-47-02: a flight whose miss went 6 → 151 → 7 px)")
+    flight_reach: float = param(0.0, 0.0, 1000.0, step=5.0, unit="m/s", label="Pair within the flight's reach",
+                                help="While a 3D flight is followed, a pair that triangulates farther from where "
+                                     "the flight puts the shuttle than a shuttle hit since the flight's last point "
+                                     "could have gone at this speed (plus 1 m and the flight's spread) is another "
+                                     "object (an LED board's moving dot): it is not paired, a camera's choice whose "
+                                     "line of sight misses that reach gives way, and pairs where the flight puts the "
+                                     "shuttle come first (0 = off, the default; 160 = the fastest smash)")
     exit_margin: float = param(2.0, 0.0, 100.0, step=0.5, unit="px", label="Leaving the image within",
                                help="A detection this near the image's border is not reported when the 3D "
                                     "flight puts the shuttle just outside the image next to it (the clipped "
