@@ -129,6 +129,29 @@ class StereoPairing:
         err = float(self.rig.epipolar_errors([[own_left.x, own_left.y]], [list(self.right_xy(own_right))])[0, 0])
         self.gate.add_sample(err)
 
+    def _survivors(self, res_left: CameraResult, res_right: CameraResult):
+        """Each camera's best ``stereo.max_candidates`` surviving candidates by score, their image
+        points (the right camera's at the left image's time) and the epipolar errors of every
+        combination; None when a camera has none. A coasting prediction is no measurement: it is
+        never triangulated."""
+        k = int(self.params.stereo.max_candidates)
+        left = sorted((c for c in res_left.candidates if c.rejected_by is None and not c.predicted),
+                      key=lambda c: -c.score)[:k]
+        right = sorted((c for c in res_right.candidates if c.rejected_by is None and not c.predicted),
+                       key=lambda c: -c.score)[:k]
+        if not left or not right:
+            return None
+        pl = np.array([[c.x, c.y] for c in left])
+        pr = np.array([self.right_xy(c) for c in right])
+        return left, right, pl, pr, self.rig.epipolar_errors(pl, pr)
+
+    def _in_front_within_range(self, point: np.ndarray) -> bool:
+        """A triangulated ``point`` lies in front of both cameras, within the stereo distance range."""
+        sp = self.params.stereo
+        dist = float(np.linalg.norm(point))
+        return bool(point[2] > 0 and self.rig.depth(1, self.rig.to_output(point))[0] > 0
+                    and sp.min_distance <= dist <= sp.max_distance)
+
     def reject_off_volume(self, res_left: CameraResult, res_right: CameraResult
                           ) -> tuple[CameraResult, CameraResult]:
         """Each camera's surviving candidates that meet a partner on the other camera only
@@ -138,24 +161,15 @@ class StereoPairing:
         two results (the same objects where nothing was rejected)."""
         if not self.params.stereo.play_volume or not self.rig.has_court_pose:
             return res_left, res_right
-        sp = self.params.stereo
-        k = int(sp.max_candidates)
-        left = sorted((c for c in res_left.candidates if c.rejected_by is None and not c.predicted),
-                      key=lambda c: -c.score)[:k]
-        right = sorted((c for c in res_right.candidates if c.rejected_by is None and not c.predicted),
-                       key=lambda c: -c.score)[:k]
-        if not left or not right:
+        survivors = self._survivors(res_left, res_right)
+        if survivors is None:
             return res_left, res_right
-        pl = np.array([[c.x, c.y] for c in left])
-        pr = np.array([self.right_xy(c) for c in right])
-        epi = self.rig.epipolar_errors(pl, pr)
+        left, right, pl, pr, epi = survivors
         inside = np.zeros(epi.shape, dtype=bool)
         outside = np.zeros(epi.shape, dtype=bool)
         for i, j in zip(*np.nonzero(epi <= self.gate.tolerance())):
             point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
-            dist = float(np.linalg.norm(point))
-            if (point[2] <= 0 or self.rig.depth(1, self.rig.to_output(point))[0] <= 0
-                    or not (sp.min_distance <= dist <= sp.max_distance)):
+            if not self._in_front_within_range(point):
                 continue
             if in_play_volume(self.rig, self.params, point):
                 inside[i, j] = True
@@ -174,17 +188,10 @@ class StereoPairing:
         flight's reach (``guide``, ``reach_level``), those where it puts the shuttle first, if any."""
         sp = self.params.stereo
         tolerance = self.gate.tolerance()
-        k = int(sp.max_candidates)
-        # A coasting prediction is no measurement: it is never triangulated.
-        left = sorted((c for c in res_left.candidates if c.rejected_by is None and not c.predicted),
-                      key=lambda c: -c.score)[:k]
-        right = sorted((c for c in res_right.candidates if c.rejected_by is None and not c.predicted),
-                       key=lambda c: -c.score)[:k]
-        if not left or not right:
+        survivors = self._survivors(res_left, res_right)
+        if survivors is None:
             return StereoPair(None, None)
-        pl = np.array([[c.x, c.y] for c in left])
-        pr = np.array([self.right_xy(c) for c in right])
-        epi = self.rig.epipolar_errors(pl, pr)
+        left, right, pl, pr, epi = survivors
         best = None
         beyond = False
         order = np.argsort(epi, axis=None)
@@ -193,10 +200,7 @@ class StereoPairing:
             if epi[i, j] > tolerance:
                 break
             point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
-            dist = float(np.linalg.norm(point))
-            depth_ok = point[2] > 0 and self.rig.depth(1, self.rig.to_output(point))[0] > 0
-            if (not depth_ok or not (sp.min_distance <= dist <= sp.max_distance)
-                    or not in_play_volume(self.rig, self.params, point)):
+            if not self._in_front_within_range(point) or not in_play_volume(self.rig, self.params, point):
                 continue
             level = self.reach_level(point, guide)
             if level == 0:
