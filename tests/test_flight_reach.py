@@ -36,8 +36,8 @@ def tracker():
     t.close()
 
 
-def test_off_by_default():
-    assert TrackerParams().stereo.flight_reach == 0.0
+def test_on_by_default_at_the_fastest_smash():
+    assert TrackerParams().stereo.flight_reach == REACH
 
 
 def _follow_a_flight(tracker, frames: int = 20) -> float:

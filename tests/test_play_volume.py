@@ -17,6 +17,7 @@ from badminton_gui.core.types import CameraResult, Candidate
 from badminton_gui.io.demo_scene import make_rig
 
 ON = TrackerParams().with_value("stereo.play_volume", True)
+OFF = TrackerParams().with_value("stereo.play_volume", False)
 SHUTTLE = (0.5, 2.0, 3.0)     # court frame, m: over the far half
 BOARD_DOT = (5.6, 1.0, 0.5)   # on a board standing beside the court
 
@@ -46,6 +47,10 @@ def _pair(params):
         tracker.close()
 
 
+def test_on_by_default():
+    assert TrackerParams().stereo.play_volume
+
+
 def test_a_pair_outside_the_play_volume_is_not_the_shuttle():
     rig, pair, board_alone = _pair(ON)
     assert pair.point is not None
@@ -55,7 +60,7 @@ def test_a_pair_outside_the_play_volume_is_not_the_shuttle():
 
 
 def test_switched_off_the_board_dot_pairs():
-    rig, pair, board_alone = _pair(TrackerParams())
+    rig, pair, board_alone = _pair(OFF)
     assert np.allclose(rig.to_output(pair.point)[0], BOARD_DOT, atol=0.05)
     assert board_alone is not None
 

@@ -22,13 +22,12 @@ class StereoParams(ParamGroup):
     min_distance: float = param(0.3, 0.0, 100.0, step=0.1, unit="m", label="Nearest",
                                 help="Triangulated points closer to the left camera are rejected")
     max_distance: float = param(40.0, 0.5, 500.0, step=0.5, unit="m", label="Farthest")
-    play_volume: bool = flag(False, label="Pairs inside the play volume",
+    play_volume: bool = flag(True, label="Pairs inside the play volume",
                              help="With a court pose, two detections whose 3D point lies outside the play "
                                   "volume (the court plus 'Play volume: margin' around it, up to its height; "
                                   "Shuttle scale group) are not a pair, and both are rejected when they pair "
                                   "nowhere else: an LED board's moving dot beside the court, which both cameras "
-                                  "see where it is. Off by default: it lifts every scene family's 2D accuracy "
-                                  "but costs one family a little 3D coverage (docs/findings.md)")
+                                  "see where it is. Without a court pose it does nothing")
     max_candidates: int = param(6, 1, 50, step=1, label="Candidates per camera",
                                 help="How many best candidates per camera are tried for a stereo pair")
     adaptive_epipolar: bool = flag(True, label="Learn the epipolar tolerance",
@@ -134,13 +133,13 @@ class StereoParams(ParamGroup):
                                  help="... or when the same two tracks were the last step's pair and their "
                                       "epipolar miss moved by at most 0.5 % of the image width since, up to 2 × "
                                       "the tolerance (rally_11-47-02: a flight whose miss went 6 → 151 → 7 px)")
-    flight_reach: float = param(0.0, 0.0, 1000.0, step=5.0, unit="m/s", label="Pair within the flight's reach",
+    flight_reach: float = param(160.0, 0.0, 1000.0, step=5.0, unit="m/s", label="Pair within the flight's reach",
                                 help="While a 3D flight is followed, a pair that triangulates farther from where "
                                      "the flight puts the shuttle than a shuttle hit since the flight's last point "
                                      "could have gone at this speed (plus 1 m and the flight's spread) is another "
                                      "object (an LED board's moving dot): it is not paired, a camera's choice whose "
                                      "line of sight misses that reach gives way, and pairs where the flight puts the "
-                                     "shuttle come first (0 = off, the default; 160 = the fastest smash)")
+                                     "shuttle come first (160 = the fastest smash, the default; 0 = off)")
     exit_margin: float = param(2.0, 0.0, 100.0, step=0.5, unit="px", label="Leaving the image within",
                                help="A detection this near the image's border is not reported when the 3D "
                                     "flight puts the shuttle just outside the image next to it (the clipped "
