@@ -592,3 +592,85 @@ def test_bad_robot_options_are_refused_when_parsed(argv, capsys):
         main(argv)
     assert exit_.value.code == 2
     assert "Traceback" not in capsys.readouterr().err
+
+
+class VanishingPort(FakePort):
+    """Writes ``good_writes`` frames, then fails as an unplugged adapter does."""
+
+    def __init__(self, good_writes: int) -> None:
+        super().__init__()
+        self.good_writes = good_writes
+
+    def write(self, data):
+        if len(self.writes) >= self.good_writes:
+            raise OSError(5, "Input/output error")
+        return super().write(data)
+
+
+def test_a_lost_link_is_counted_timed_and_logged_and_its_return_too(caplog):
+    ports = [VanishingPort(good_writes=1), FakePort()]
+    opened = threading.Event()
+
+    def factory(port, baud, write_timeout):
+        if len(ports) == 1:
+            opened.wait(30)              # the device stays away until the test brings it back
+        return ports.pop(0)
+
+    caplog.set_level("WARNING", logger="badminton_gui.io.robot_link")
+    link = RobotLink("/dev/robot", heartbeat_s=0.05, serial_factory=factory)
+    link.RETRY_MIN_S = link.RETRY_MAX_S = 0.01
+    try:
+        assert wait_for(lambda: link.status().outages == 1)
+        time.sleep(0.2)
+        down = link.status()
+        assert not down.connected and down.seconds_down >= 0.2     # an outage going on counts up
+        opened.set()
+        assert wait_for(lambda: link.status().connected)
+        back = link.status()
+        assert back.outages == 1 and back.reconnects == 1
+        assert back.seconds_down >= down.seconds_down
+        time.sleep(0.1)
+        assert link.status().seconds_down == back.seconds_down     # finished: no longer counting
+    finally:
+        link.close()
+    said = [r.getMessage() for r in caplog.records]
+    assert any(m.startswith("robot link: lost (write to /dev/robot:") for m in said), said
+    assert any("/dev/robot back after" in m for m in said), said
+
+
+def test_closing_the_link_is_not_an_outage():
+    link = RobotLink("fake", heartbeat_s=0.05, serial_factory=lambda *a: FakePort())
+    try:
+        assert wait_for(lambda: link.status().heartbeats_sent >= 2)
+    finally:
+        link.close()
+    assert link.status().outages == 0 and link.status().seconds_down == 0.0
+
+
+def test_track_with_the_robot_required_fails_when_the_link_was_lost_on_the_way(tmp_path, capsys,
+                                                                                monkeypatch):
+    """The output is still written in full; the exit status and one line say the robot went
+    without results (without --robot-required: said, exit 0)."""
+    import badminton_gui.io.robot_link as robot_link
+    from badminton_gui.cli import main
+    from .test_safe_write import _pair
+
+    class LinkToAVanishingRobot(robot_link.RobotLink):
+        def __init__(self, port, baud):
+            ports = [VanishingPort(good_writes=1)]     # opens, one heartbeat, then writes fail
+            super().__init__(port, baud, heartbeat_s=0.05,
+                             serial_factory=lambda *a: ports.pop() if ports else _refuse())
+
+    def _refuse():
+        raise OSError(2, "No such file or directory")
+
+    monkeypatch.setattr(robot_link, "RobotLink", LinkToAVanishingRobot)
+    _pair(tmp_path)
+    args = ["track", "--left", str(tmp_path / "l.avi"), "--right", str(tmp_path / "r.avi"),
+            "--calib", str(tmp_path / "rig.yaml"), "--quiet", "--robot", "/dev/robot"]
+    assert main(args + ["-o", str(tmp_path / "t.csv")]) == 0
+    assert "robot link: lost once during the run" in capsys.readouterr().err
+    assert main(args + ["-o", str(tmp_path / "t2.csv"), "--robot-required"]) == 2
+    err = capsys.readouterr().err
+    assert "robot link: lost once during the run" in err and "(--robot-required)" in err
+    assert len((tmp_path / "t2.csv").read_text().splitlines()) == 1 + 5

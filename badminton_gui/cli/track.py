@@ -32,8 +32,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "serial port / Bluetooth port / pyserial URL")
     p.add_argument("--baud", type=baud_rate, default=115200, help="robot link baud rate (default 115200)")
     p.add_argument("--robot-required", action="store_true",
-                   help="stop with exit status 2 when the --robot port cannot be opened at the start "
-                        "(default: say so on stderr, track anyway and keep retrying the port)")
+                   help="stop with exit status 2 when the --robot port cannot be opened at the start, "
+                        "and end with exit status 2 (the output still written in full) when the link "
+                        "was lost during the run (default: say so on stderr, track anyway and keep "
+                        "retrying the port)")
     p.add_argument("--max-frames", type=frame_count, default=None, help="stop after this many frames")
     add_json_argument(p, "output, pairs, points_3d, points_3d_percent, pairs_per_second, frame "
                          "('court' or 'left-camera'), rig_epipolar_px (null: not measured), rig_note "
@@ -57,6 +59,7 @@ def run(args: argparse.Namespace) -> int:
     classifiers = _adapted_classifiers(args, params) if adapt else None
     link = _robot_link(args)     # before the videos' reader thread: a refused port starts nothing
     source = None
+    link_status = None
     try:
         rig, source, total = open_stereo_videos(args)
         configure_opencv_threads()
@@ -76,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
             source.close()
         if link is not None:
             link.close()
-            _report_link(link, args.quiet)
+            link_status = _report_link(link, args.quiet)
     n, hits3d = summary.pairs, summary.points_3d
     if n == 0:
         raise UserError("the videos hold no frames")
@@ -100,7 +103,15 @@ def run(args: argparse.Namespace) -> int:
               f"{summary.pairs_per_second:.1f} pairs/s (decoding included), {frame_name} frame -> {args.output}")
         if summary.score_text:
             print(summary.score_text + " (the timestamp files' labels)")
+    if args.robot_required and link_status is not None and link_status.outages:
+        raise UserError(f"robot link: lost {_times(link_status.outages)} during the run, "
+                        f"{link_status.seconds_down:.1f} s without a link (--robot-required); "
+                        f"{args.output} is complete")
     return 0
+
+
+def _times(n: int) -> str:
+    return "once" if n == 1 else f"{n} times"
 
 
 def _adapted_classifiers(args, params):
@@ -150,8 +161,9 @@ def _robot_link(args):
     return link
 
 
-def _report_link(link, quiet: bool) -> None:
-    """What the robot got, on stderr: always when nothing was sent."""
+def _report_link(link, quiet: bool):
+    """What the robot got, on stderr: always when nothing was sent or the link was lost on the
+    way (the robot went without results then). Returns the link's last status."""
     s = link.status()
     if not s.messages_sent:
         _log.error("robot link: nothing was sent to %s%s", s.port,
@@ -159,6 +171,10 @@ def _report_link(link, quiet: bool) -> None:
     elif not quiet:
         print(f"robot link: {s.messages_sent} messages sent to {s.port}, {s.messages_dropped} "
               f"replaced by newer ones, {s.errors} errors", file=sys.stderr)
+    if s.outages:
+        _log.error("robot link: lost %s during the run, %.1f s without a link in all (last error: %s)",
+                   _times(s.outages), s.seconds_down, s.last_error or "none")
+    return s
 
 
 def _labels_in_times(args):

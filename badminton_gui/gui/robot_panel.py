@@ -96,9 +96,13 @@ class RobotLinkPanel(QWidget):
             return
         s = self.link.status()
         state = "connected" if s.connected else "waiting for the port"
+        if not s.connected and s.outages:
+            state = "<span style='color:#e66'>lost, reopening the port</span>"
         text = (f"<b>{s.port}</b> @ {s.baud}: {state}<br>"
                 f"sent {s.messages_sent}, dropped {s.messages_dropped}, errors {s.errors}<br>"
                 f"heartbeats {s.heartbeats_sent}, reconnects {s.reconnects}")
+        if s.outages:
+            text += f", lost {s.outages}× ({s.seconds_down:.1f} s in all)"
         if s.last_error:
             text += f"<br><span style='color:#e66'>{s.last_error}</span>"
         self.status.setText(text)

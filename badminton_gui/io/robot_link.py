@@ -12,7 +12,9 @@ tracking can never be slowed down or crashed by the link:
   ``max_rate_hz`` messages a second, adds a heartbeat every ``heartbeat_s``, and when the device
   vanishes (write error, unplugged adapter, Bluetooth out of range) closes it and reopens it in
   the background, with a back-off, for as long as the link lives.
-* :meth:`RobotLink.status` is a frozen snapshot (port, baud, connected, counters, last error).
+* :meth:`RobotLink.status` is a frozen snapshot (port, baud, connected, counters, last error,
+  and how often and how long the link was lost while in use); a loss and a return are logged
+  when they happen, so a run's log says when the robot went without results.
 
 The robot side: :class:`StreamDecoder` turns any byte stream back into messages; it resynchronises
 after garbage, lost bytes or corrupted frames (a damaged length field holds back no later message)
@@ -23,6 +25,7 @@ and never raises on bad input.
 from __future__ import annotations
 
 import binascii
+import logging
 import math
 import os
 import queue
@@ -55,6 +58,8 @@ FLAG_VELOCITY = 0x0002     # vx, vy, vz valid
 FLAG_PREDICTION = 0x0004   # landing fields valid
 FLAG_COURT_FRAME = 0x0008  # coordinates are court coordinates (else left-camera frame)
 FLAG_IN_FLIGHT = 0x0010    # a flight is being followed
+
+_log = logging.getLogger(__name__)
 
 CALL_UNKNOWN, CALL_IN, CALL_OUT = 0, 1, 2
 _CALL_CODES = {"in": CALL_IN, "out": CALL_OUT}
@@ -308,6 +313,10 @@ class LinkStatus:
     errors: int
     reconnects: int
     last_error: str
+    # Times a link in use was lost (write error, device gone), and the seconds without a link
+    # since the first connection (an outage still going on counts up to now).
+    outages: int = 0
+    seconds_down: float = 0.0
 
 
 class RobotLink:
@@ -355,6 +364,9 @@ class RobotLink:
         self._open_attempts = 0
         self._connected = False
         self._last_error = ""
+        self._outages = 0
+        self._down_since: float | None = None   # monotonic time the link in use was lost
+        self._seconds_down = 0.0                 # finished outages
         self._serial = None
         self._thread = threading.Thread(target=self._run, name=f"robot-link {port}", daemon=True)
         self._thread.start()
@@ -386,8 +398,12 @@ class RobotLink:
 
     def status(self) -> LinkStatus:
         with self._cond:
+            down = self._seconds_down
+            if self._down_since is not None:
+                down += time.monotonic() - self._down_since
             return LinkStatus(self.port, self.baud, self._connected, self._sent, self._dropped,
-                              self._heartbeats, self._errors, self._reconnects, self._last_error)
+                              self._heartbeats, self._errors, self._reconnects, self._last_error,
+                              self._outages, down)
 
     @property
     def open_attempts(self) -> int:
@@ -411,6 +427,10 @@ class RobotLink:
             self._closing = True
             self._cond.notify_all()
         self._thread.join(max(0.0, deadline - time.monotonic()))
+        with self._cond:
+            if self._down_since is not None:    # an outage ends with the link: its time is final
+                self._seconds_down += time.monotonic() - self._down_since
+                self._down_since = None
         if self._write_lock.acquire(timeout=max(0.0, deadline - time.monotonic())):
             self._stopped = True
             self._write_lock.release()
@@ -509,6 +529,13 @@ class RobotLink:
             if self._sent or self._heartbeats or self._errors:
                 self._reconnects += 1
             self._connected = True
+            outage = None
+            if self._down_since is not None:
+                outage = time.monotonic() - self._down_since
+                self._seconds_down += outage
+                self._down_since = None
+        if outage is not None:
+            _log.warning("robot link: %s back after %.1f s without a link", self.port, outage)
         return True
 
     def _write(self, frame: bytes) -> bool:
@@ -532,7 +559,7 @@ class RobotLink:
                 # Gone (unplugged, out of range, pty closed) or a URL handler's own error: reopen
                 # in the background.
                 self._record_error(f"write to {self.port}: {exc or type(exc).__name__}")
-        self._close_port()
+        self._close_port(lost=True)
         return False
 
     def _record_error(self, text: str) -> None:
@@ -540,10 +567,19 @@ class RobotLink:
             self._errors += 1
             self._last_error = text
 
-    def _close_port(self) -> None:
+    def _close_port(self, lost: bool = False) -> None:
+        """Close the port; ``lost``: the device failed while in use (an outage begins, said in
+        the log once, with the reason)."""
         ser, self._serial = self._serial, None
         with self._cond:
+            lost = lost and self._connected
             self._connected = False
+            if lost:
+                self._outages += 1
+                self._down_since = time.monotonic()
+                reason = self._last_error
+        if lost:
+            _log.warning("robot link: lost (%s); retrying in the background", reason)
         if ser is not None:
             try:
                 ser.close()
