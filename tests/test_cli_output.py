@@ -366,6 +366,34 @@ def test_configuring_twice_replaces_the_handlers(tmp_path):
     assert list(root.handlers) == before and sys.excepthook is hook
 
 
+def test_a_log_shared_with_another_process_loses_nothing_when_that_one_rotates(tmp_path,
+                                                                                 monkeypatch):
+    """The GUI and a `track` run write the same log. When the other process rotates it (here
+    so often that the backups this process was writing into are deleted), this process's next
+    record still lands in the log file on disk."""
+    monkeypatch.setattr(logging_setup, "MAX_LOG_BYTES", 20_000)
+    monkeypatch.setattr(logging_setup, "LOG_BACKUPS", 2)
+    log = tmp_path / "shared.log"
+    configure_logging("badminton-gui", log_file=log)
+    said = logging.getLogger("badminton_gui.test")
+    said.warning("the gui before")
+    script = ("import logging\n"
+              "from badminton_gui.io import logging_setup\n"
+              "logging_setup.MAX_LOG_BYTES, logging_setup.LOG_BACKUPS = 20_000, 2\n"
+              f"logging_setup.configure_logging('badminton-track', log_file={str(log)!r})\n"
+              "for i in range(2000):\n"
+              "    logging.getLogger('badminton_gui.track').warning('track line %d %s', i, 'x' * 60)\n")
+    subprocess.run([sys.executable, "-c", script], env=subprocess_env(), check=True, timeout=120,
+                   capture_output=True)
+    said.warning("the gui after the other one rotated")
+    said.warning("and once more")
+    text = log.read_text()
+    assert "the gui after the other one rotated" in text and "and once more" in text
+    assert "track line 1999" in text
+    assert not (tmp_path / "shared.log.3").exists()     # the backups stay at LOG_BACKUPS
+    logging_setup.reset_logging()
+
+
 # ---- the GUI's start-up ---------------------------------------------------------------------------
 
 def test_gui_logs_its_start_and_a_bad_command_line_to_the_file(capsys, isolated_state_dir):

@@ -21,12 +21,18 @@ from __future__ import annotations
 import faulthandler
 import logging
 import logging.handlers
+import os
 import platform
 import sys
 import threading
 from pathlib import Path
 
 from .app_dirs import log_dir
+
+try:
+    import fcntl
+except ImportError:      # Windows
+    fcntl = None
 
 LOG_FILE_NAME = "badminton-gui.log"
 # Five old files of 2 MB: weeks of normal use, and small enough to attach to a message.
@@ -66,18 +72,88 @@ def default_log_file() -> Path:
 
 
 class _RotatingLog(logging.handlers.RotatingFileHandler):
-    """A rotating file that keeps ``faulthandler`` pointed at the file it writes now.
+    """A rotating file that several processes can share (the GUI and a ``track`` run write the
+    same log), and that keeps ``faulthandler`` pointed at the file it writes now.
+
+    The stdlib handler assumes it is the file's only writer: when another process rotates the
+    file, this one goes on writing into the renamed backup, and once that backup ages out of
+    ``LOG_BACKUPS`` into a deleted file, so its records are lost. Here every record first checks
+    that the path still names the file this handler writes (device and inode, as
+    ``WatchedFileHandler`` does) and reopens it when not; a rollover is made under an advisory
+    lock beside the log (POSIX), and only when no other process rotated meanwhile.
 
     faulthandler holds a file descriptor; rotation closes that descriptor and opens a new file,
-    so it is re-pointed around every rollover (a stale descriptor could be reused by an
+    so it is re-pointed around every reopening (a stale descriptor could be reused by an
     unrelated file, which a crash report would then overwrite)."""
 
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            if self._rotated_elsewhere():
+                self._reopen()
+        except OSError:
+            pass         # the directory went away or is unreadable: the stdlib's emit reports it
+        super().emit(record)
+
     def doRollover(self) -> None:  # noqa: N802 - the stdlib's name
+        with _RolloverLock(self.baseFilename):
+            if self._rotated_elsewhere():
+                self._reopen()     # another process rotated it first: the new file is short
+                return
+            _point_faulthandler(None)
+            try:
+                super().doRollover()
+            finally:
+                _point_faulthandler(self.stream)
+
+    def _rotated_elsewhere(self) -> bool:
+        """True when the path no longer names the open file (renamed or deleted by another
+        process)."""
+        if self.stream is None:
+            return False
+        try:
+            on_disk = os.stat(self.baseFilename)
+        except FileNotFoundError:
+            return True
+        own = os.fstat(self.stream.fileno())
+        return (on_disk.st_dev, on_disk.st_ino) != (own.st_dev, own.st_ino)
+
+    def _reopen(self) -> None:
         _point_faulthandler(None)
         try:
-            super().doRollover()
+            old, self.stream = self.stream, None
+            if old is not None:
+                old.close()
+            self.stream = self._open()
         finally:
             _point_faulthandler(self.stream)
+
+
+class _RolloverLock:
+    """An exclusive advisory lock on ``<log>.lock`` while a process rotates the log (POSIX
+    ``flock``; elsewhere, and when the lock file cannot be made, no lock: Windows cannot rename
+    a file another process holds open anyway, so there the first writer keeps rotating)."""
+
+    def __init__(self, log_path: str) -> None:
+        self.path = log_path + ".lock"
+        self.fd: int | None = None
+
+    def __enter__(self) -> "_RolloverLock":
+        if fcntl is None:
+            return self
+        try:
+            self.fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            fcntl.flock(self.fd, fcntl.LOCK_EX)
+        except OSError:
+            if self.fd is not None:
+                os.close(self.fd)
+            self.fd = None
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.fd is not None:
+            fcntl.flock(self.fd, fcntl.LOCK_UN)
+            os.close(self.fd)
+            self.fd = None
 
 
 def _point_faulthandler(stream) -> None:
