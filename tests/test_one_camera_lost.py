@@ -96,11 +96,11 @@ def _no_second_look(params: TrackerParams) -> TrackerParams:
 
 def test_a_camera_that_lost_the_shuttle_leaves_the_robot_its_3d_point_from_the_other():
     results, truths, _, _ = _run(_no_second_look(TrackerParams()), "image")
-    # Painted out of the left image; for a few frames the left detector takes something else
-    # (a player's part, far off the flight): the right camera's sight moves the flight then too.
+    # Painted out of the left image; the left detector may take something else for a few frames
+    # (a player's part, far off the flight: with OpenCV 5, not with 4.13): the right camera's
+    # sight moves the flight then too.
     assert all(r.left.detection is None or not _near(r.left.detection, tr.uv_left)
                for r, tr in zip(results, truths))
-    assert sum(r.left.detection is not None for r in results) >= 2
     assert all(r.right.detection is not None for r in results)
     errors = [float(np.linalg.norm(np.subtract(r.point, tr.position))) for r, tr in zip(results, truths)
               if r.point is not None]

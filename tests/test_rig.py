@@ -76,7 +76,9 @@ def test_missing_and_bad_rig_files(tmp_path):
     with pytest.raises(RigError) as info:
         StereoRig.load(prose)
     message = str(info.value)
-    assert "not an OpenCV FileStorage" in message and "line 2" in message
+    assert "not an OpenCV FileStorage" in message
+    # OpenCV 5 names the line; OpenCV 4 only that the input is invalid.
+    assert "line 2" in message if cv2.__version__ >= "5" else "Input file is invalid" in message
     assert "exception set" not in message and ".cpp" not in message
 
 

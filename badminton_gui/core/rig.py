@@ -30,6 +30,19 @@ from .errors import TrackerInputError
 
 _UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-12)
 
+
+def undistort_points_iterated(pts: np.ndarray, camera_matrix: np.ndarray, dist: np.ndarray,
+                              criteria) -> np.ndarray:
+    """``cv2.undistortPoints`` with its iteration criteria, on every supported OpenCV: 4.x takes
+    them only through ``undistortPointsIter``, 5.x as ``undistortPoints``' last argument (and
+    has no ``undistortPointsIter``). Same result on both."""
+    if _UNDISTORT_ITER is not None:
+        return _UNDISTORT_ITER(pts, camera_matrix, dist, None, None, criteria)
+    return cv2.undistortPoints(pts, camera_matrix, dist, None, None, None, criteria)
+
+
+_UNDISTORT_ITER = getattr(cv2, "undistortPointsIter", None)
+
 # px at 1280 px image width: a running rig whose sure shuttle pairs miss their epipolar lines by
 # more than this (median, ``StereoTracker.rig_epipolar_px``) is worth refining (``refine-calib``).
 # A chessboard-calibrated rig misses by a px or two there (the blobs' centroids in two views of a
@@ -211,9 +224,14 @@ class StereoRig:
             cause = exc.__cause__ if isinstance(exc, SystemError) and exc.__cause__ else exc
             text = str(cause)
             where = re.search(r"\((\d+)\): ([^']+)'", text)   # "...file.yaml(2): Incorrect indentation'"
+            # OpenCV 4 names no line: "OpenCV(4.13.0) /path/persistence.cpp:753: error: (-5:Bad
+            # argument) Input file is invalid in function 'open'" -> "Input file is invalid".
+            said = re.search(r"error: \(-?\d+:[^)]*\) (.+?)(?: in function '[^']*')?$", text.strip())
             lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
             detail = (f"line {where.group(1)}: {where.group(2)}" if where else
-                      lines[-1] if lines and "exception set" not in lines[-1] else "")
+                      said.group(1) if said else
+                      lines[-1] if lines and "exception set" not in lines[-1] and ".cpp" not in lines[-1]
+                      else "")
             raise RigError(f"rig file {path} is not an OpenCV FileStorage YAML/XML rig file"
                            + (f" ({detail})" if detail else "")) from None
         if not fs.isOpened():
@@ -354,7 +372,7 @@ class StereoRig:
             return cv2.undistortPoints(pts, m, d).reshape(-1, 2)
         # More iterations than cv2.undistortPoints' default: strong barrel lenses (the NYCU rig)
         # otherwise leave micrometre-level errors that add up in triangulation.
-        return cv2.undistortPoints(pts, m, d, None, None, None, _UNDISTORT_CRITERIA).reshape(-1, 2)
+        return undistort_points_iterated(pts, m, d, _UNDISTORT_CRITERIA).reshape(-1, 2)
 
     def undistort_pixels(self, camera: int, pts) -> np.ndarray:
         """Pixel points → undistorted pixel points of the same camera matrix."""

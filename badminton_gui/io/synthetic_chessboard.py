@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from ..core.calibrate.board import BoardSpec
-from ..core.rig import StereoRig
+from ..core.rig import StereoRig, undistort_points_iterated
 from ..core.types import StereoFrame
 
 
@@ -206,7 +206,7 @@ class SyntheticChessboardSource:
         grid = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 1, 2)
         m, d = (self.rig.M1, self.rig.D1) if camera == 0 else (self.rig.M2, self.rig.D2)
         criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)
-        norm = cv2.undistortPoints(grid, m, d, None, None, None, criteria)
+        norm = undistort_points_iterated(grid, m, d, criteria)
         return norm.reshape(h * s, w * s, 2).astype(np.float32)
 
     def render(self, camera: int, pose: BoardPose) -> np.ndarray:
