@@ -5,14 +5,15 @@ leave-one-clip-out on those three says little about a hall it has never seen. He
 of the shared TV clips (``broadcast/venues.csv``) take turns: a classifier is trained on every clip
 of the other four venues (tuned-on and held-out alike, as ``train_classifier.py --kind broadcast``
 trains: ``train_classifier.dump``, ``train_broadcast``), and the left-out venue's clips go through
-`detect --preset broadcast` with it (``broadcast_census.census``: the same chain, look-ahead and
-adaptation to each clip). Each clip is scored by the protocol and by the in-play score, which
+`detect --preset broadcast` with it (``broadcast_census.census``: the same chain and look-ahead,
+adapted to each clip when the preset or ``--adapt`` says so). Each clip is scored by the protocol and by the in-play score, which
 leaves out the labelled frames whose shuttle is at rest (core/evaluation.py ``at_rest_frames``).
 
     .venv/bin/python benchmarks/generalise.py --venues                  # five folds: three MLPs on ≈ 170,000 candidates each
     .venv/bin/python benchmarks/generalise.py --venues --only odense    # one fold
     .venv/bin/python benchmarks/generalise.py --venues --shipped        # the shipped classifier instead (no training)
-    .venv/bin/python benchmarks/generalise.py --venues --no-adapt       # without adapting to each clip (before -> after)
+    .venv/bin/python benchmarks/generalise.py --venues --adapt          # adapting each fold's classifier to each clip first
+    .venv/bin/python benchmarks/generalise.py --venues --causes         # also why each venue's wrong frames are wrong
     .venv/bin/python benchmarks/generalise.py --rest                    # labelled frames at rest, per clip
 
 The fold classifiers are written to the cache (``clips.cache_dir("venue-folds")``), never to
@@ -22,6 +23,7 @@ The fold classifiers are written to the cache (``clips.cache_dir("venue-folds")`
 from __future__ import annotations
 
 import argparse
+import collections
 import csv
 import hashlib
 import sys
@@ -102,7 +104,9 @@ def leave_venue_out(args) -> int:
         with ProcessPoolExecutor(args.jobs) as pool:
             parts = list(pool.map(dump, jobs))
     who = "the shipped classifier" if args.shipped else "trained without its venue"
-    who += ", not adapted to each clip" if args.no_adapt else ", adapted to each clip"
+    from badminton_gui.io.presets import load_preset
+    adapt = args.adapt if args.adapt is not None else load_preset("broadcast").classifier.adapt_min_run > 0
+    who += ", adapted to each clip" if adapt else ", not adapted to each clip"
     print(f"TV clips, `detect --preset broadcast`, {who}; protocol, then in play "
           f"(frames at rest left out):", flush=True)
     per_venue: dict[str, tuple[Outcomes, Outcomes, int, int]] = {}
@@ -112,9 +116,10 @@ def leave_venue_out(args) -> int:
             model, seconds, rows = fold_classifier(venue, jobs, parts, place, args.seed)
             print(f"\nclassifier without {venue}: {rows} candidates, "
                   f"{'cached' if not seconds else f'trained in {seconds:.0f} s'}", flush=True)
-        tasks = [(c, model, rest_frames(c.labels, 1280, c.video), False if args.no_adapt else None)
+        tasks = [(c, model, rest_frames(c.labels, 1280, c.video), adapt)
                  for c in clips if place[c.name] == venue]
         total, play, at_rest = Outcomes(), Outcomes(), 0
+        causes: collections.Counter = collections.Counter()
         with ProcessPoolExecutor(args.jobs) as pool:
             for (clip, _m, rest, _a), counts in zip(tasks, pool.map(_score, tasks)):
                 o, p = outcomes(counts), outcomes(counts, "in-play ")
@@ -122,9 +127,12 @@ def leave_venue_out(args) -> int:
                 print(f"  {clip.name:12s} {venue:13s} {'held-out' if clip.held_out else 'tuned-on':8s} "
                       f"{o.total:5d} frames {len(rest):4d} at rest  {fmt(o)}  | {fmt(p)}  ({counts_of(o)})",
                       flush=True)
+                causes += counts
         per_venue[venue] = (total, play, at_rest, len(tasks))
         print(f"  {venue} total: {fmt(total)}  | in play {fmt(play)}  ({counts_of(total)}; in play "
               f"{counts_of(play)})", flush=True)
+        if args.causes:
+            _print_causes(causes)
     print(f"\nper venue ({who}): accuracy, precision, recall, F1 | the same in play")
     everything = [Outcomes(), Outcomes(), 0, 0]
     for venue, (o, p, rest, n) in per_venue.items():
@@ -133,6 +141,13 @@ def leave_venue_out(args) -> int:
     o, p, rest, n = everything
     print(f"  {'all':13s} {n:2d} clips {o.total:5d} frames {rest:4d} at rest  {fmt(o)}  | {fmt(p)}")
     return 0
+
+
+def _print_causes(counts: collections.Counter) -> None:
+    """A venue's wrong frames by outcome and cause (broadcast_census.py's causes), most first."""
+    rows = sorted(((k, v) for k, v in counts.items() if isinstance(k, tuple)), key=lambda kv: -kv[1])
+    for (outcome, cause), n in rows:
+        print(f"    {n:5d}  {outcome:3s}  {cause}")
 
 
 def rest_census() -> int:
@@ -172,9 +187,12 @@ def main() -> int:
     ap.add_argument("--only", nargs="*", default=None, metavar="VENUE", help="these folds only")
     ap.add_argument("--shipped", action="store_true",
                     help="--venues: score every venue with the shipped classifier (no training)")
-    ap.add_argument("--no-adapt", action="store_true",
-                    help="--venues: score without adapting the classifier to each clip first (the "
-                         "preset adapts; this gives the adaptation's before -> after on unseen venues)")
+    ap.add_argument("--adapt", action=argparse.BooleanOptionalAction, default=None,
+                    help="--venues: adapt the classifier to each clip first, or not (default: as the "
+                         "broadcast preset's classifier.adapt_min_run says; --adapt against --no-adapt "
+                         "gives the adaptation's before -> after on unseen venues)")
+    ap.add_argument("--causes", action="store_true",
+                    help="--venues: also each venue's wrong frames by cause (broadcast_census.py)")
     ap.add_argument("--seed", type=int, default=0, help="the MLPs' random start")
     ap.add_argument("--jobs", type=int, default=1)
     args = ap.parse_args()

@@ -12,6 +12,14 @@ from badminton_gui.core.rig import StereoRig
 W, H, N = 320, 240, 40
 
 
+def adapting_tv_preset():
+    """The broadcast preset with the classifier adapted to each recording (``classifier.adapt_min_run``
+    25, its value until the shipped TV classifier was trained on every venue): the adaptation is
+    no longer the preset's, but the CLI and the GUI still offer it, so their tests ask for it."""
+    from badminton_gui.io.presets import load_preset
+    return load_preset("broadcast").with_value("classifier.adapt_min_run", 25)
+
+
 def moving_dot_frames(n=N, offset=0.0):
     """A white 'shuttle' crossing a dark textured floor; returns frames and the true centres."""
     rng = np.random.default_rng(0)
@@ -264,9 +272,11 @@ def test_detect_adapts_to_the_recording_when_asked(dot_video, tmp_path, capsys):
     for r in hits:
         x, y = truth[int(r["Frame"])]
         assert abs(float(r["X"]) - x) < 2.0 and abs(float(r["Y"]) - y) < 2.0
-    # --no-adapt, a preset with it off, and the live readout: one pass, no adaptation line.
-    for extra in (["--no-adapt"], ["--preset", "broadcast", "--lookahead", "0"], []):
+    # --no-adapt, presets with it off (the broadcast preset too: its classifier saw every venue),
+    # and the live readout: one pass, no adaptation line.
+    for extra in (["--no-adapt"], ["--preset", "broadcast", "--lookahead", "0"],
+                  ["--preset", "broadcast"], []):
         assert main(["detect", str(video), "-o", str(out)] + extra) == 0
         assert "adapted to the recording" not in capsys.readouterr().out
-    assert main(["detect", str(video), "-o", str(out), "--preset", "broadcast"]) == 0
+    assert main(["detect", str(video), "-o", str(out), "--preset", "broadcast", "--adapt"]) == 0
     assert "adapt" in capsys.readouterr().out   # adapted, or no run long enough on this tiny video

@@ -12,6 +12,8 @@ import os
 import numpy as np
 import pytest
 
+from .test_cli import adapting_tv_preset  # the broadcast preset with the adaptation on
+
 pytest.importorskip("pytestqt")
 pytest.importorskip("PySide6")
 
@@ -355,7 +357,6 @@ def _play_dot_video(folder, k: int):
     from badminton_gui.gui.worker import TrackingWorker
     from badminton_gui.io.detect_file import detect_to_csv
     from badminton_gui.io.labels import read_point_labels
-    from badminton_gui.io.presets import load_preset
 
     from .test_cli import moving_dot_frames, write_labels, write_video
 
@@ -369,12 +370,12 @@ def _play_dot_video(folder, k: int):
     cv2.circle(frames[5], tuple(int(v) for v in truth[5]), 1, (245, 245, 245), -1)
     write_video(folder / "dot.avi", frames)
     write_labels(folder / "dot_ball.csv", truth)
-    params = load_preset("broadcast").with_value("lookahead.frames", k)
+    params = adapting_tv_preset().with_value("lookahead.frames", k)
     summary = detect_to_csv(folder / "dot.avi", params, folder / "rows.csv",
                             labels=read_point_labels(folder / "dot_ball.csv").as_dict())
     spec = SourceSpec("single", str(folder / "dot.avi"), realtime=False,
                       left_labels=str(folder / "dot_ball.csv"))
-    worker = TrackingWorker(lambda context: open_spec(spec, context), load_preset("broadcast"),
+    worker = TrackingWorker(lambda context: open_spec(spec, context), adapting_tv_preset(),
                             realtime=False, lookahead_frames=k)
     packets = _run_to_the_end(worker)
     assert worker.latest_stats.frames == len(frames)
@@ -424,13 +425,12 @@ def test_the_adaptation_pass_is_an_opening_step_stop_gives_up_and_tuning_keeps(q
     from badminton_gui.gui.settings import SourceSpec
     from badminton_gui.gui.sources import open_spec
     from badminton_gui.gui.worker import TrackingWorker
-    from badminton_gui.io.presets import load_preset
 
     from .test_cli import moving_dot_frames, write_video
 
     write_video(tmp_path / "dot.avi", moving_dot_frames()[0])
     spec = SourceSpec("single", str(tmp_path / "dot.avi"), realtime=False)
-    params = load_preset("broadcast")
+    params = adapting_tv_preset()
     worker = TrackingWorker(lambda context: open_spec(spec, context), params, realtime=False,
                             lookahead_frames=4)
     steps, opened = [], []
@@ -534,13 +534,12 @@ def test_turning_the_view_live_during_the_adaptation_pass_skips_it_and_plays(qap
     from badminton_gui.gui.settings import SourceSpec
     from badminton_gui.gui.sources import open_spec
     from badminton_gui.gui.worker import TrackingWorker
-    from badminton_gui.io.presets import load_preset
 
     from .test_cli import moving_dot_frames, write_video
 
     write_video(tmp_path / "dot.avi", moving_dot_frames()[0])
     spec = SourceSpec("single", str(tmp_path / "dot.avi"), realtime=False)
-    worker = TrackingWorker(lambda context: open_spec(spec, context), load_preset("broadcast"),
+    worker = TrackingWorker(lambda context: open_spec(spec, context), adapting_tv_preset(),
                             realtime=False, lookahead_frames=4)
     steps = []
 
@@ -565,7 +564,6 @@ def test_turning_the_view_on_while_a_tv_clip_plays_adapts_its_classifier(qapp, t
     from badminton_gui.gui.settings import SourceSpec
     from badminton_gui.gui.sources import open_spec
     from badminton_gui.gui.worker import TrackingWorker
-    from badminton_gui.io.presets import load_preset
 
     from .test_cli import moving_dot_frames, write_labels, write_video
 
@@ -574,7 +572,7 @@ def test_turning_the_view_on_while_a_tv_clip_plays_adapts_its_classifier(qapp, t
     write_labels(tmp_path / "dot_ball.csv", truth)
     spec = SourceSpec("single", str(tmp_path / "dot.avi"), realtime=False,
                       left_labels=str(tmp_path / "dot_ball.csv"))
-    params = load_preset("broadcast")
+    params = adapting_tv_preset()
     worker = TrackingWorker(lambda context: open_spec(spec, context), params, realtime=False,
                             lookahead_frames=0)
     steps, tracked, used = [], [], []
@@ -614,13 +612,12 @@ def test_a_mid_clip_pass_that_finds_no_run_says_so_once(qapp, tmp_path):
     from badminton_gui.gui.settings import SourceSpec
     from badminton_gui.gui.sources import open_spec
     from badminton_gui.gui.worker import TrackingWorker
-    from badminton_gui.io.presets import load_preset
 
     from .test_cli import moving_dot_frames, write_video
 
     write_video(tmp_path / "floor.avi", moving_dot_frames(40, offset=-1000)[0])   # no dot
     spec = SourceSpec("single", str(tmp_path / "floor.avi"), realtime=False)
-    params = load_preset("broadcast")
+    params = adapting_tv_preset()
     worker = TrackingWorker(lambda context: open_spec(spec, context), params, realtime=False,
                             lookahead_frames=0)
     steps, tracked = [], []

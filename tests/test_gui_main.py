@@ -665,12 +665,18 @@ def test_a_source_without_truth_says_so_in_the_readouts():
     assert text.startswith("L 95.0 % · R 100.0 %") and "labels · 100 frames" in text
 
 
-def _choose_a_labelled_tv_video(main_window, tmp_path, monkeypatch, lookahead_view: bool = True):
+def _choose_a_labelled_tv_video(main_window, tmp_path, monkeypatch, lookahead_view: bool = True,
+                                adapting: bool = False):
     """A window that opened a 5-s video of a moving dot with its labels through Source ▸ One
-    video (TV broadcast)…, played in real time, the look-ahead view on or off."""
+    video (TV broadcast)…, played in real time, the look-ahead view on or off; ``adapting``: with
+    the broadcast preset's classifier adapted to each recording (off in the shipped preset)."""
     from badminton_gui.gui import main_window as mw
 
-    from .test_cli import moving_dot_frames, write_video
+    from .test_cli import adapting_tv_preset, moving_dot_frames, write_video
+    if adapting:
+        shipped = mw.load_preset
+        monkeypatch.setattr(mw, "load_preset",
+                            lambda name: adapting_tv_preset() if name == "broadcast" else shipped(name))
     frames, centres = moving_dot_frames(150)           # 5 s played in real time: still open below
     write_video(tmp_path / "tv.avi", frames, fps=30.0)
     labels = tmp_path / "tv_ball.csv"
@@ -694,9 +700,8 @@ def _choose_a_labelled_tv_video(main_window, tmp_path, monkeypatch, lookahead_vi
 
 def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window, qtbot, tmp_path, monkeypatch):
     """Source ▸ One video (TV broadcast)…: the picture in the left feed, the right one says why it
-    is empty, the broadcast preset is in use (its classifier adapted to the video for the
-    look-ahead view), the live score covers the one camera, and no rig, 3D point or landing call
-    is invented."""
+    is empty, the broadcast preset is in use (its classifier as shipped: it saw every venue), the
+    live score covers the one camera, and no rig, 3D point or landing call is invented."""
     from badminton_gui.gui import main_window as mw
 
     window = _choose_a_labelled_tv_video(main_window, tmp_path, monkeypatch)
@@ -708,8 +713,8 @@ def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window,
     assert window.right_feed._message == mw.ONE_CAMERA_TEXT and window.right_feed._qimage is None
     assert window.left_feed.title == "Camera"
     assert "no second camera" in window.status_source.text()
-    # The look-ahead view (on by default) adapted the preset's classifier to the video first.
-    assert "classifier adapted to the recording: 1 runs" in window.status_source.text()
+    # The look-ahead view (on by default) did not adapt the classifier: the preset does not ask.
+    assert "classifier adapted" not in window.status_source.text()
     qtbot.waitUntil(lambda: window.latest_packet is not None, timeout=WAIT_MS)
     packet = window.latest_packet
     assert packet.right is None and packet.result.point is None and packet.result.flight.prediction is None
@@ -724,9 +729,10 @@ def test_one_video_opens_with_the_broadcast_preset_and_tracks_in_2d(main_window,
 
 def test_the_view_turned_on_while_a_tv_video_plays_adapts_and_says_so(main_window, qtbot, tmp_path, monkeypatch):
     """A TV video opened with the look-ahead view off plays live; turned on, the view first
-    adapts the classifier to the video (the step over the feed and in the status line), then the
+    adapts the classifier to the video (under a preset that asks for it) (the step over the feed and in the status line), then the
     status line says what it did, and the feeds' pause for it is not taken for a tracker behind."""
-    window = _choose_a_labelled_tv_video(main_window, tmp_path, monkeypatch, lookahead_view=False)
+    window = _choose_a_labelled_tv_video(main_window, tmp_path, monkeypatch, lookahead_view=False,
+                                         adapting=True)
     qtbot.waitUntil(lambda: window.worker is not None and window.worker.latest_stats is not None
                     and window.worker.latest_stats.frames >= 10, timeout=WAIT_MS)
     assert "classifier adapted" not in window.status_source.text()

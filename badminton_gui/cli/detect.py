@@ -24,8 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_lookahead_argument(p)
     p.add_argument("--adapt", action=argparse.BooleanOptionalAction, default=None,
                    help="first adapt the classifier to this recording from its own long runs of "
-                        "detections (two passes; default: the preset's classifier.adapt_min_run, on "
-                        "for --preset broadcast, and never with --lookahead 0, the live readout)")
+                        "detections (two passes; default: the preset's classifier.adapt_min_run, off in "
+                        "every shipped preset, and never with --lookahead 0, the live readout)")
     add_json_argument(p, "video, output, frames, found, found_percent, frames_per_second, "
                          "frame_count (announced by the video; 0 unknown), truncated, adapted, "
                          "adapted_runs, adapted_frames, lead_in_frames, gap_fill_frames")

@@ -20,7 +20,10 @@ What it gains and costs: on a TV clip the classifier has not seen (``benchmarks/
 seeds 0 / 1 / 2 instead of 74.64 / 75.68 / 77.75 %; with the shipped classifier the held-out clips
 77.40 -> 80.31 %. On the three clips the shipped classifier was trained on it *costs* (87.53 ->
 82.74 %): there the classifier knew the true labels, and the adaptation trades that memory for
-pseudo-labels. Only the broadcast preset turns it on (``classifier.adapt_min_run`` 25).
+pseudo-labels. No shipped preset turns it on (``classifier.adapt_min_run``; ``detect --adapt``): the
+broadcast preset did while its classifier knew two venues, but the one trained on all five scores
+venues it never saw better as trained (leave-one-venue-out, benchmarks/generalise.py --venues
+against --adapt: 74.44 against 72.26 %).
 
 Offline only: it needs the recording twice (CLI ``detect``; broadcast_census.py, accuracy.py).
 The live readout and the GUI keep the shipped classifier. Two cameras have surer evidence than a
@@ -50,7 +53,7 @@ from .params import TrackerParams
 # centroid the candidate carries; at 3 px a third of the runs' frames had no positive (a trial).
 PSEUDO_LABEL_RADIUS = 8.0
 # frames: the run length when adaptation is asked for (``detect --adapt``) under a preset that has
-# it off; the broadcast preset's value, chosen leave-one-clip-out (train_classifier.py).
+# it off; chosen leave-one-clip-out for the three-clip TV classifier (train_classifier.py).
 DEFAULT_MIN_RUN = 25
 
 

@@ -503,8 +503,9 @@ class MainWindow(QMainWindow):
             f"Show each frame once the next {FILE_LOOKAHEAD} are tracked, re-decided as "
             f"'badminton-track detect' and 'track' decide a file's rows (a flight's first frames, "
             f"the shuttle just off the racket). The view is {FILE_LOOKAHEAD} frames late (with the "
-            f"broadcast preset's lead-in to the served shuttle, 70 more; a TV recording's classifier "
-            f"is adapted to it first, as 'detect' does: turning the view off meanwhile skips that); "
+            f"broadcast preset's lead-in to the served shuttle, 70 more; under parameters that adapt the "
+            f"classifier to a TV recording, that pass runs first, as in 'detect': turning the view off "
+            f"meanwhile skips it); "
             f"the robot link and recordings get every result at once. Off: each frame as soon as "
             f"it is tracked")
 

@@ -11,8 +11,8 @@ pair*. Bad input (a missing video, a rig for another resolution, a full disk) en
 one sentence; the dialog stays open to fix it.
 
 One camera's video (a TV clip, *One video…*) runs the loop of `badminton-track detect`
-(io/detect_file.py): with the broadcast preset that is two passes, the classifier adapted to the
-recording first, then the look-ahead with the lead-in from the held shuttle — the file readout,
+(io/detect_file.py): with the broadcast preset the look-ahead with the lead-in from the held
+shuttle (and, when the parameters ask, a first pass adapting the classifier) — the file readout,
 which the live view (frame by frame, the shipped classifier) cannot give: on the held-out TV clips
 82 against 77 %.
 """

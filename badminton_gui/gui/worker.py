@@ -19,8 +19,8 @@ The feeds may show each pair with the file commands' look-ahead readout instead 
 (:meth:`TrackingWorker.set_lookahead`, Playback ▸ Look-ahead view): the worker keeps each pair's
 images until core/track_lookahead.py's ``DelayedReadout`` has decided its result K pairs later, then
 scores, trails and shows that result on that pair — a recording then shows the rows `detect` and
-`track` write (a TV clip's classifier adapted to it first, as `detect` does, as a step of
-opening it). The robot link and the result taps still get every live result at once.
+`track` write (a TV clip's classifier adapted to it first when the parameters ask, as `detect`
+does, as a step of opening it). The robot link and the result taps still get every live result at once.
 
 Two more hooks serve the refine dialog (gui/refine_dialog.py): *result taps*, cheap functions
 the worker calls with every result at the tracking rate (the display packets are throttled to
@@ -731,8 +731,8 @@ class TrackingWorker(QObject):
     def _adapt(self, source: FrameSource, tracker: MonoTracker, context: OpeningContext,
                while_playing: bool = False) -> bool:
         """A recorded TV clip viewed with the look-ahead gets `detect`'s rows: when the preset
-        adapts its classifier to each recording (``classifier.adapt_min_run``, the broadcast
-        preset), a first pass over the file does so now (core/adaptation.py), shown as a step
+        adapts its classifier to each recording (``classifier.adapt_min_run``; no shipped
+        preset does), a first pass over the file does so now (core/adaptation.py), shown as a step
         of opening the source that Stop gives up with the source, and turning the view live
         gives up alone. A live view keeps the shipped classifier. The same when the view is
         turned on, or another preset chosen, while the clip plays (``while_playing``: once per

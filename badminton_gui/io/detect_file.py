@@ -1,9 +1,9 @@
 """Detecting the shuttle in one camera's recorded video into a CSV file: the one loop behind
 `badminton-track detect` and the GUI's *Tools ▸ Process a recording…* for a single video.
 
-Why this file exists: a TV clip gets its best readout only from a file — the classifier adapted
-to the recording in a first pass, then the look-ahead with the lead-in from the held shuttle
-(core/adaptation.py, core/lookahead.py) — and the operator in the desktop tool must get the same
+Why this file exists: a TV clip gets its best readout only from a file — the look-ahead with the
+lead-in from the held shuttle (core/lookahead.py), and when asked the classifier adapted to the
+recording in a first pass (core/adaptation.py) — and the operator in the desktop tool must get the same
 rows as the command line. So both call :func:`detect_to_csv`, which adds what a long job needs in
 either: progress per pass, cancellation between two frames (the rows decided so far are written
 and the file stays a valid CSV), the score against labels when there are any, and one-sentence
