@@ -96,9 +96,9 @@ def _no_second_look(params: TrackerParams) -> TrackerParams:
 
 def test_a_camera_that_lost_the_shuttle_leaves_the_robot_its_3d_point_from_the_other():
     results, truths, _, _ = _run(_no_second_look(TrackerParams()), "image")
-    # Painted out of the left image; the left detector may take something else for a few frames
-    # (a player's part, far off the flight: with OpenCV 5, not with 4.13): the right camera's
-    # sight moves the flight then too.
+    # Painted out of the left image; whatever the left detector takes meanwhile (before the
+    # flight's reach rule, a player's part far off the flight for a few frames; with it, nothing)
+    # is not the shuttle, and the right camera's sight moves the flight.
     assert all(r.left.detection is None or not _near(r.left.detection, tr.uv_left)
                for r, tr in zip(results, truths))
     assert all(r.right.detection is not None for r in results)
