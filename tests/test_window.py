@@ -7,6 +7,7 @@ import copy
 import math
 import threading
 
+import cv2
 import numpy as np
 import pytest
 
@@ -392,3 +393,55 @@ def test_a_shuttle_merged_with_a_wide_blob_is_split_off_it_in_windows_too():
     assert split_in_window >= 8
     assert all(found[1])
     assert sum(found[0]) < len(found[0]) // 2     # without the split it is lost in the blob
+
+
+def _struck_beside_a_player(n=70, hit=40):
+    """A dot flies right at 8 px a frame towards a player (a large, flickering blob: too large for
+    a shuttle) and is struck beside him at frame ``hit``: it leaves up and back at 30 px a frame
+    while the racket head (a dot of its own) goes on the old path, slower, into the player."""
+    from tests.test_detector import _noisy_frame
+
+    rng = np.random.default_rng(5)
+    frames, shuttle = [], []
+    for i in range(n):
+        img = _noisy_frame(rng, 30, (480, 640))
+        # The player: a large patch whose pixels change every frame, so it stays in the mask.
+        img[200:400, 440:500] = rng.integers(40, 160, (200, 60, 1), dtype=np.uint8)
+        if i <= hit:
+            x, y = 100 + 8 * (i - 0), 240
+        else:
+            x, y = 100 + 8 * hit - 30 * (i - hit), 240 - 10 * (i - hit)
+            racket = (100 + 8 * hit + 5 * (i - hit), 240 + (i - hit))
+            if racket[0] < 440:
+                cv2.circle(img, racket, 3, (235, 235, 235), -1)
+        if x > 0:
+            cv2.circle(img, (int(x), int(y)), 3, (245, 245, 245), -1)
+        frames.append(img)
+        shuttle.append((x, y))
+    return frames, shuttle
+
+
+@pytest.mark.parametrize("near_large", [0.0, 48.0])
+def test_beside_a_player_the_frames_are_whole_so_the_struck_shuttle_is_seen_at_once(near_large):
+    """``window.near_large``: while the followed shuttle is predicted near a blob too large for a
+    shuttle on the last whole frame (a player, a racket), the frames are whole, so the shuttle
+    struck there is a candidate on every frame after the hit, although the followed tracklet goes
+    on with the racket; without it the window stays with the racket and the struck shuttle leaves
+    it. Far from the player the window is used as before."""
+    hit = 40
+    frames, shuttle = _struck_beside_a_player(hit=hit)
+    det = CameraDetector(_params(window__full_every=8, window__stagger=False,
+                                 window__near_large=near_large))
+    seen, windowed_far = [], 0
+    for i, img in enumerate(frames):
+        res = det.process(img, i / FPS, keep_mask=False)
+        x, y = shuttle[i]
+        if 15 <= i <= 30:   # far from the player (≥ 100 px)
+            windowed_far += det.window_tracker.last_window is not None
+        if hit < i <= hit + 8 and x > 20:
+            seen.append(any(math.hypot(c.x - x, c.y - y) <= 8 for c in res.candidates))
+    assert windowed_far >= 8
+    if near_large > 0:
+        assert all(seen), seen
+    else:
+        assert not all(seen)   # the window stayed with the racket: the struck shuttle missed

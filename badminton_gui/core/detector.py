@@ -207,7 +207,7 @@ class CameraDetector:
         h, w = frame_bgr.shape[:2]
         p = self.params
         window = (self._window.plan(self._associator, t, w, h, self.model_scale(w, h),
-                                    self.keep_whole)
+                                    self.keep_whole, self._large_boxes)
                   if p.window.enabled else None)
         self._memory.planned = (t, window)
         return window is not None
@@ -241,7 +241,8 @@ class CameraDetector:
         if planned is not None and planned[0] == t:
             window = planned[1]
         else:
-            window = (self._window.plan(self._associator, t, w, h, scale, self.keep_whole)
+            window = (self._window.plan(self._associator, t, w, h, scale, self.keep_whole,
+                                        self._large_boxes)
                       if p.window.enabled else None)
         windowed = None if window is None else self._window.model_mask(frame_bgr, scale, window,
                                                                        self._background)

@@ -44,6 +44,12 @@ Consequences, by design:
   the association restarts): windowing on clutter starved the tracklets outside the window,
   the lost shuttle's own among them, which ended after ``max_misses`` frames with the history
   that lets a shuttle pause (rally_11-49-21 left 1452–1465);
+- ``window.near_large``: no window while the followed shuttle is predicted within this many px
+  of a blob too large for a shuttle on the last whole frame (a player and his racket: the
+  boxes of a window's frame are clipped by its edge). There it may be struck, and the followed
+  tracklet often goes on with the racket or the hand that struck it while the shuttle leaves
+  its window at once on a path of its own, found only on the next scheduled whole frame, 1–7
+  frames late;
 - after a whole frame on which a rival tracklet (not followed, not confirmed, running quality
   ≥ ``window.watch_quality``) was seen, the next frame is whole too, so a new serve gets its
   confirming frames in a row.
@@ -111,6 +117,7 @@ class WindowTracker:
         # count plus ``phase`` × ``full_every`` is a multiple of ``full_every`` (the stereo
         # tracker gives the right camera phase 0.5, so the two cameras' whole frames alternate).
         self.phase = 0.0
+        self._large: np.ndarray | None = None     # the last whole frame's blobs too large for a shuttle
 
     def set_params(self, params: TrackerParams) -> None:
         self.params = params
@@ -119,6 +126,7 @@ class WindowTracker:
         self._since_full = 0
         self.last_window = None
         self._skipped = 0
+        self._large = None
 
     def before_whole(self, background: BackgroundModel) -> None:
         """Call before a whole frame's ``background.apply``: with ``window.catch_up`` the pixels
@@ -131,13 +139,20 @@ class WindowTracker:
 
     # ---- the choice --------------------------------------------------------------------
     def plan(self, associator: TrackletAssociator, t: float, width: int, height: int,
-             scale: float, whole: bool = False) -> tuple[int, int, int, int] | None:
+             scale: float, whole: bool = False, large: np.ndarray | None = None
+             ) -> tuple[int, int, int, int] | None:
         """This frame's window (x0, y0, x1, y1 in full-resolution px), or None: the whole frame
-        (always when ``whole``).
+        (always when ``whole``). ``large``: the full-resolution boxes (x, y, w, h) of the last
+        frame's blobs too large for a shuttle, kept when that frame was whole
+        (``window.near_large``).
 
         Call once per frame, before the frame is processed (after the last frame's ``commit``).
         """
         self.frames += 1
+        if self.last_window is None:
+            # Blobs clipped by a window's edge look smaller than they are: the players are
+            # those of the last whole frame (a few frames old; they move little meanwhile).
+            self._large = large
         window = None if whole else self._choose(associator, t, width, height, scale)
         self.note(window)
         return window
@@ -173,6 +188,12 @@ class WindowTracker:
             # shuttle's own among them, which ends after max_misses frames with its history.
             return None
         if self._since_full == 0 and self._rival_seen(associator, followed):
+            return None
+        if wp.near_large > 0 and self._large is not None and near_box(
+                followed.predict(t), self._large, wp.near_large * associator.factor(followed)):
+            # Where a player or a racket is, the shuttle may be struck: its new path leaves the
+            # window at once while the followed tracklet goes on with the racket or the hand
+            # that struck; a whole frame finds the struck shuttle on its first frame.
             return None
         return window_around(associator, followed, t, width, height, wp.margin, wp.max_fraction)
 
@@ -224,6 +245,16 @@ def followed_tracklet(associator: TrackletAssociator) -> Tracklet | None:
         if tr.ident == associator.selected:
             return tr
     return None
+
+
+def near_box(point: tuple[float, float], boxes: np.ndarray, radius: float) -> bool:
+    """True when ``point`` lies within ``radius`` of one of ``boxes`` (x, y, w, h)."""
+    if not len(boxes):
+        return False
+    x, y = point
+    b = np.asarray(boxes, dtype=float)
+    return bool(np.any((b[:, 0] - radius <= x) & (x <= b[:, 0] + b[:, 2] + radius)
+                       & (b[:, 1] - radius <= y) & (y <= b[:, 1] + b[:, 3] + radius)))
 
 
 def window_around(associator: TrackletAssociator, tr: Tracklet, t: float, width: int, height: int,

@@ -441,3 +441,7 @@ class WindowParams(ParamGroup):
                                help="Track in a window only while the followed tracklet's running quality "
                                     "(the classifier's mean score of its candidates) is at least this: a "
                                     "clutter track followed before the serve keeps the frames whole")
+    near_large: float = param(0.0, 0.0, 1000.0, step=4.0, unit="px", label="Whole near a player within",
+                              help="No window while the followed shuttle is predicted within this of a blob "
+                                   "too large for a shuttle on the last whole frame (a player, a racket: "
+                                   "where it may be struck and leave the old path at once; 0 = off)")
