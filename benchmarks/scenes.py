@@ -1,6 +1,6 @@
 """The tracker on randomised demo courts it was never tuned on: per scene family, with the default.
 
-    .venv/bin/python benchmarks/scenes.py [--quick] [--seeds N] [--seconds S] [--jobs J] [--json]
+    .venv/bin/python benchmarks/scenes.py [--quick] [--seeds N] [--seconds S] [--jobs J] [--json] [--census]
 
 Why this file exists: where the project was tuned it meets its goals; an operator in a new hall
 with a new rack is always the unseen case. Each family of ``io/demo_style.py`` (side-near,
@@ -18,6 +18,11 @@ scene's exact truth:
   ``benchmarks/landing.py`` picks it; a seen landing without a prediction counts as infinitely
   wrong in the median and p95.
 
+``--census`` also counts each family's wrong camera-frames by cause: a report on the scene's LED
+board (its moving dot), paired by the two cameras into a 3D point or made alone, by the
+shuttle's life then (in flight, lying after a landing, no shuttle in play); another wrong report;
+a miss.
+
 Then the goal check of issue 40 per family: ≥ 99 % 2D per camera, a 3D point on ≥ 95 % of the
 frames both cameras see, median 3D error ≤ 1 cm, landing 300 ms ahead median ≤ 5 cm, p95 ≤ 15 cm.
 Clips of more than 1280×720 pixels are shortened in proportion (to half at 2048×1536): rendering
@@ -34,6 +39,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -80,11 +86,41 @@ def adapted_classifiers(family: str, seed: int, frames: int, params) -> tuple[tu
     return classifiers, judged
 
 
+def board_polygons(scene: DemoScene) -> list[np.ndarray | None]:
+    """Each camera's image outline of the scene's LED board (None: no board, or behind it)."""
+    board = scene.style.board if scene.style is not None else None
+    out: list[np.ndarray | None] = []
+    for cam in scene.cameras:
+        if board is None:
+            out.append(None)
+            continue
+        pc = cam.to_camera(np.asarray(board.corners, float))
+        out.append(None if np.any(pc[:, 2] < 0.3) else cam.project_camera(pc).astype(np.float32))
+    return out
+
+
+def wrong_frame_cause(code: str, report, point, shuttle_kind: str, polygon, margin: float) -> str | None:
+    """The census's cause of one wrong camera-frame (``--census``): a report on the LED board
+    (its moving dot) paired with the other camera into a 3D point, or alone (no 3D point), split
+    by the shuttle's life then (``flight``, ``rest`` after a landing, ``off`` no shuttle in
+    play); another wrong report; or a miss. None for a right frame."""
+    if code in ("TP", "TN"):
+        return None
+    if code == "FN":
+        return "miss"
+    on_board = polygon is not None and cv2.pointPolygonTest(polygon, (float(report.x), float(report.y)),
+                                                            True) >= -margin
+    if not on_board:
+        return "other report"
+    return f"board {'paired' if point is not None else 'alone'} ({shuttle_kind})"
+
+
 def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = None,
              preset: str | None = None, adapt: bool = False) -> dict:
     """Track one clip of a family and return its raw counts (JSON-friendly); ``preset``: a
     preset name or parameter file instead of the default; ``adapt``: first adapt each camera's
-    classifier to the clip (``adapted_classifiers``), as `track --adapt`."""
+    classifier to the clip (``adapted_classifiers``), as `track --adapt`. Its ``census``
+    counts each wrong camera-frame's cause (``wrong_frame_cause``)."""
     style = sample_scene(family, seed)
     frames = clip_frames(style, seconds, max_frames)
     params = load_preset(preset).with_value("lookahead.frames", FILE_LOOKAHEAD)
@@ -97,6 +133,8 @@ def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = No
     delay = StereoLookahead(scene.rig, params, tracker.epipolar_tolerance)
     tol = tolerance_px(style.size[0])
     codes: list[list[str]] = [[], []]
+    polygons = board_polygons(scene)
+    census: dict[str, int] = {}
     both = both_with_point = 0
     errors: list[float] = []
     history = []            # (t, live FlightInfo, None): what the robot was told at each step
@@ -113,6 +151,10 @@ def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = No
                                            np.array([bool(vis)]),
                                            np.array([uv if (vis and uv) else [np.nan, np.nan]]),
                                            tol)[0]))
+            cause = wrong_frame_cause(codes[cam][-1], d, decided.point,
+                                      scene.script.segment_at(truth.t).kind, polygons[cam], tol)
+            if cause is not None:
+                census[cause] = census.get(cause, 0) + 1
         if truth.visible_left and truth.visible_right:
             both += 1
             both_with_point += decided.point is not None
@@ -139,7 +181,8 @@ def run_clip(family: str, seed: int, seconds: float, max_frames: int | None = No
             "hfov_deg": round(style.hfov_deg, 1), "board": style.board is not None, "frames": frames,
             "pairs_per_s": frames / max(elapsed, 1e-9), "left": counts[0], "right": counts[1],
             "both_visible": both, "both_with_point": both_with_point, "errors_3d": errors,
-            "landings": landings, "fine_tuned": [not j.kept for j in judged] if adapt else None}
+            "landings": landings, "fine_tuned": [not j.kept for j in judged] if adapt else None,
+            "census": census}
 
 
 def _landings(scene: DemoScene, frames: int, history) -> list[dict]:
@@ -250,6 +293,20 @@ def _print_tables(clips: list[dict], families: dict, preset: str | None = None) 
         print(f"  {name:>16}: " + ", ".join(f"{g} {_verdict(ok)}" for g, ok in checks.items()))
 
 
+def _print_census(clips: list[dict], families) -> None:
+    """The wrong camera-frames of each family (both cameras) by cause (``wrong_frame_cause``)."""
+    print("\nwrong camera-frames by cause (both cameras; board: a report on the LED board, paired "
+          "into a 3D point or alone; (flight / rest / off): the shuttle's life then):")
+    for name in families:
+        total: dict[str, int] = {}
+        for c in clips:
+            if c["family"] == name:
+                for cause, n in c.get("census", {}).items():
+                    total[cause] = total.get(cause, 0) + n
+        print(f"  {name:>16}: {sum(total.values())} wrong; " + ", ".join(
+            f"{cause} {n}" for cause, n in sorted(total.items(), key=lambda kv: -kv[1])))
+
+
 def _run_one(task) -> dict:
     configure_opencv_threads()
     return run_clip(*task)
@@ -272,6 +329,9 @@ def main(argv: list[str] | None = None) -> int:
                     "{\"shuttle_scale\": {\"enabled\": true}}) instead of the default preset")
     ap.add_argument("--adapt", action="store_true", help="adapt each clip's classifiers to it first "
                     "(a first pass, as `track --adapt`; core/court_adaptation.py)")
+    ap.add_argument("--census", action="store_true", help="also count each family's wrong "
+                    "camera-frames by cause: a report on the LED board (paired or alone), another "
+                    "wrong report, a miss")
     ap.add_argument("--log", type=Path, default=None, metavar="FILE",
                     help="append each finished clip's counts to FILE (JSON lines); clips already "
                          "in FILE are not run again, so a stopped run resumes")
@@ -323,6 +383,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fine-tuned (kept by the held-back guard): left {sum(t[0] for t in tuned)}, right "
               f"{sum(t[1] for t in tuned)} of {len(clips)} clips")
     _print_tables(clips, families, args.preset)
+    if args.census:
+        _print_census(clips, families)
     print(f"\nwall time {time.perf_counter() - start:.0f} s")
     return 0
 

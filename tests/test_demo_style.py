@@ -159,10 +159,14 @@ def test_a_tiny_scenes_benchmark_run(capsys):
     assert out["goals"]["side-far"]["landing median ≤ 5 cm"] is None      # no landing in 40 frames
     clip = out["clips"][0]
     assert clip["seed"] == seed and sum(clip["left"].values()) == 40
+    # The census counts every wrong camera-frame once.
+    wrong = sum(clip[side][k] for side in ("left", "right") for k in ("fp1", "fp2", "fn"))
+    assert sum(clip["census"].values()) == wrong
     # The tables print too.
     assert scenes.main(["--families", "side-far", "--seeds", "1", "--first-seed", str(seed),
-                        "--seconds", "0.5", "--max-frames", "20"]) == 0
-    assert "goal check" in capsys.readouterr().out
+                        "--seconds", "0.5", "--max-frames", "20", "--census"]) == 0
+    printed = capsys.readouterr().out
+    assert "goal check" in printed and "wrong camera-frames by cause" in printed
 
 
 def test_a_seen_landing_without_prediction_makes_the_p95_infinite_not_nan():

@@ -245,7 +245,7 @@ class StereoTracker:
         res = step.results
         if self.params.stereo.stereo_vouch:
             step.take("stereo_vouch", self.vouch.apply(res[0], res[1]))
-        step.take("off_volume", self.pairing.reject_off_volume(res[0], res[1]))
+        step.take("off_volume", self.pairing.reject_off_volume(res[0], res[1], step.t, step.guide))
         self.pairing.learn(res[0], res[1])
         self.pairing.pair(step)
         self.left.commit(step.dets[0], step.t, res[0].candidates)

@@ -9,7 +9,8 @@ triangulate (``stereo.flight_vouch``) or when the same two tracks were the last 
 their miss moved little (``stereo.pair_continuity``). Free-running cameras' right detections are
 first moved along their tracks to the left image's time (``stereo.align_pairs``). With
 ``stereo.play_volume`` a pair must lie inside the play volume, and what pairs only outside it
-(an LED board's moving dot) is rejected in both cameras.
+(an LED board's moving dot) is rejected in both cameras; with ``stereo.off_volume_radius`` also
+what one camera keeps alone where such pairs were refused (``off_volume.py``).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from ..rig import StereoRig
 from ..step import Step
 from ..types import REJECT_STEREO, CameraResult, Candidate
 from .epipolar import EpipolarGate
+from .off_volume import OffVolumeMemory
 
 # s: the least time between a pair's two images for the right camera's detections to be moved
 # along their tracks to the left image's time before they are paired (free-running cameras,
@@ -93,6 +95,8 @@ class StereoPairing:
         # s: the left image's time minus the right one's in the pair being processed.
         self.right_lag = 0.0
         self._last_pair: _LastPair | None = None
+        # Where pairs were refused as off the play volume (``stereo.off_volume_radius``).
+        self.off_volume = OffVolumeMemory()
 
     def set_times(self, t_left: float, t_right: float) -> None:
         """The pair being processed was taken at these times (``right_xy`` moves by their lag)."""
@@ -129,16 +133,18 @@ class StereoPairing:
         err = float(self.rig.epipolar_errors([[own_left.x, own_left.y]], [list(self.right_xy(own_right))])[0, 0])
         self.gate.add_sample(err)
 
-    def _survivors(self, res_left: CameraResult, res_right: CameraResult):
-        """Each camera's best ``stereo.max_candidates`` surviving candidates by score, their image
-        points (the right camera's at the left image's time) and the epipolar errors of every
-        combination; None when a camera has none. A coasting prediction is no measurement: it is
-        never triangulated."""
+    def _best(self, result: CameraResult) -> list[Candidate]:
+        """A camera's best ``stereo.max_candidates`` surviving candidates by score. A coasting
+        prediction is no measurement: it is never triangulated."""
         k = int(self.params.stereo.max_candidates)
-        left = sorted((c for c in res_left.candidates if c.rejected_by is None and not c.predicted),
+        return sorted((c for c in result.candidates if c.rejected_by is None and not c.predicted),
                       key=lambda c: -c.score)[:k]
-        right = sorted((c for c in res_right.candidates if c.rejected_by is None and not c.predicted),
-                       key=lambda c: -c.score)[:k]
+
+    def _survivors(self, res_left: CameraResult, res_right: CameraResult):
+        """Each camera's best surviving candidates (``_best``), their image points (the right
+        camera's at the left image's time) and the epipolar errors of every combination; None
+        when a camera has none."""
+        left, right = self._best(res_left), self._best(res_right)
         if not left or not right:
             return None
         pl = np.array([[c.x, c.y] for c in left])
@@ -152,21 +158,49 @@ class StereoPairing:
         return bool(point[2] > 0 and self.rig.depth(1, self.rig.to_output(point))[0] > 0
                     and sp.min_distance <= dist <= sp.max_distance)
 
-    def reject_off_volume(self, res_left: CameraResult, res_right: CameraResult
-                          ) -> tuple[CameraResult, CameraResult]:
+    def reject_off_volume(self, res_left: CameraResult, res_right: CameraResult, t: float = 0.0,
+                          guide: StepGuide | None = None) -> tuple[CameraResult, CameraResult]:
         """Each camera's surviving candidates that meet a partner on the other camera only
         outside the play volume (``in_play_volume``), both of them, rejected (``REJECT_STEREO``):
         both cameras see that object off the court, so neither is the shuttle, and a camera
-        left without a pair would otherwise keep it as its own choice and follow it. Returns the
-        two results (the same objects where nothing was rejected)."""
-        if not self.params.stereo.play_volume or not self.rig.has_court_pose:
+        left without a pair would otherwise keep it as its own choice and follow it. With
+        ``stereo.off_volume_radius``, the places of those pairs are remembered (``t``: the step's
+        time) and a candidate with no partner inside the play volume whose line of sight passes
+        near one is rejected too (``off_volume.py``); a candidate whose line of sight passes where
+        the followed flight (``guide``) puts the shuttle neither marks a place nor is rejected at
+        one (the shuttle paired by chance with clutter off the volume, then seen by one camera).
+        Returns the two results (the same objects where nothing was rejected)."""
+        sp = self.params.stereo
+        if not sp.play_volume or not self.rig.has_court_pose:
             return res_left, res_right
-        survivors = self._survivors(res_left, res_right)
-        if survivors is None:
-            return res_left, res_right
-        left, right, pl, pr, epi = survivors
+        best = (self._best(res_left), self._best(res_right))
+        gone: tuple[set[int], set[int]] = (set(), set())
+        paired_inside: set[int] = set()
+        if best[0] and best[1]:
+            off, inside, points = self._off_volume_pairs(*best, guide)
+            for cam, axis in ((0, 1), (1, 0)):
+                gone[cam].update(id(best[cam][i]) for i in np.flatnonzero(off.any(axis=axis)))
+                paired_inside.update(id(best[cam][i]) for i in np.flatnonzero(inside.any(axis=axis)))
+            if sp.off_volume_radius > 0.0 and points:
+                self.off_volume.remember(np.array(points), t, sp.off_volume_radius)
+        if sp.off_volume_radius > 0.0:
+            self.off_volume.forget_before(t - sp.off_volume_memory)
+            for cam, res in enumerate((res_left, res_right)):
+                gone[cam].update(id(c) for c in self._lone_at_refused_places(cam, res, paired_inside | gone[cam],
+                                                                             guide))
+        return (_rejected(res_left, gone[0]) if gone[0] else res_left,
+                _rejected(res_right, gone[1]) if gone[1] else res_right)
+
+    def _off_volume_pairs(self, left: list[Candidate], right: list[Candidate], guide: StepGuide | None):
+        """Of the two cameras' best survivors: which pairs meet the epipolar gate only outside the
+        play volume (neither candidate pairs inside it), which pair inside it, and the points (court
+        frame) of the former whose candidates both lie off the followed flight (``_on_flight``)."""
+        pl = np.array([[c.x, c.y] for c in left])
+        pr = np.array([self.right_xy(c) for c in right])
+        epi = self.rig.epipolar_errors(pl, pr)
         inside = np.zeros(epi.shape, dtype=bool)
         outside = np.zeros(epi.shape, dtype=bool)
+        where: dict[tuple[int, int], np.ndarray] = {}
         for i, j in zip(*np.nonzero(epi <= self.gate.tolerance())):
             point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
             if not self._in_front_within_range(point):
@@ -175,12 +209,41 @@ class StereoPairing:
                 inside[i, j] = True
             else:
                 outside[i, j] = True
+                where[(int(i), int(j))] = point
         off = outside & ~inside.any(axis=1)[:, None] & ~inside.any(axis=0)[None, :]
-        if not off.any():
-            return res_left, res_right
-        gone_left = {id(left[i]) for i in np.flatnonzero(off.any(axis=1))}
-        gone_right = {id(right[j]) for j in np.flatnonzero(off.any(axis=0))}
-        return _rejected(res_left, gone_left), _rejected(res_right, gone_right)
+        points = [self.rig.to_output(where[(int(i), int(j))])[0] for i, j in zip(*np.nonzero(off))
+                  if not self._on_flight(0, left[i], guide) and not self._on_flight(1, right[j], guide)]
+        return off, inside, points
+
+    def _on_flight(self, cam: int, c: Candidate, guide: StepGuide | None) -> bool:
+        """Does camera ``cam``'s line of sight through ``c`` pass where the followed flight puts the
+        shuttle (within ``trajectory.outlier_distance`` and three of the flight's σ)? False
+        without a flight to ask."""
+        known = None if guide is None else guide.get()
+        if known is None:
+            return False
+        position, covariance = known
+        near = self.params.trajectory.outlier_distance + 3.0 * math.sqrt(max(float(np.trace(covariance)) / 3.0, 0.0))
+        centre, dirs = self.rig.rays(cam, [[c.x, c.y]])
+        offset = position - centre
+        along = max(float(offset @ dirs[0]), 0.0)
+        return float(np.linalg.norm(offset - along * dirs[0])) <= near
+
+    def _lone_at_refused_places(self, cam: int, result: CameraResult, spared: set[int],
+                                guide: StepGuide | None) -> list[Candidate]:
+        """Camera ``cam``'s surviving candidates, other than ``spared`` (ids: those paired inside
+        the play volume, those already rejected) and those on the followed flight (``_on_flight``),
+        whose lines of sight pass within ``stereo.off_volume_radius`` of a place where a pair was
+        refused as off the play volume."""
+        if not len(self.off_volume):
+            return []
+        lone = [c for c in result.candidates if c.rejected_by is None and not c.predicted and id(c) not in spared]
+        if not lone:
+            return []
+        centre, dirs = self.rig.rays(cam, [[c.x, c.y] for c in lone])
+        radius = self.params.stereo.off_volume_radius
+        return [c for c, d in zip(lone, dirs)
+                if self.off_volume.near_sight(centre, d, radius) and not self._on_flight(cam, c, guide)]
 
     def choose_pair(self, res_left: CameraResult, res_right: CameraResult,
                     guide: StepGuide | None = None) -> StereoPair:

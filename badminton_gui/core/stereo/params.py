@@ -28,6 +28,14 @@ class StereoParams(ParamGroup):
                                   "Shuttle scale group) are not a pair, and both are rejected when they pair "
                                   "nowhere else: an LED board's moving dot beside the court, which both cameras "
                                   "see where it is. Without a court pose it does nothing")
+    off_volume_radius: float = param(0.0, 0.0, 5.0, step=0.05, unit="m", label="... nor alone where pairs were refused",
+                                     help="A camera's candidate with no partner inside the play volume whose line of "
+                                          "sight passes this near a place where a pair was refused as off the play "
+                                          "volume is rejected: the board's dot that camera keeps while the other "
+                                          "camera's dot is no candidate that step (0 = off)")
+    off_volume_memory: float = param(60.0, 0.0, 3600.0, step=5.0, unit="s", label="... refused within",
+                                     help="How long a place where a pair was refused as off the play volume is "
+                                          "remembered (a board stands where it stands; its dot comes back)")
     max_candidates: int = param(6, 1, 50, step=1, label="Candidates per camera",
                                 help="How many best candidates per camera are tried for a stereo pair")
     adaptive_epipolar: bool = flag(True, label="Learn the epipolar tolerance",
