@@ -103,7 +103,10 @@ def _pipeline_digest(preset: str) -> str:
     import hashlib
     h = hashlib.sha1(repr(load_preset(preset)).encode())
     for folder in ("core", "io"):
-        for source in sorted((ROOT / "badminton_gui" / folder).glob("*.py")):
+        # Every module below, the stage subpackages too (core/detect, core/stereo, ...): hashing
+        # only the top folder reused stale features after a change in a stage.
+        for source in sorted((ROOT / "badminton_gui" / folder).rglob("*.py")):
+            h.update(str(source.relative_to(ROOT)).encode())
             h.update(source.read_bytes())
     return h.hexdigest()[:10]
 
