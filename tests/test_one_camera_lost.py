@@ -154,3 +154,30 @@ def test_an_older_pairs_reprojection_miss_serves_while_the_shuttle_is_still_near
     finally:
         tracker.close()
         scene.close()
+
+
+def test_a_report_withheld_as_gone_out_of_view_is_labelled_by_that_rule_not_as_outscored():
+    """The exit rule withholds a camera's report at the border while the flight leaves its view:
+    the overlay must name the two-camera rules ("stereo"), not "score" (another candidate was
+    better), which the step's end gave every unchosen survivor."""
+    from badminton_gui.core.types import REJECT_SCORE, REJECT_STEREO
+    scene = DemoScene(seed=0, size=(640, 360), rig="binocular", n_frames=150)
+    tracker = StereoTracker(scene.rig, TrackerParams(), parallel=False)
+    tracker.trace = True
+    exits = []
+    try:
+        for i in range(150):
+            left, right = scene.render(i)
+            t = scene.time_of(i)
+            result = tracker.process_frame(StereoFrame(left, right, t, t, i, i), keep_masks=False)
+            for cam, side in enumerate((result.left, result.right)):
+                if f"exit:{('left', 'right')[cam]}" in result.trace:
+                    exits.append((i, side))
+    finally:
+        tracker.close()
+        scene.close()
+    assert exits                          # the demo court's seed 0 leaves the left view at 148
+    for _, side in exits:
+        assert side.detection is None
+        labels = [c.rejected_by for c in side.candidates]
+        assert REJECT_STEREO in labels and REJECT_SCORE not in labels

@@ -16,7 +16,7 @@ REJECT_LENGTH = "length"          # filter 1: contour length out of range
 REJECT_SHORT_SIDE = "short_side"  # filter 2: tilted rectangle's shortest side out of range
 REJECT_WHITENESS = "whiteness"    # filter 3: not white enough / too saturated
 REJECT_MOTION = "motion"          # filter 4: too far from the predicted position, or stationary
-REJECT_STEREO = "stereo"          # withheld by the two-camera rules: no partner, unconfirmed, caught
+REJECT_STEREO = "stereo"          # withheld by the two-camera rules: no partner, unconfirmed, caught, gone out of view
 REJECT_SCORE = "score"            # passed the filters but another candidate was better
 REJECT_REASONS = (REJECT_LENGTH, REJECT_SHORT_SIDE, REJECT_WHITENESS, REJECT_MOTION,
                   REJECT_STEREO, REJECT_SCORE)

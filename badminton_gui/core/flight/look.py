@@ -24,7 +24,7 @@ from ..params import TrackerParams
 from ..rig import StereoRig
 from ..step import Step
 from ..stereo.look import ImagePaths
-from ..types import CameraResult, Candidate
+from ..types import REJECT_STEREO, CameraResult, Candidate
 
 # px at 1280 px width: how near the flight's projection a white pixel must show for a shuttle
 # merged with a larger blob (wider, a shoulder's edge next to a hidden cork passed on the demo).
@@ -228,5 +228,10 @@ class FlightLook:
                         and ((border and self.gone_out(cam, det, frame, guide[0]))
                              or (weak_now and self.out_of_view(cam, frame, guide[0]))))):
                 step.dets[cam] = None
+                # Marked as the two-camera rules' refusal: left unmarked, the step's end labelled
+                # it "score" (another candidate better), which the overlay then showed.
+                step.results[cam] = dataclasses.replace(step.results[cam], candidates=tuple(
+                    dataclasses.replace(c, rejected_by=REJECT_STEREO) if c is det else c
+                    for c in step.results[cam].candidates))
                 step.point, step.epi = None, None
                 step.fired("exit", cam)
