@@ -211,8 +211,10 @@ class StereoPairing:
                 outside[i, j] = True
                 where[(int(i), int(j))] = point
         off = outside & ~inside.any(axis=1)[:, None] & ~inside.any(axis=0)[None, :]
-        points = [self.rig.to_output(where[(int(i), int(j))])[0] for i, j in zip(*np.nonzero(off))
-                  if not self._on_flight(0, left[i], guide) and not self._on_flight(1, right[j], guide)]
+        # The places only matter to the memory (``stereo.off_volume_radius``, off by default).
+        points = [] if self.params.stereo.off_volume_radius <= 0.0 else [
+            self.rig.to_output(where[(int(i), int(j))])[0] for i, j in zip(*np.nonzero(off))
+            if not self._on_flight(0, left[i], guide) and not self._on_flight(1, right[j], guide)]
         return off, inside, points
 
     def _on_flight(self, cam: int, c: Candidate, guide: StepGuide | None) -> bool:
