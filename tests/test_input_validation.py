@@ -335,3 +335,34 @@ def test_max_frames_is_refused_when_parsed(command, value, capsys):
         main([command, "--max-frames", value])
     assert stop.value.code == 2
     assert "argument --max-frames:" in capsys.readouterr().err
+
+
+def test_one_video_given_as_both_cameras_is_refused_not_triangulated(dot_pair, capsys):
+    # A toed-in rig triangulates an identical pair to plausible points metres off: every pair is
+    # refused, its row marked, and the sentence says what happened.
+    summary, rows = _track(dot_pair, right="l.avi")
+    assert len(rows) == N_FRAMES and summary.points_3d == 0
+    assert {r["withheld_reason"] for r in rows} == {"input_refused"}
+    assert f"{N_FRAMES} pairs refused: the left and right images are identical" in summary.warning
+    code = main(["track", "--left", str(dot_pair / "l.avi"), "--right", str(dot_pair / "l.avi"),
+                 "--calib", str(dot_pair / "rig.yaml"), "-o", str(dot_pair / "cli.csv")])
+    assert code == 0
+    assert "the same camera or video given twice?" in capsys.readouterr().err
+
+
+def test_identical_images_are_refused_but_uniform_ones_are_not():
+    from badminton_gui.core.errors import TrackerInputError
+    from badminton_gui.core.tracker import StereoTracker
+    frames, _ = moving_dot_frames(2)
+    rig = make_rig_for()
+    tracker = StereoTracker(rig, parallel=False)
+    try:
+        with pytest.raises(TrackerInputError, match="identical"):
+            tracker.process(frames[0], frames[0].copy(), 0.0)
+        black = np.zeros_like(frames[0])
+        assert tracker.process(black, black.copy(), 0.0).timestamp == 0.0   # cameras starting up
+        other = frames[1].copy()
+        other[-1, -1, 0] ^= 1                                   # one pixel apart: two pictures
+        assert tracker.process(frames[1], other, 1 / 30).timestamp == 1 / 30
+    finally:
+        tracker.close()

@@ -22,6 +22,10 @@ The rules:
   time is tracked. Where the clock is known in advance (timestamp files) the file commands
   mark the frames it times instead (``VideoPair.doubt``), and their pairing never hands this
   method a stalled pair.
+- The two images differ. Two cameras never give bit-identical pictures (their viewpoints and
+  sensor noise differ), so an identical pair is one camera or one file given as both: on a
+  toed-in rig its "pairs" triangulate to plausible points metres from the shuttle, silently
+  wrong. Such a pair is refused; a uniform pair (two black frames while cameras start) is not.
 """
 
 from __future__ import annotations
@@ -58,6 +62,10 @@ class InputChecks:
         ``t_right`` None: the right image has the left one's time. Nothing is remembered
         unless the whole pair passes, so a refused pair leaves the run as it was."""
         images = (self.image(0, left), self.image(1, right))
+        if same_picture(*images):
+            raise TrackerInputError(
+                "the left and right images are identical: both inputs show one camera (the same "
+                "camera or video given twice?); a 3D point needs the two cameras' own views")
         t_left = self.timestamp(0, timestamp)
         t_r = t_left if t_right is None else self.timestamp(1, t_right)
         for cam, t in enumerate((t_left, t_r)):
@@ -114,3 +122,15 @@ class InputChecks:
         if abs(t) > MAX_TIMESTAMP:
             raise TrackerInputError(f"{name} is {t!r} s, beyond ±{MAX_TIMESTAMP:g} s: is it in seconds?")
         return t
+
+
+def same_picture(left: np.ndarray, right: np.ndarray) -> bool:
+    """True when two same-shaped images are identical and not uniform. The middle row is
+    compared first: two cameras' images differ there almost always, so the common case costs
+    one row's comparison."""
+    if left is right:
+        return int(left.min()) != int(left.max())
+    middle = left.shape[0] // 2
+    if not np.array_equal(left[middle], right[middle]) or not np.array_equal(left, right):
+        return False
+    return int(left.min()) != int(left.max())

@@ -60,11 +60,14 @@ class TrackFileSummary:
     # source's sentences on what the output lacks (a file cut short, a stalled clock).
     withheld: tuple[tuple[str, int], ...] = ()
     source_notes: tuple[str, ...] = ()
+    # Why the tracker refused pairs (``TrackerInputError``'s sentence, how many pairs), first first.
+    refusals: tuple[tuple[str, int], ...] = ()
 
     @property
     def warning(self) -> str:
         """One sentence on what in the output may be wrong or missing; '' when nothing is."""
         parts = list(self.source_notes)
+        parts += [f"{n} pair{'s' if n != 1 else ''} refused: {reason}" for reason, n in self.refusals]
         if self.withheld:
             counts = ", ".join(f"{n} {reason}" for reason, n in self.withheld)
             total = sum(n for _, n in self.withheld)
@@ -145,6 +148,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
     doubt = getattr(source, "doubt", None)     # VideoPair's: a step whose 3D would be made up
     withheld: dict[str, int] = {}
     refused: set[tuple[int, int]] = set()     # (index, index_right) of the pairs the tracker refused
+    refusals: dict[str, int] = {}               # the tracker's reason -> pairs refused for it
 
     def row(decided) -> list[str]:
         nonlocal hits3d
@@ -171,9 +175,10 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                     break
                 try:
                     result = tracker.process_frame(frame, keep_masks=False)
-                except TrackerInputError:
+                except TrackerInputError as exc:
                     # A pair the tracker refuses (a camera whose clock stalled): its row keeps
                     # its place in the file, empty and marked, and the run goes on.
+                    refusals[str(exc)] = refusals.get(str(exc), 0) + 1
                     result = TrackResult(frame.index, frame.timestamp, CameraResult(None),
                                          CameraResult(None), index_right=frame.index_right)
                     refused.add((frame.index, frame.index_right))
@@ -196,7 +201,8 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                             tracker.rig_epipolar_px, rig.image_size[0],
                             None if score is None else score.outcomes(0),
                             None if score is None else score.outcomes(1),
-                            tuple(sorted(withheld.items())), tuple(getattr(source, "notes", ())))
+                            tuple(sorted(withheld.items())), tuple(getattr(source, "notes", ())),
+                            tuple(refusals.items()))
 
 
 def adapt_to_pair(source, rig: StereoRig, params: TrackerParams, *, max_frames: int | None = None,
