@@ -11,11 +11,11 @@ from types import SimpleNamespace
 import pytest
 
 from badminton_gui.core.params import TrackerParams
-from badminton_gui.core.rig import REFINE_FROM_PX, refine_threshold
+from badminton_gui.core.rig import REFINE_FROM_PX, inputs_look_swapped, refine_threshold
 from badminton_gui.core.stereo.epipolar import EPIPOLAR_LEARNT_SAMPLES
 from badminton_gui.core.tracker import StereoTracker
 from badminton_gui.gui.rig_check import RigCheck, readout_text
-from badminton_gui.io.demo_scene import make_rig
+from badminton_gui.io.demo_scene import DemoScene, make_rig
 
 
 def test_the_tracker_reports_the_rigs_error_once_it_has_enough_sure_pairs():
@@ -41,7 +41,7 @@ def test_the_readout_and_the_advice_scale_with_the_image_and_come_once():
     assert check.update(SimpleNamespace(rig_epipolar_px=None), 2048) is None
     assert check.update(SimpleNamespace(rig_epipolar_px=1.5), 2048) is None
     advice = check.update(SimpleNamespace(rig_epipolar_px=31.0), 2048)
-    assert advice is not None and "31 px" in advice
+    assert advice is not None and "31 px" in advice.text and not advice.swap
     assert check.update(SimpleNamespace(rig_epipolar_px=31.0), 2048) is None    # once
     check.reset()
     assert check.update(SimpleNamespace(rig_epipolar_px=31.0), 2048) is not None
@@ -63,6 +63,24 @@ def test_the_banner_advises_a_refit_and_its_button_opens_the_refinement(main_win
     window._refine.close()
     window._check_keep_up(0.1, packet)
     assert not window.banner.isVisible()                 # once per source
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs Xvfb (QT_QPA_PLATFORM=xcb)")
+def test_swapped_cameras_get_a_button_that_opens_them_the_other_way_round(main_window, monkeypatch):
+    from badminton_gui.gui.settings import SourceSpec
+    from badminton_gui.gui.worker import WorkerStats
+
+    window = main_window(params=TrackerParams())
+    window.spec = SourceSpec("video", "l.mp4", "r.mp4", "rig.yaml")
+    opened = []
+    monkeypatch.setattr(window, "start_spec", opened.append)
+    packet = SimpleNamespace(stats=WorkerStats(rig_epipolar_px=20.6, rig_swapped_px=0.06),
+                             result=SimpleNamespace(left=SimpleNamespace(image_size=(1280, 720))))
+    window._check_keep_up(0.0, packet)
+    assert window.banner.isVisible() and "look swapped" in window.banner.text
+    assert window.banner.action_button.text() == "Swap cameras"
+    window.banner.action_button.click()
+    assert [(s.left, s.right) for s in opened] == [("r.mp4", "l.mp4")]
 
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
@@ -97,6 +115,51 @@ def test_the_nycu_rig_imported_from_its_cfg_files_is_found_off():
         src.close()
     assert tracker.rig_epipolar_px is not None
     assert tracker.rig_epipolar_px > 2 * refine_threshold(2048)
+    # Off, but not swapped: exchanged, its pairs miss by about ten times more.
+    assert not inputs_look_swapped(tracker.rig_epipolar_px, tracker.rig_swapped_px, 2048)
+
+
+def _tracked(left: int, right: int, frames: int = 200) -> StereoTracker:
+    """The demo court (640×360) tracked with camera ``left`` as the left input and ``right`` as
+    the right one."""
+    scene = DemoScene(seed=0, size=(640, 360), n_frames=frames)
+    tracker = StereoTracker(scene.rig, TrackerParams(), parallel=False)
+    while (f := scene.read()) is not None:
+        images = (f.left, f.right)
+        tracker.process(images[left], images[right], f.t_left, keep_masks=False)
+    tracker.close()
+    return tracker
+
+
+def test_cameras_given_the_other_way_round_are_named_as_swapped_not_as_an_off_rig():
+    as_given, exchanged = _tracked(0, 1), _tracked(1, 0)
+    width = 640
+    assert as_given.rig_epipolar_px < 1.0 and as_given.rig_swapped_px > refine_threshold(width)
+    assert not inputs_look_swapped(as_given.rig_epipolar_px, as_given.rig_swapped_px, width)
+    assert exchanged.rig_epipolar_px > refine_threshold(width) and exchanged.rig_swapped_px < 1.0
+    assert inputs_look_swapped(exchanged.rig_epipolar_px, exchanged.rig_swapped_px, width)
+    # A rig that is off is off both ways round: that stays advice to refine.
+    assert not inputs_look_swapped(31.0, 25.0, 2048)
+
+    advice = RigCheck().update(SimpleNamespace(rig_epipolar_px=exchanged.rig_epipolar_px,
+                                               rig_swapped_px=exchanged.rig_swapped_px), width)
+    assert advice.swap and "look swapped" in advice.text
+    assert "swapped?" in readout_text(exchanged.rig_epipolar_px, width, exchanged.rig_swapped_px)
+    from badminton_gui.io.track_file import TrackFileSummary
+    summary = TrackFileSummary(200, 100, 2.0, Path("t.csv"), False, exchanged.rig_epipolar_px, width,
+                               rig_swapped_px=exchanged.rig_swapped_px)
+    assert "look swapped" in summary.rig_note and "refine-calib" not in summary.rig_note
+
+
+def test_swapping_a_source_exchanges_everything_that_belongs_to_a_camera():
+    from badminton_gui.gui.settings import SourceSpec
+    spec = SourceSpec("video", "l.mp4", "r.mp4", "rig.yaml", "lt.csv", "rt.csv", left_labels="ll.csv",
+                      right_labels="rl.csv")
+    back = spec.swapped()
+    assert (back.left, back.right, back.left_times, back.right_times, back.left_labels, back.right_labels) == (
+        "r.mp4", "l.mp4", "rt.csv", "lt.csv", "rl.csv", "ll.csv")
+    assert back.calib == "rig.yaml" and back.swapped() == spec
+    assert spec.swappable and not SourceSpec("demo").swappable and not SourceSpec("single", "a.mp4").swappable
 
 
 def test_a_file_tracked_with_an_off_rig_says_so_and_one_that_held_does_not(tmp_path):

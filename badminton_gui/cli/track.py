@@ -38,8 +38,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "retrying the port)")
     p.add_argument("--max-frames", type=frame_count, default=None, help="stop after this many frames")
     add_json_argument(p, "output, pairs, points_3d, points_3d_percent, pairs_per_second, frame "
-                         "('court' or 'left-camera'), rig_epipolar_px (null: not measured), rig_note "
-                         "('' when the rig held), score (null without labels, else left/right with "
+                         "('court' or 'left-camera'), rig_epipolar_px (null: not measured), rig_swapped_px "
+                         "(the same pairs with the cameras exchanged), rig_note ('' when the rig "
+                         "held), score (null without labels, else left/right with "
                          "tp, tn, fp1, fp2, fn and accuracy, precision, recall, f1 as fractions)")
     p.add_argument("--adapt", action=argparse.BooleanOptionalAction, default=None,
                    help="first adapt each camera's classifier to this court from the flights both "
@@ -96,7 +97,8 @@ def run(args: argparse.Namespace) -> int:
         print_json({"output": str(args.output), "pairs": n, "points_3d": hits3d,
                     "points_3d_percent": round(100 * hits3d / n, 3),
                     "pairs_per_second": round(summary.pairs_per_second, 3), "frame": frame_name,
-                    "rig_epipolar_px": summary.rig_epipolar_px, "rig_note": summary.rig_note,
+                    "rig_epipolar_px": summary.rig_epipolar_px, "rig_swapped_px": summary.rig_swapped_px,
+                    "rig_note": summary.rig_note,
                     "warning": summary.warning, "score": score})
     elif not args.quiet:
         print(f"{n} frame pairs, 3D point in {hits3d} ({100 * hits3d / n:.1f} %), "

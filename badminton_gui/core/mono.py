@@ -27,6 +27,7 @@ class MonoTracker:
 
     trajectory = None          # no 3D flight without a second camera
     rig_epipolar_px = None     # no stereo rig to check
+    rig_swapped_px = None
 
     def __init__(self, params: TrackerParams | None = None) -> None:
         self.params = params or TrackerParams()

@@ -159,6 +159,13 @@ class StereoTracker:
         far (None: too few yet); a chessboard rig a few px, the NYCU rig from its ``.cfg`` ≈ 30 px."""
         return self.gate.rig_error_px()
 
+    @property
+    def rig_swapped_px(self) -> float | None:
+        """The median epipolar error (px) the same sure pairs have with the left and right images
+        exchanged (None: too few yet): far below ``rig_epipolar_px`` when the inputs are swapped
+        (``rig.inputs_look_swapped``)."""
+        return self.gate.swapped_error_px()
+
     def close(self) -> None:
         self.adaptation.close()
         if self._pool is not None:

@@ -316,7 +316,7 @@ class Readouts(QWidget):
         v["latency"].setText(latency_text(s))
         v["latency"].setToolTip(latency_tooltip(s))
         v["playback"].setText(f"{s.playback_speed:.2f}× real time")
-        v["rig"].setText(rig_readout_text(s.rig_epipolar_px, r.left.image_size[0]))
+        v["rig"].setText(rig_readout_text(s.rig_epipolar_px, r.left.image_size[0], s.rig_swapped_px))
         v["score"].setText(score_text(s.score_left, s.score_right, s.truth_name))
         v["score"].setToolTip(score_tooltip(s.score_left, s.score_right, s.truth_name))
 
@@ -463,6 +463,10 @@ class MainWindow(QMainWindow):
         self._action(src, "&One video (TV broadcast)…", self.choose_single_video)
         src.addSeparator()
         self._action(src, "&Restart source", lambda: self.start_spec(self.spec), "Ctrl+R")
+        self.swap_action = self._action(src, "S&wap left and right", self.swap_cameras)
+        self.swap_action.setToolTip("Open the two cameras (or videos) again, each as the other: for a "
+                                    "rack cabled the other way round")
+        src.aboutToShow.connect(lambda: self.swap_action.setEnabled(self.spec.swappable))
         self.stop_action = self._action(src, "S&top", self.stop_source, "Ctrl+.")
         self.stop_action.setToolTip("Stop tracking and release the cameras or files (also gives up "
                                     "opening a source that takes long)")
@@ -565,6 +569,11 @@ class MainWindow(QMainWindow):
                                         if hasattr(self, "realtime_action") else spec.realtime)
         st.save_source_spec(self.settings, self.spec)
         self.start_opener(lambda context, spec=self.spec: open_spec(spec, context), self.spec.describe())
+
+    def swap_cameras(self) -> None:
+        """Open the current two-camera source again with the left and right exchanged."""
+        if self.spec.swappable:
+            self.start_spec(self.spec.swapped())
 
     def start_opener(self, opener: SourceOpener, description: str) -> None:
         """Track a new source (tests pass stand-in openers here).
@@ -1282,7 +1291,9 @@ class MainWindow(QMainWindow):
         if not self.banner.isVisible():
             rig_advice = self._rig_check.update(stats, packet.result.left.image_size[0])
             if rig_advice is not None:
-                self.banner.show_message(rig_advice, kind="advice", action=("Refine…", self.open_refine))
+                action = (("Swap cameras", self.swap_cameras) if rig_advice.swap and self.spec.swappable
+                          else ("Refine…", self.open_refine))
+                self.banner.show_message(rig_advice.text, kind="advice", action=action)
 
     def use_preset(self, name: str) -> None:
         """Track with a shipped preset, or a preset .json file (dropped on the window), from now

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 from PySide6.QtCore import QSettings
 
@@ -41,6 +41,18 @@ class SourceSpec:
     video_times: bool = False          # pair a video pair by the files' own frame timestamps
     left_labels: str = ""              # optional label CSVs (Frame,Visibility,X,Y): live score
     right_labels: str = ""
+
+    @property
+    def swappable(self) -> bool:
+        """A two-camera source whose cameras can be given the other way round."""
+        return self.kind in ("video", "cameras")
+
+    def swapped(self) -> "SourceSpec":
+        """The same source with the left and right cameras exchanged (their timestamps and labels
+        with them): a rack cabled the other way round, or two videos picked in the wrong fields."""
+        return replace(self, left=self.right, right=self.left, left_times=self.right_times,
+                       right_times=self.left_times, left_labels=self.right_labels,
+                       right_labels=self.left_labels)
 
     def describe(self) -> str:
         if self.kind == "demo":

@@ -198,6 +198,7 @@ class WorkerStats:
     live: bool = False               # a camera pair: newest frame wins, drops counted
     paced: bool = False              # a file or the demo played in real time
     rig_epipolar_px: float | None = None   # the rig's measured epipolar error (StereoTracker), px
+    rig_swapped_px: float | None = None    # the same with the cameras exchanged (StereoTracker), px
     # The readout scored against the source's truth (io/truth.py) since the parameters last
     # changed: None without a truth; ``truth_name`` says which ("demo truth", "labels").
     score_left: Outcomes | None = None
@@ -723,6 +724,7 @@ class TrackingWorker(QObject):
                                      live=reader is not None,
                                      paced=reader is None and realtime and not stepping,
                                      rig_epipolar_px=tracker.rig_epipolar_px,
+                                     rig_swapped_px=tracker.rig_swapped_px,
                                      truth_name="" if truth is None else truth.name,
                                      **_adapt_readout(tracker))
             show(readout.push(result, (frame, labels, t_available, live_stats, generation, diagnostics)),

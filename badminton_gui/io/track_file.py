@@ -17,7 +17,7 @@ from typing import Callable
 
 from ..core.evaluation import LiveScore, Outcomes
 from ..core.params import TrackerParams
-from ..core.rig import StereoRig, refine_threshold
+from ..core.rig import StereoRig, inputs_look_swapped, refine_threshold, swapped_sentence
 from ..core.court_adaptation import StereoHarvest, adapt_to_stereo_recording
 from ..core.errors import TrackerInputError
 from ..core.track_lookahead import StereoLookahead
@@ -62,6 +62,7 @@ class TrackFileSummary:
     source_notes: tuple[str, ...] = ()
     # Why the tracker refused pairs (``TrackerInputError``'s sentence, how many pairs), first first.
     refusals: tuple[tuple[str, int], ...] = ()
+    rig_swapped_px: float | None = None    # the same pairs with the cameras exchanged (StereoTracker)
 
     @property
     def warning(self) -> str:
@@ -95,6 +96,10 @@ class TrackFileSummary:
         px = self.rig_epipolar_px
         if px is None or px <= refine_threshold(self.image_width):
             return ""
+        if inputs_look_swapped(px, self.rig_swapped_px, self.image_width):
+            return (swapped_sentence(px, self.rig_swapped_px)
+                    + " Give the left video as the right one and the right as the left (their "
+                    "timestamp files too).")
         return (f"The shuttle's pairs missed their epipolar lines by {px:.0f} px (median; a good rig "
                 f"stays under {refine_threshold(self.image_width):.0f} px here): the rig's relative pose "
                 f"is off, and so are the 3D points. `badminton-track refine-calib` (or Calibration ▸ "
@@ -202,7 +207,7 @@ def track_to_csv(source, rig: StereoRig, params: TrackerParams, output: str | Pa
                             None if score is None else score.outcomes(0),
                             None if score is None else score.outcomes(1),
                             tuple(sorted(withheld.items())), tuple(getattr(source, "notes", ())),
-                            tuple(refusals.items()))
+                            tuple(refusals.items()), tracker.rig_swapped_px)
 
 
 def adapt_to_pair(source, rig: StereoRig, params: TrackerParams, *, max_frames: int | None = None,

@@ -33,6 +33,11 @@ class EpipolarGate:
         # with each new sample, and np.median of 600 values costs ≈ 0.05 ms a call.
         self._sorted: list[float] = []
         self._nans = 0
+        # The same pairs' errors with the cameras' roles exchanged: small where the direct ones
+        # are large when the left and right inputs were swapped (``swapped_error_px``).
+        self._swapped: deque[float] = deque(maxlen=600)
+        self._swapped_median: tuple[int, float | None] = (0, None)   # (samples added, its median)
+        self._swapped_added = 0
 
     @property
     def learnt(self) -> bool:
@@ -83,8 +88,24 @@ class EpipolarGate:
                    if self.learnt else EPIPOLAR_TYPICAL_MIN)
         return 1.0 + (epi / typical) ** 2
 
-    def add_sample(self, err: float) -> None:
-        """One sure pair's epipolar error (the oldest of 600 leaves)."""
+    def swapped_error_px(self) -> float | None:
+        """The median epipolar error (px) the same sure pairs would have with the left and right
+        images exchanged, or None before EPIPOLAR_LEARNT_SAMPLES of them."""
+        if len(self._swapped) < EPIPOLAR_LEARNT_SAMPLES:
+            return None
+        # Read with every display packet; it changes only with a new sample.
+        if self._swapped_median[0] != self._swapped_added:
+            values = np.asarray(self._swapped)
+            values = values[~np.isnan(values)]
+            self._swapped_median = (self._swapped_added, float(np.median(values)) if len(values) else None)
+        return self._swapped_median[1]
+
+    def add_sample(self, err: float, swapped: float | None = None) -> None:
+        """One sure pair's epipolar error, and the error it has with the cameras exchanged (the
+        oldest of 600 leaves)."""
+        if swapped is not None:
+            self._swapped.append(swapped)
+            self._swapped_added += 1
         samples = self._samples
         if len(samples) == samples.maxlen:
             old = samples[0]

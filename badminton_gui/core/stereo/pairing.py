@@ -131,7 +131,8 @@ class StereoPairing:
         if min(left.tracklet_hits(own_left), right.tracklet_hits(own_right)) < sp.confident_hits:
             return
         err = float(self.rig.epipolar_errors([[own_left.x, own_left.y]], [list(self.right_xy(own_right))])[0, 0])
-        self.gate.add_sample(err)
+        swapped = float(self.rig.epipolar_errors([[own_right.x, own_right.y]], [[own_left.x, own_left.y]])[0, 0])
+        self.gate.add_sample(err, swapped)
 
     def _best(self, result: CameraResult) -> list[Candidate]:
         """A camera's best ``stereo.max_candidates`` surviving candidates by score. A coasting
