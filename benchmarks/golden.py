@@ -111,11 +111,12 @@ def _demo_recording(work: Path, seed: int) -> Path:
     return folder
 
 
-def _demo_track(seed: int):
+def _demo_track(seed: int, preset: str | None = None):
     def run(work: Path, out: Path) -> None:
         d = _demo_recording(work, seed)
         cli(["track", "--left", str(d / "left.mp4"), "--right", str(d / "right.mp4"),
-             "--calib", str(d / "rig.yaml"), "-o", str(out), "--quiet"])
+             "--calib", str(d / "rig.yaml"), "-o", str(out), "--quiet"]
+            + (["--preset", preset] if preset else []))
     return run
 
 
@@ -126,7 +127,7 @@ def _demo_detect(seed: int):
     return run
 
 
-def _rally_track(rally: Path, max_frames: int | None = None):
+def _rally_track(rally: Path, max_frames: int | None = None, preset: str | None = None):
     def run(work: Path, out: Path) -> None:
         rig = work / f"{rally.name}_rig.yaml"
         with contextlib.redirect_stdout(io.StringIO()):
@@ -136,7 +137,8 @@ def _rally_track(rally: Path, max_frames: int | None = None):
              "--right", str(rally / "CameraReader_2.mp4"), "--calib", str(rig),
              "--left-times", str(rally / "CameraReader_1.csv"),
              "--right-times", str(rally / "CameraReader_2.csv"), "-o", str(out), "--quiet"]
-            + (["--max-frames", str(max_frames)] if max_frames else []))
+            + (["--max-frames", str(max_frames)] if max_frames else [])
+            + (["--preset", preset] if preset else []))
     return run
 
 
@@ -146,12 +148,13 @@ def _broadcast_detect(video: Path):
     return run
 
 
-def _rally_case(name: str, max_frames: int | None = None) -> Case:
+def _rally_case(name: str, max_frames: int | None = None, preset: str | None = None) -> Case:
     rally = DATA_DIR / "nycu-stereo" / name
     needs = tuple(rally / f for f in ("CameraReader_1.cfg", "CameraReader_2.cfg", "CameraReader_1.mp4",
                                       "CameraReader_2.mp4", "CameraReader_1.csv", "CameraReader_2.csv"))
     first = f"-first{max_frames}" if max_frames else ""
-    return Case(f"{name}{first}-track", "track", needs, _rally_track(rally, max_frames))
+    tag = f"-{preset}" if preset else ""
+    return Case(f"{name}{first}{tag}-track", "track", needs, _rally_track(rally, max_frames, preset))
 
 
 def _broadcast_case(name: str) -> Case:
@@ -162,10 +165,13 @@ def _broadcast_case(name: str) -> Case:
 CASES: tuple[Case, ...] = (
     *(Case(f"demo-seed{s}-track", "track", (), _demo_track(s)) for s in (0, 1)),
     *(Case(f"demo-seed{s}-detect-left", "detect", (), _demo_detect(s)) for s in (0, 1)),
+    # The coarse preset: windowed tracking and the coarser model, which the default does not run.
+    Case("demo-seed0-coarse-track", "track", (), _demo_track(0, "coarse")),
     _rally_case("rally_11-46-04"),
     # The serve and the first exchanges: the real stereo case short enough for the test suite.
     _rally_case("rally_11-46-04", max_frames=RALLY_SLICE),
     _rally_case("rally_11-49-21"),
+    _rally_case("rally_11-49-21", preset="coarse"),
     _broadcast_case("1_02_01"),
     _broadcast_case("bwf_00001"),
 )
