@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import argparse
 import cProfile
+import dataclasses
 import importlib
 import io
 import math
@@ -495,6 +496,85 @@ def process_bound(full_rig: StereoRig, preset: str | None, n: int) -> None:
                       f"{1000 * (time.process_time() - cpu) / len(pairs):5.2f} ms CPU a pair")
 
 
+def stage_cpu(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, preset: str | None) -> tuple:
+    """The thread CPU a pair spends in each camera's candidate stage (``plan_window`` and
+    ``find_candidates``: stages 1–4) and in the rest of ``StereoTracker.process`` (the stereo
+    stage: pairing, vouch, look, hold, 3D, flight, phase), one thread (``parallel=False``), 2048 px.
+    CPU time, not wall: the machine's load stretches the wall clock but hardly the CPU a pair.
+    Returns (left, right, stereo) ms a pair, means."""
+    pairs = load_pairs(n, None, skip)
+    tracker = StereoTracker(full_rig, params, parallel=False)
+    spent = {"left": 0.0, "right": 0.0}
+    for side, det in (("left", tracker.left), ("right", tracker.right)):
+        for name in ("plan_window", "find_candidates"):
+            def timed(*args, _run=getattr(det, name), _side=side, **kw):
+                c0 = time.thread_time()
+                out = _run(*args, **kw)
+                spent[_side] += time.thread_time() - c0
+                return out
+            setattr(det, name, timed)
+    rows = []
+    for lf, rf, t in pairs:
+        spent["left"] = spent["right"] = 0.0
+        c0 = time.thread_time()
+        tracker.process(lf, rf, t, keep_masks=False)
+        total = time.thread_time() - c0
+        rows.append((spent["left"], spent["right"], total - spent["left"] - spent["right"]))
+    tracker.close()
+    ms = 1000 * np.asarray(rows)
+    mean, total = ms.mean(axis=0), ms.sum(axis=1).mean()
+    print(f"CPU a pair by stage, {RALLY} pairs {skip}-{skip + len(pairs) - 1}, preset {preset or 'default'}, "
+          f"one thread: total {total:.2f} ms; " + ", ".join(
+              f"{name} {m:.2f} ms ({100 * m / total:.1f} %, p99 {np.percentile(ms[:, k], 99):.2f})"
+              for k, (name, m) in enumerate(zip(("left camera's candidates", "right camera's candidates",
+                                                  "stereo stage"), mean))))
+    bound = max(mean[0], mean[1]) + mean[2]
+    print(f"  a process per camera, the stereo stage after both: at best {bound:.2f} ms a pair on the "
+          f"critical path ({1000 / bound:.0f} pairs/s on idle cores) against {total:.2f} ms in turn "
+          f"({1000 / total:.0f} pairs/s), before the frames' hand-over")
+    return tuple(float(m) for m in mean)
+
+
+def processes_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rounds: int,
+                 preset: str | None) -> None:
+    """``StereoTracker`` with its camera threads against ``StereoTracker(processes=True)`` (each
+    camera's detector in a worker process, frames handed over through shared memory), alternated
+    in this run on the same frames held in memory, 2048 px: pairs/s, latency p50 / p99, the CPU a
+    pair (this process's and the workers', of it the workers'), and a digest of the outputs (the
+    two must match). The first pair is not timed (it waits for the workers to start)."""
+    import hashlib
+    import os
+    pairs = load_pairs(n, None, skip)
+    print(f"threads against processes: {RALLY} pairs {skip}-{skip + len(pairs) - 1}, preset {preset or 'default'}")
+    print(f"{'round':>5} {'mode':>9} {'pairs/s':>8} {'p50 ms':>7} {'p99 ms':>7} {'CPU/pair':>9} "
+          f"{'of it workers':>13} {'outputs':>8} {'load':>5}")
+    for r in range(rounds):
+        for mode in (("threads", "processes") if r % 2 == 0 else ("processes", "threads")):
+            tracker = StereoTracker(full_rig, params, processes=mode == "processes")
+            # The first pair untimed, either way: it waits for the workers to start (imports).
+            lf, rf, t = pairs[0]
+            results = [tracker.process(lf, rf, t, keep_masks=False)]
+            workers0 = tracker.cameras.worker_cpu() if mode == "processes" else 0.0
+            lat = []
+            c0, w0 = time.process_time(), time.perf_counter()
+            for lf, rf, t in pairs[1:]:
+                t0 = time.perf_counter()
+                results.append(tracker.process(lf, rf, t, keep_masks=False))
+                lat.append(time.perf_counter() - t0)
+            wall = time.perf_counter() - w0
+            cpu = time.process_time() - c0
+            workers = tracker.cameras.worker_cpu() - workers0 if mode == "processes" else 0.0
+            tracker.close()
+            digest = hashlib.sha1()
+            for res in results:
+                digest.update(repr(dataclasses.replace(res, processing_ms=0.0)).encode())
+            lat_ms, timed = np.asarray(lat) * 1000, len(lat)
+            print(f"{r + 1:>5} {mode:>9} {timed / wall:8.1f} {np.percentile(lat_ms, 50):7.2f} "
+                  f"{np.percentile(lat_ms, 99):7.2f} {1000 * (cpu + workers) / timed:6.2f} ms "
+                  f"{1000 * workers / timed:10.2f} ms {digest.hexdigest()[:8]} {os.getloadavg()[0]:5.1f}",
+                  flush=True)
+
+
 def window_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rounds: int,
               preset: str | None) -> None:
     """Windowed tracking (core/window.py) off and on, alternated in this process, 2048 px.
@@ -665,7 +745,13 @@ def main() -> None:
     ap.add_argument("--window", action="store_true",
                     help="only: the preset with window.enabled off and on, alternated (2048 px, "
                          "--pairs pairs from pair --skip on, --rounds rounds)")
-    ap.add_argument("--skip", type=int, default=0, help="--window: pairs skipped first")
+    ap.add_argument("--stages", action="store_true",
+                    help="only: the CPU a pair in each camera's candidate stage and in the stereo stage "
+                         "(one thread, 2048 px, --pairs pairs from pair --skip on)")
+    ap.add_argument("--processes", action="store_true",
+                    help="only: StereoTracker's camera threads against a process per camera "
+                         "(StereoTracker(processes=True)), alternated, --rounds rounds (2048 px)")
+    ap.add_argument("--skip", type=int, default=0, help="--window, --stages, --processes: pairs skipped first")
     ap.add_argument("--rounds", type=int, default=3, help="--window, --trees: alternated rounds")
     ap.add_argument("--trees", nargs="+", default=None, metavar="DIR",
                     help="only: source trees (dirs with badminton_gui/ and resources/; '.': this "
@@ -675,6 +761,15 @@ def main() -> None:
     if args.trees:
         with opencv_threads(args.cv_threads or None):
             trees_ab(args.trees, args.preset, args.pairs, args.skip, args.rounds)
+        return
+    if args.stages or args.processes:
+        params = load_preset(args.preset)
+        full_rig = rig_from_nycu(DATA / RALLY / "CameraReader_1.cfg", DATA / RALLY / "CameraReader_2.cfg")
+        with opencv_threads(args.cv_threads or None):
+            if args.stages:
+                stage_cpu(full_rig, params, args.pairs, args.skip, args.preset)
+            if args.processes:
+                processes_ab(full_rig, params, args.pairs, args.skip, args.rounds, args.preset)
         return
     if args.window:
         params = load_preset(args.preset)

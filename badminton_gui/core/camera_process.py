@@ -160,7 +160,8 @@ class RemoteDetector(TrackletQueries):
     def _install(self, snapshot: DetectorSnapshot) -> None:
         self._associator = SnapshotTracklets(snapshot)
         self.last_diagnostics = snapshot.diagnostics
-        self.last_scored = snapshot.scored
+        if snapshot.scored is not None:
+            self.last_scored = snapshot.scored
 
     # ---- what the stereo stage tells the detector ------------------------------------------
     def commit(self, detection: Candidate | None, t: float, candidates: tuple[Candidate, ...] = ()) -> None:

@@ -181,9 +181,11 @@ class CameraDetector(TrackletQueries):
 
     def snapshot(self, result: CameraResult) -> DetectorSnapshot:
         """What the stereo stage may ask about ``result`` (this detector's last frame) until the
-        next frame, for a stand-in in another process (``core/camera_process.py``)."""
+        next frame, for a stand-in in another process (``core/camera_process.py``); the
+        classifier's view of the blobs (``last_scored``) only while the court adaptation reads it."""
+        scored = self.last_scored if self.params.adapt.enabled else None
         return DetectorSnapshot.of(self._associator, self._tracklets.looks, result,
-                                   self.last_diagnostics, self.last_scored)
+                                   self.last_diagnostics, scored)
 
     @property
     def tracking(self) -> bool:

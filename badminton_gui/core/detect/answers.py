@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections import deque
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -176,11 +176,29 @@ def _leaving_edge(x: float, y: float, velocity: tuple[float, float], w: int, h: 
             or (vy < 0 and y + 0.5 < margin) or (vy > 0 and h - 0.5 - y < margin))
 
 
-def _trimmed(tr: Tracklet | None) -> Tracklet | None:
-    """A copy of ``tr`` keeping the last two of its recent positions (all a query reads)."""
-    if tr is None:
-        return None
-    return dataclasses.replace(tr, recent=deque(list(tr.recent)[-2:], maxlen=2))
+class TrackletFacts(NamedTuple):
+    """What a query reads of a :class:`Tracklet` (the same names): a snapshot's tracklet."""
+
+    ident: int
+    x: float
+    y: float
+    vx: float
+    vy: float
+    hits: int
+    hit_now: bool
+    velocity_known: bool
+    quality: float
+    recent: tuple       # the last two of its recent positions
+
+    @staticmethod
+    def row(tr: Tracklet | None) -> tuple | None:
+        """``tr``'s facts as a plain tuple (quick to pickle; ``TrackletFacts._make`` reads it)."""
+        if tr is None:
+            return None
+        recent = tr.recent
+        last = tuple(recent[k] for k in range(max(len(recent) - 2, 0), len(recent)))
+        return (tr.ident, tr.x, tr.y, tr.vx, tr.vy, tr.hits, tr.hit_now, tr.velocity_known,
+                tr.quality, last)
 
 
 @dataclass(frozen=True, slots=True)
@@ -189,18 +207,19 @@ class DetectorSnapshot:
     not live), the followed tracklet's ident and its ghost, each such tracklet's recent widths
     and areas (``TrackletLooks``), and the frame's ``last_diagnostics`` / ``last_scored``."""
 
-    tracklets: dict[int, Tracklet | None]
-    ghost: Tracklet | None
+    tracklets: dict[int, tuple | None]      # TrackletFacts rows
+    ghost: tuple | None
     selected: int | None
     widths: dict[int, tuple[float, ...] | None]
     areas: dict[int, tuple[float, ...] | None]
     diagnostics: DetectionDiagnostics | None = None
-    scored: tuple[np.ndarray, np.ndarray] = (np.zeros((0, 2)), np.zeros((0, 0)))
+    scored: tuple[np.ndarray, np.ndarray] | None = None
 
     @classmethod
     def of(cls, associator, looks, result: CameraResult, diagnostics: DetectionDiagnostics | None,
-           scored: tuple[np.ndarray, np.ndarray]) -> DetectorSnapshot:
-        """The snapshot of a detector's ``associator`` and ``looks`` after ``result``."""
+           scored: tuple[np.ndarray, np.ndarray] | None) -> DetectorSnapshot:
+        """The snapshot of a detector's ``associator`` and ``looks`` after ``result``
+        (``scored``: the frame's ``last_scored``, when someone reads it)."""
         idents = {c.tracklet for c in result.candidates if c.tracklet >= 0}
         if associator.selected is not None:
             idents.add(associator.selected)
@@ -210,7 +229,8 @@ class DetectorSnapshot:
         for ident in idents:
             widths[ident] = None if looks.widths(ident) is None else tuple(looks.widths(ident))
             areas[ident] = None if looks.areas(ident) is None else tuple(looks.areas(ident))
-        return cls({i: _trimmed(live.get(i)) for i in idents}, _trimmed(associator.ghost),
+        row = TrackletFacts.row
+        return cls({i: row(live.get(i)) for i in idents}, row(associator.ghost),
                    associator.selected, widths, areas, diagnostics, scored)
 
 
@@ -222,23 +242,24 @@ class SnapshotTracklets:
         self.snapshot = snapshot
         self.selected = None if snapshot is None else snapshot.selected
 
-    def tracklet(self, ident: int) -> Tracklet | None:
+    def tracklet(self, ident: int) -> TrackletFacts | None:
         if ident < 0 or self.snapshot is None:
             return None
         try:
-            return self.snapshot.tracklets[ident]
+            row = self.snapshot.tracklets[ident]
         except KeyError:
             raise LookupError(f"tracklet {ident} is not in this frame's snapshot") from None
+        return None if row is None else TrackletFacts._make(row)
 
     @property
-    def followed(self) -> Tracklet | None:
+    def followed(self) -> TrackletFacts | None:
         if self.selected is None or self.snapshot is None:
             return None
         live = self.snapshot.tracklets.get(self.selected)
         if live is not None:
-            return live
+            return TrackletFacts._make(live)
         ghost = self.snapshot.ghost
-        return ghost if ghost is not None and ghost.ident == self.selected else None
+        return TrackletFacts._make(ghost) if ghost is not None and ghost[0] == self.selected else None
 
     def select(self, ident: int | None) -> None:
         self.selected = ident
