@@ -36,6 +36,11 @@ alternating, the tracker's two threads against the two detector processes fed th
 would have to feed them (each frame copied into the process's shared memory, the
 ``CameraResult`` pickled back): pairs/s, p99, and the CPU a pair costs each way.
 
+``--stages`` splits the CPU a pair (one thread) between each camera's candidate stage and the
+stereo stage; ``--processes`` runs ``StereoTracker`` with its camera threads and with a process
+per camera (``processes=True``) alternately on the same frames: pairs/s, latency, the CPU a pair
+including the workers', and a digest of the outputs, which must match.
+
 First of all it prints how fast the demo court renders at 1280×720 (the GUI's demo must render
 faster than the cameras' rate it imitates); that part needs no data.
 
@@ -540,21 +545,24 @@ def processes_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, 
     """``StereoTracker`` with its camera threads against ``StereoTracker(processes=True)`` (each
     camera's detector in a worker process, frames handed over through shared memory), alternated
     in this run on the same frames held in memory, 2048 px: pairs/s, latency p50 / p99, the CPU a
-    pair (this process's and the workers', of it the workers'), and a digest of the outputs (the
+    pair (this process's and the workers'; of it the workers', and this process's copying the
+    frames into the workers' shared memory), and a digest of the outputs (the
     two must match). The first pair is not timed (it waits for the workers to start)."""
     import hashlib
     import os
     pairs = load_pairs(n, None, skip)
     print(f"threads against processes: {RALLY} pairs {skip}-{skip + len(pairs) - 1}, preset {preset or 'default'}")
     print(f"{'round':>5} {'mode':>9} {'pairs/s':>8} {'p50 ms':>7} {'p99 ms':>7} {'CPU/pair':>9} "
-          f"{'of it workers':>13} {'outputs':>8} {'load':>5}")
+          f"{'of it workers':>13} {'copying':>11} {'outputs':>8} {'load':>5}")
     for r in range(rounds):
         for mode in (("threads", "processes") if r % 2 == 0 else ("processes", "threads")):
             tracker = StereoTracker(full_rig, params, processes=mode == "processes")
             # The first pair untimed, either way: it waits for the workers to start (imports).
             lf, rf, t = pairs[0]
             results = [tracker.process(lf, rf, t, keep_masks=False)]
-            workers0 = tracker.cameras.worker_cpu() if mode == "processes" else 0.0
+            procs = mode == "processes"
+            workers0 = tracker.cameras.worker_cpu() if procs else 0.0
+            copy0 = tracker.cameras.copy_cpu() if procs else 0.0
             lat = []
             c0, w0 = time.process_time(), time.perf_counter()
             for lf, rf, t in pairs[1:]:
@@ -563,7 +571,8 @@ def processes_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, 
                 lat.append(time.perf_counter() - t0)
             wall = time.perf_counter() - w0
             cpu = time.process_time() - c0
-            workers = tracker.cameras.worker_cpu() - workers0 if mode == "processes" else 0.0
+            workers = tracker.cameras.worker_cpu() - workers0 if procs else 0.0
+            copying = tracker.cameras.copy_cpu() - copy0 if procs else 0.0
             tracker.close()
             digest = hashlib.sha1()
             for res in results:
@@ -571,7 +580,8 @@ def processes_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, 
             lat_ms, timed = np.asarray(lat) * 1000, len(lat)
             print(f"{r + 1:>5} {mode:>9} {timed / wall:8.1f} {np.percentile(lat_ms, 50):7.2f} "
                   f"{np.percentile(lat_ms, 99):7.2f} {1000 * (cpu + workers) / timed:6.2f} ms "
-                  f"{1000 * workers / timed:10.2f} ms {digest.hexdigest()[:8]} {os.getloadavg()[0]:5.1f}",
+                  f"{1000 * workers / timed:10.2f} ms {1000 * copying / timed:8.2f} ms "
+                  f"{digest.hexdigest()[:8]} {os.getloadavg()[0]:5.1f}",
                   flush=True)
 
 

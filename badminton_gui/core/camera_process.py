@@ -104,7 +104,8 @@ class RemoteDetector(TrackletQueries):
 
     ``submit`` a frame, then ``collect`` its ``CameraResult`` (``find_candidates`` does both);
     ask and tell it what the tracker asks and tells a ``CameraDetector``. ``worker_cpu``: the
-    worker's CPU seconds so far (as of its last frame). ``close`` ends the worker."""
+    worker's CPU seconds so far (as of its last frame); ``copy_cpu``: this process's spent
+    copying the frames into shared memory. ``close`` ends the worker."""
 
     def __init__(self, params: TrackerParams | None = None, geometry=None, start_method: str = "spawn") -> None:
         self.params = params or TrackerParams()
@@ -122,6 +123,7 @@ class RemoteDetector(TrackletQueries):
         self.last_diagnostics = None
         self.last_scored: tuple[np.ndarray, np.ndarray] = (np.zeros((0, 2)), np.zeros((0, 0)))
         self.worker_cpu = 0.0
+        self.copy_cpu = 0.0      # this process's CPU seconds spent copying frames to the worker
 
     @property
     def _looks(self) -> SnapshotTracklets:
@@ -140,7 +142,9 @@ class RemoteDetector(TrackletQueries):
         if self._shm is None or self._shm.size < frame.nbytes:
             self._release()
             self._shm = shared_memory.SharedMemory(create=True, size=max(frame.nbytes, 1))
+        c0 = time.thread_time()
         np.copyto(np.ndarray(frame.shape, frame.dtype, buffer=self._shm.buf), frame)
+        self.copy_cpu += time.thread_time() - c0
         self._send(("frame", self._shm.name, frame.shape, frame.dtype.str, float(t), bool(keep_mask),
                     bool(self.keep_whole)))
         self._awaiting = True

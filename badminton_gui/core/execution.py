@@ -71,6 +71,10 @@ class ProcessCameras:
         """The two workers' CPU seconds so far (as of their last frames)."""
         return sum(detector.worker_cpu for detector in self.detectors)
 
+    def copy_cpu(self) -> float:
+        """This process's CPU seconds spent copying the two cameras' frames to the workers."""
+        return sum(detector.copy_cpu for detector in self.detectors)
+
     def close(self) -> None:
         for detector in self.detectors:
             detector.close()
