@@ -13,6 +13,7 @@ import pytest
 
 from badminton_gui.core.camera_process import CameraProcessError, RemoteDetector
 from badminton_gui.core.tracker import StereoTracker
+from badminton_gui.io.demo_eval import dropped_frame_steps
 from badminton_gui.io.demo_scene import DemoScene
 from badminton_gui.io.presets import load_preset
 from tests.conftest_data import NYCU_DIR, open_nycu_rally, requires_data
@@ -48,8 +49,9 @@ def _same(a, b, path="result") -> str | None:
     return None if a == b and type(a) is type(b) else f"{path}: {a!r} against {b!r}"
 
 
-def _compare(rig, frames, params=None, keep_masks=False) -> int:
-    """Steps compared; fails at the first step whose results differ."""
+def _compare(rig, frames, params=None, keep_masks=False) -> tuple[int, int]:
+    """(steps compared, questions the stand-ins asked their workers); fails at the first step
+    whose results differ."""
     ours = StereoTracker(rig, params)
     theirs = StereoTracker(rig, params, processes=True)
     steps = 0
@@ -64,7 +66,7 @@ def _compare(rig, frames, params=None, keep_masks=False) -> int:
     finally:
         ours.close()
         theirs.close()
-    return steps
+    return steps, theirs.left.questions + theirs.right.questions
 
 
 def _demo(seed: int, frames: int, size=(640, 360)):
@@ -77,12 +79,22 @@ def _demo(seed: int, frames: int, size=(640, 360)):
 
 def test_demo_court_same_results_in_processes():
     rig, frames = _demo(3, 240)
-    assert _compare(rig, frames, keep_masks=True) == 240
+    steps, questions = _compare(rig, frames, keep_masks=True)
+    assert steps == 240
+    assert questions > 0        # the flight's coast asked a worker about its mask
 
 
 def test_coarse_preset_windows_same_results_in_processes():
     rig, frames = _demo(0, 200)
-    assert _compare(rig, frames, load_preset("coarse")) == 200
+    assert _compare(rig, frames, load_preset("coarse"))[0] == 200
+
+
+def test_one_camera_steps_same_results_in_processes():
+    """Free-running cameras: steps that bring one camera's image only (``_process_one``)."""
+    scene = DemoScene(seed=3, size=(640, 360), rig="binocular", n_frames=150)
+    steps = list(dropped_frame_steps(scene, 150))
+    assert any(not (s.fresh_left and s.fresh_right) for s in steps)
+    assert _compare(scene.rig, steps)[0] == len(steps)
 
 
 @requires_data
@@ -93,7 +105,7 @@ def test_nycu_stretch_same_results_in_processes():
     rig, src = open_nycu_rally(rally)
     with contextlib.closing(src):
         frames = list(itertools.islice(iter(src.read, None), 150))
-    assert _compare(rig, frames) == 150
+    assert _compare(rig, frames)[0] == 150
 
 
 def test_parameters_and_reset_reach_the_worker():

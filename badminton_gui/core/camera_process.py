@@ -124,6 +124,7 @@ class RemoteDetector(TrackletQueries):
         self.last_scored: tuple[np.ndarray, np.ndarray] = (np.zeros((0, 2)), np.zeros((0, 0)))
         self.worker_cpu = 0.0
         self.copy_cpu = 0.0      # this process's CPU seconds spent copying frames to the worker
+        self.questions = 0       # questions asked of the worker and waited for (``is_blind``, ...)
 
     @property
     def _looks(self) -> SnapshotTracklets:
@@ -220,6 +221,7 @@ class RemoteDetector(TrackletQueries):
 
     def _ask(self, name: str, *args):
         assert name in _QUESTIONS
+        self.questions += 1
         self._send(("ask", name, args))
         return self._reply()
 
