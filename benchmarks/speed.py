@@ -38,8 +38,9 @@ would have to feed them (each frame copied into the process's shared memory, the
 
 ``--stages`` splits the CPU a pair (one thread) between each camera's candidate stage and the
 stereo stage; ``--processes`` runs ``StereoTracker`` with its camera threads and with a process
-per camera (``processes=True``) alternately on the same frames: pairs/s, latency, the CPU a pair
-including the workers', and a digest of the outputs, which must match.
+per camera (``processes=True``; frames copied into the workers' shared memory, or found there
+already) alternately on the same frames: pairs/s, latency, the CPU a pair including the
+workers', and a digest of the outputs, which must match.
 
 First of all it prints how fast the demo court renders at 1280×720 (the GUI's demo must render
 faster than the cameras' rate it imitates); that part needs no data.
@@ -543,34 +544,49 @@ def stage_cpu(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, pre
 def processes_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rounds: int,
                  preset: str | None) -> None:
     """``StereoTracker`` with its camera threads against ``StereoTracker(processes=True)`` (each
-    camera's detector in a worker process, frames handed over through shared memory), alternated
-    in this run on the same frames held in memory, 2048 px: pairs/s, latency p50 / p99, the CPU a
-    pair (this process's and the workers'; of it the workers', and this process's copying the
-    frames into the workers' shared memory), and a digest of the outputs (the
-    two must match). The first pair is not timed (it waits for the workers to start)."""
+    camera's detector in a worker process), alternated in this run on the same frames held in
+    memory, 2048 px. Two ways of handing the frames over: ``processes`` copies each frame into
+    the worker's shared memory (``copying``: this process's CPU doing it), ``proc-shm`` finds each
+    pair already in the workers' buffers (``ProcessCameras.frame_buffers``: where a decoder could
+    write it; the benchmark's own copy there stands in for the decoding and is not timed).
+    Per mode: pairs/s and latency p50 / p99 of ``process``, the CPU a pair (this process's and the
+    workers'; of it the workers'), and a digest of the outputs (all must match). The first pair
+    is not timed (it waits for the workers to start)."""
     import hashlib
     import os
     pairs = load_pairs(n, None, skip)
     print(f"threads against processes: {RALLY} pairs {skip}-{skip + len(pairs) - 1}, preset {preset or 'default'}")
     print(f"{'round':>5} {'mode':>9} {'pairs/s':>8} {'p50 ms':>7} {'p99 ms':>7} {'CPU/pair':>9} "
           f"{'of it workers':>13} {'copying':>11} {'outputs':>8} {'load':>5}")
+    modes = ("threads", "processes", "proc-shm")
     for r in range(rounds):
-        for mode in (("threads", "processes") if r % 2 == 0 else ("processes", "threads")):
-            tracker = StereoTracker(full_rig, params, processes=mode == "processes")
+        for mode in modes[r % 3:] + modes[:r % 3]:
+            procs, shm = mode != "threads", mode == "proc-shm"
+            tracker = StereoTracker(full_rig, params, processes=procs)
+
+            def placed(lf, rf):
+                if not shm:
+                    return lf, rf, 0.0
+                c = time.process_time()
+                bl, br = tracker.cameras.frame_buffers((lf.shape, rf.shape))
+                np.copyto(bl, lf)
+                np.copyto(br, rf)
+                return bl, br, time.process_time() - c
+
             # The first pair untimed, either way: it waits for the workers to start (imports).
-            lf, rf, t = pairs[0]
-            results = [tracker.process(lf, rf, t, keep_masks=False)]
-            procs = mode == "processes"
+            lf, rf, _ = placed(pairs[0][0], pairs[0][1])
+            results = [tracker.process(lf, rf, pairs[0][2], keep_masks=False)]
             workers0 = tracker.cameras.worker_cpu() if procs else 0.0
             copy0 = tracker.cameras.copy_cpu() if procs else 0.0
-            lat = []
-            c0, w0 = time.process_time(), time.perf_counter()
+            lat, untimed = [], 0.0
+            c0 = time.process_time()
             for lf, rf, t in pairs[1:]:
+                lf, rf, spent = placed(lf, rf)
+                untimed += spent
                 t0 = time.perf_counter()
                 results.append(tracker.process(lf, rf, t, keep_masks=False))
                 lat.append(time.perf_counter() - t0)
-            wall = time.perf_counter() - w0
-            cpu = time.process_time() - c0
+            cpu = time.process_time() - c0 - untimed
             workers = tracker.cameras.worker_cpu() - workers0 if procs else 0.0
             copying = tracker.cameras.copy_cpu() - copy0 if procs else 0.0
             tracker.close()
@@ -578,7 +594,7 @@ def processes_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, 
             for res in results:
                 digest.update(repr(dataclasses.replace(res, processing_ms=0.0)).encode())
             lat_ms, timed = np.asarray(lat) * 1000, len(lat)
-            print(f"{r + 1:>5} {mode:>9} {timed / wall:8.1f} {np.percentile(lat_ms, 50):7.2f} "
+            print(f"{r + 1:>5} {mode:>9} {timed / sum(lat):8.1f} {np.percentile(lat_ms, 50):7.2f} "
                   f"{np.percentile(lat_ms, 99):7.2f} {1000 * (cpu + workers) / timed:6.2f} ms "
                   f"{1000 * workers / timed:10.2f} ms {1000 * copying / timed:8.2f} ms "
                   f"{digest.hexdigest()[:8]} {os.getloadavg()[0]:5.1f}",

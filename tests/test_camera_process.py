@@ -97,6 +97,24 @@ def test_one_camera_steps_same_results_in_processes():
     assert _compare(scene.rig, steps)[0] == len(steps)
 
 
+def test_frames_put_in_the_workers_buffers_are_not_copied():
+    """Frames written straight into the ring of shared buffers (as a decoder could) give the
+    same results, with no copy."""
+    rig, frames = _demo(2, 120)
+    ours, theirs = StereoTracker(rig), StereoTracker(rig, processes=True)
+    try:
+        for k, frame in enumerate(frames):
+            left, right = theirs.cameras.frame_buffers((frame.left.shape, frame.right.shape))
+            left[:], right[:] = frame.left, frame.right
+            shared = dataclasses.replace(frame, left=left, right=right)
+            assert _same(ours.process_frame(frame, keep_masks=False),
+                         theirs.process_frame(shared, keep_masks=False)) is None, k
+        assert theirs.cameras.copy_cpu() == 0.0
+    finally:
+        ours.close()
+        theirs.close()
+
+
 @requires_data
 def test_nycu_stretch_same_results_in_processes():
     rally = NYCU_DIR / "rally_11-46-04"

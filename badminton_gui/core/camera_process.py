@@ -8,9 +8,11 @@ candidates are found at the same time, while the stereo stage stays in the track
 The stereo stage asks a camera's detector about its candidates during a step and tells it what
 it decided. :class:`RemoteDetector` stands in for the detector there:
 
-- the frame goes to the worker through shared memory (one buffer per camera: the tracker writes
-  the next frame only once it has the last one's result, and the detector keeps no reference to
-  a frame after it), with the frame's time and ``keep_whole``;
+- the frame goes to the worker through shared memory, with the frame's time and ``keep_whole``:
+  copied into one buffer per camera (the tracker writes the next frame only once it has the
+  last one's result, and the detector keeps no reference to a frame after it), or, when the
+  frame was put in one of the stand-in's ``frame_buffer`` ring (a decoder writing there), not
+  copied at all;
 - the worker runs ``plan_window`` and ``find_candidates`` on it and sends back the
   ``CameraResult`` with a :class:`~badminton_gui.core.detect.answers.DetectorSnapshot`; the
   questions about the tracklets behind the candidates are answered from it, by the same code
@@ -41,6 +43,9 @@ from .detect.answers import DetectorSnapshot, SnapshotTracklets, TrackletQueries
 from .params import TrackerParams
 from .types import CameraResult, Candidate
 
+# Frame buffers in a ring (``RemoteDetector.frame_buffer``): a frame is read again on the
+# tracker's next step (its motion check), so a buffer is refilled two frames later at the soonest.
+SLOTS = 3
 # What the stereo side may tell the worker's detector: the detector's methods, called in order.
 _FEEDBACK = frozenset({"commit", "protect_report", "set_params", "reset", "set_window_phase",
                        "use_rig", "use_classifier", "use_score"})
@@ -77,10 +82,12 @@ def serve(conn, params: TrackerParams, geometry) -> None:
                 if request[0] == "frame":
                     _, buf_name, shape, dtype, t, keep_mask, keep_whole = request
                     if buf_name not in buffers:
-                        for old in buffers.values():
-                            old.close()
+                        if len(buffers) > SLOTS:       # the tracker's buffers were replaced
+                            for old in buffers.values():
+                                old.close()
+                            buffers = {}
                         # The tracker's process alone unlinks it (the resource tracker is shared).
-                        buffers = {buf_name: shared_memory.SharedMemory(name=buf_name)}
+                        buffers[buf_name] = shared_memory.SharedMemory(name=buf_name)
                     frame = np.ndarray(shape, dtype, buffer=buffers[buf_name].buf)
                     detector.keep_whole = keep_whole
                     detector.plan_window(frame, t)
@@ -97,6 +104,18 @@ def serve(conn, params: TrackerParams, geometry) -> None:
     finally:
         for shm in buffers.values():
             shm.close()
+
+
+def _free(shm: shared_memory.SharedMemory | None) -> None:
+    """Unlink a frame buffer of ours; its mapping goes once no array of it is left (the
+    tracker may still hold its last frame)."""
+    if shm is None:
+        return
+    try:
+        shm.close()
+    except BufferError:
+        pass
+    shm.unlink()
 
 
 class RemoteDetector(TrackletQueries):
@@ -118,6 +137,8 @@ class RemoteDetector(TrackletQueries):
         self._pending: list[tuple[str, tuple]] = []
         self._associator = SnapshotTracklets()
         self._shm: shared_memory.SharedMemory | None = None
+        self._ring: list[tuple[shared_memory.SharedMemory, int]] = []   # (buffer, its address)
+        self._turn = 0
         self._awaiting = False
         self.keep_whole = False
         self.last_diagnostics = None
@@ -140,15 +161,43 @@ class RemoteDetector(TrackletQueries):
         if self._awaiting:
             raise RuntimeError("collect the last frame's result before submitting another")
         frame = np.ascontiguousarray(frame_bgr)
-        if self._shm is None or self._shm.size < frame.nbytes:
-            self._release()
-            self._shm = shared_memory.SharedMemory(create=True, size=max(frame.nbytes, 1))
-        c0 = time.thread_time()
-        np.copyto(np.ndarray(frame.shape, frame.dtype, buffer=self._shm.buf), frame)
-        self.copy_cpu += time.thread_time() - c0
-        self._send(("frame", self._shm.name, frame.shape, frame.dtype.str, float(t), bool(keep_mask),
+        shm = self._ring_buffer_of(frame)
+        if shm is None:
+            if self._shm is None or self._shm.size < frame.nbytes:
+                _free(self._shm)
+                self._shm = shared_memory.SharedMemory(create=True, size=max(frame.nbytes, 1))
+            shm = self._shm
+            c0 = time.thread_time()
+            np.copyto(np.ndarray(frame.shape, frame.dtype, buffer=shm.buf), frame)
+            self.copy_cpu += time.thread_time() - c0
+        self._send(("frame", shm.name, frame.shape, frame.dtype.str, float(t), bool(keep_mask),
                     bool(self.keep_whole)))
         self._awaiting = True
+
+    def frame_buffer(self, shape: tuple[int, ...], dtype=np.uint8) -> np.ndarray:
+        """An array in shared memory to put the next frame in (a decoder may write it there):
+        ``submit`` of it hands the worker its name, no copy. The buffers are taken in turn from a
+        ring of ``SLOTS``; one stays as filled until ``SLOTS - 1`` more are taken, so take one per
+        frame and process that frame before taking the next."""
+        nbytes = max(int(np.prod(shape)) * np.dtype(dtype).itemsize, 1)
+        if not self._ring or self._ring[0][0].size < nbytes:
+            for shm, _ in self._ring:
+                _free(shm)
+            self._ring = []
+            for _ in range(SLOTS):
+                shm = shared_memory.SharedMemory(create=True, size=nbytes)
+                self._ring.append((shm, np.frombuffer(shm.buf, np.uint8, count=1).ctypes.data))
+        shm = self._ring[self._turn][0]
+        self._turn = (self._turn + 1) % SLOTS
+        return np.ndarray(shape, dtype, buffer=shm.buf)
+
+    def _ring_buffer_of(self, frame: np.ndarray) -> shared_memory.SharedMemory | None:
+        """The ring buffer ``frame`` fills from its start (``frame_buffer``), or None."""
+        at = frame.ctypes.data
+        for shm, address in self._ring:
+            if at == address and frame.nbytes <= shm.size:
+                return shm
+        return None
 
     def collect(self) -> CameraResult:
         """The submitted frame's candidates (filters 1–4 applied, no choice made yet)."""
@@ -261,13 +310,9 @@ class RemoteDetector(TrackletQueries):
                 self._proc.join()
             self._conn.close()
             self._proc = None
-        self._release()
-
-    def _release(self) -> None:
-        if self._shm is not None:
-            self._shm.close()
-            self._shm.unlink()
-            self._shm = None
+        for shm in [self._shm] + [shm for shm, _ in self._ring]:
+            _free(shm)
+        self._shm, self._ring = None, []
 
     def __del__(self) -> None:
         try:

@@ -67,6 +67,11 @@ class ProcessCameras:
             detector.submit(frame, t, keep_masks)
         return [detector.collect() for detector in self.detectors]
 
+    def frame_buffers(self, shapes: tuple[tuple[int, ...], tuple[int, ...]]) -> tuple[np.ndarray, np.ndarray]:
+        """Arrays in the workers' shared memory for the next pair's frames (``RemoteDetector.frame_buffer``):
+        a pair put there is handed over without a copy."""
+        return tuple(detector.frame_buffer(shape) for detector, shape in zip(self.detectors, shapes))
+
     def worker_cpu(self) -> float:
         """The two workers' CPU seconds so far (as of their last frames)."""
         return sum(detector.worker_cpu for detector in self.detectors)
