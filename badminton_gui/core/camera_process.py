@@ -186,14 +186,14 @@ class RemoteDetector(TrackletQueries):
             self._ring = []
             for _ in range(SLOTS):
                 shm = shared_memory.SharedMemory(create=True, size=nbytes)
-                self._ring.append((shm, np.frombuffer(shm.buf, np.uint8, count=1).ctypes.data))
+                self._ring.append((shm, np.frombuffer(shm.buf, np.uint8, count=1).__array_interface__["data"][0]))
         shm = self._ring[self._turn][0]
         self._turn = (self._turn + 1) % SLOTS
         return np.ndarray(shape, dtype, buffer=shm.buf)
 
     def _ring_buffer_of(self, frame: np.ndarray) -> shared_memory.SharedMemory | None:
         """The ring buffer ``frame`` fills from its start (``frame_buffer``), or None."""
-        at = frame.ctypes.data
+        at = frame.__array_interface__["data"][0]
         for shm, address in self._ring:
             if at == address and frame.nbytes <= shm.size:
                 return shm
@@ -289,7 +289,10 @@ class RemoteDetector(TrackletQueries):
     def _reply(self):
         try:
             status, value = self._conn.recv()
-        except EOFError:
+        except (EOFError, OSError):
+            # Under ``spawn`` a script that starts a tracker outside ``if __name__ == "__main__":``
+            # starts it again in the worker, which then fails on its import.
+            self._proc.join(timeout=1)
             raise CameraProcessError(f"the camera's worker process ended (exit code {self._proc.exitcode})") from None
         if status == "error":
             raise CameraProcessError(value)
