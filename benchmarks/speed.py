@@ -36,6 +36,12 @@ alternating, the tracker's two threads against the two detector processes fed th
 would have to feed them (each frame copied into the process's shared memory, the
 ``CameraResult`` pickled back): pairs/s, p99, and the CPU a pair costs each way.
 
+``--stages`` splits the CPU a pair (one thread) between each camera's candidate stage and the
+stereo stage; ``--processes`` runs ``StereoTracker`` with its camera threads and with a process
+per camera (``processes=True``; frames copied into the workers' shared memory, or found there
+already) alternately on the same frames: pairs/s, latency, the CPU a pair including the
+workers', and a digest of the outputs, which must match.
+
 First of all it prints how fast the demo court renders at 1280×720 (the GUI's demo must render
 faster than the cameras' rate it imitates); that part needs no data.
 
@@ -46,6 +52,7 @@ from __future__ import annotations
 
 import argparse
 import cProfile
+import dataclasses
 import importlib
 import io
 import math
@@ -495,6 +502,105 @@ def process_bound(full_rig: StereoRig, preset: str | None, n: int) -> None:
                       f"{1000 * (time.process_time() - cpu) / len(pairs):5.2f} ms CPU a pair")
 
 
+def stage_cpu(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, preset: str | None) -> tuple:
+    """The thread CPU a pair spends in each camera's candidate stage (``plan_window`` and
+    ``find_candidates``: stages 1–4) and in the rest of ``StereoTracker.process`` (the stereo
+    stage: pairing, vouch, look, hold, 3D, flight, phase), one thread (``parallel=False``), 2048 px.
+    CPU time, not wall: the machine's load stretches the wall clock but hardly the CPU a pair.
+    Returns (left, right, stereo) ms a pair, means."""
+    pairs = load_pairs(n, None, skip)
+    tracker = StereoTracker(full_rig, params, parallel=False)
+    spent = {"left": 0.0, "right": 0.0}
+    for side, det in (("left", tracker.left), ("right", tracker.right)):
+        for name in ("plan_window", "find_candidates"):
+            def timed(*args, _run=getattr(det, name), _side=side, **kw):
+                c0 = time.thread_time()
+                out = _run(*args, **kw)
+                spent[_side] += time.thread_time() - c0
+                return out
+            setattr(det, name, timed)
+    rows = []
+    for lf, rf, t in pairs:
+        spent["left"] = spent["right"] = 0.0
+        c0 = time.thread_time()
+        tracker.process(lf, rf, t, keep_masks=False)
+        total = time.thread_time() - c0
+        rows.append((spent["left"], spent["right"], total - spent["left"] - spent["right"]))
+    tracker.close()
+    ms = 1000 * np.asarray(rows)
+    mean, total = ms.mean(axis=0), ms.sum(axis=1).mean()
+    print(f"CPU a pair by stage, {RALLY} pairs {skip}-{skip + len(pairs) - 1}, preset {preset or 'default'}, "
+          f"one thread: total {total:.2f} ms; " + ", ".join(
+              f"{name} {m:.2f} ms ({100 * m / total:.1f} %, p99 {np.percentile(ms[:, k], 99):.2f})"
+              for k, (name, m) in enumerate(zip(("left camera's candidates", "right camera's candidates",
+                                                  "stereo stage"), mean))))
+    bound = max(mean[0], mean[1]) + mean[2]
+    print(f"  a process per camera, the stereo stage after both: at best {bound:.2f} ms a pair on the "
+          f"critical path ({1000 / bound:.0f} pairs/s on idle cores) against {total:.2f} ms in turn "
+          f"({1000 / total:.0f} pairs/s), before the frames' hand-over")
+    return tuple(float(m) for m in mean)
+
+
+def processes_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rounds: int,
+                 preset: str | None) -> None:
+    """``StereoTracker`` with its camera threads against ``StereoTracker(processes=True)`` (each
+    camera's detector in a worker process), alternated in this run on the same frames held in
+    memory, 2048 px. Two ways of handing the frames over: ``processes`` copies each frame into
+    the worker's shared memory (``copying``: this process's CPU doing it), ``proc-shm`` finds each
+    pair already in the workers' buffers (``ProcessCameras.frame_buffers``: where a decoder could
+    write it; the benchmark's own copy there stands in for the decoding and is not timed).
+    Per mode: pairs/s and latency p50 / p99 of ``process``, the CPU a pair (this process's and the
+    workers'; of it the workers'), and a digest of the outputs (all must match). The first pair
+    is not timed (it waits for the workers to start)."""
+    import hashlib
+    import os
+    pairs = load_pairs(n, None, skip)
+    print(f"threads against processes: {RALLY} pairs {skip}-{skip + len(pairs) - 1}, preset {preset or 'default'}")
+    print(f"{'round':>5} {'mode':>9} {'pairs/s':>8} {'p50 ms':>7} {'p99 ms':>7} {'CPU/pair':>9} "
+          f"{'of it workers':>13} {'copying':>11} {'outputs':>8} {'load':>5}")
+    modes = ("threads", "processes", "proc-shm")
+    for r in range(rounds):
+        for mode in modes[r % 3:] + modes[:r % 3]:
+            procs, shm = mode != "threads", mode == "proc-shm"
+            tracker = StereoTracker(full_rig, params, processes=procs)
+
+            def placed(lf, rf):
+                if not shm:
+                    return lf, rf, 0.0
+                c = time.process_time()
+                bl, br = tracker.cameras.frame_buffers((lf.shape, rf.shape))
+                np.copyto(bl, lf)
+                np.copyto(br, rf)
+                return bl, br, time.process_time() - c
+
+            # The first pair untimed, either way: it waits for the workers to start (imports).
+            lf, rf, _ = placed(pairs[0][0], pairs[0][1])
+            results = [tracker.process(lf, rf, pairs[0][2], keep_masks=False)]
+            workers0 = tracker.cameras.worker_cpu() if procs else 0.0
+            copy0 = tracker.cameras.copy_cpu() if procs else 0.0
+            lat, untimed = [], 0.0
+            c0 = time.process_time()
+            for lf, rf, t in pairs[1:]:
+                lf, rf, spent = placed(lf, rf)
+                untimed += spent
+                t0 = time.perf_counter()
+                results.append(tracker.process(lf, rf, t, keep_masks=False))
+                lat.append(time.perf_counter() - t0)
+            cpu = time.process_time() - c0 - untimed
+            workers = tracker.cameras.worker_cpu() - workers0 if procs else 0.0
+            copying = tracker.cameras.copy_cpu() - copy0 if procs else 0.0
+            tracker.close()
+            digest = hashlib.sha1()
+            for res in results:
+                digest.update(repr(dataclasses.replace(res, processing_ms=0.0)).encode())
+            lat_ms, timed = np.asarray(lat) * 1000, len(lat)
+            print(f"{r + 1:>5} {mode:>9} {timed / sum(lat):8.1f} {np.percentile(lat_ms, 50):7.2f} "
+                  f"{np.percentile(lat_ms, 99):7.2f} {1000 * (cpu + workers) / timed:6.2f} ms "
+                  f"{1000 * workers / timed:10.2f} ms {1000 * copying / timed:8.2f} ms "
+                  f"{digest.hexdigest()[:8]} {os.getloadavg()[0]:5.1f}",
+                  flush=True)
+
+
 def window_ab(full_rig: StereoRig, params: TrackerParams, n: int, skip: int, rounds: int,
               preset: str | None) -> None:
     """Windowed tracking (core/window.py) off and on, alternated in this process, 2048 px.
@@ -665,7 +771,13 @@ def main() -> None:
     ap.add_argument("--window", action="store_true",
                     help="only: the preset with window.enabled off and on, alternated (2048 px, "
                          "--pairs pairs from pair --skip on, --rounds rounds)")
-    ap.add_argument("--skip", type=int, default=0, help="--window: pairs skipped first")
+    ap.add_argument("--stages", action="store_true",
+                    help="only: the CPU a pair in each camera's candidate stage and in the stereo stage "
+                         "(one thread, 2048 px, --pairs pairs from pair --skip on)")
+    ap.add_argument("--processes", action="store_true",
+                    help="only: StereoTracker's camera threads against a process per camera "
+                         "(StereoTracker(processes=True)), alternated, --rounds rounds (2048 px)")
+    ap.add_argument("--skip", type=int, default=0, help="--window, --stages, --processes: pairs skipped first")
     ap.add_argument("--rounds", type=int, default=3, help="--window, --trees: alternated rounds")
     ap.add_argument("--trees", nargs="+", default=None, metavar="DIR",
                     help="only: source trees (dirs with badminton_gui/ and resources/; '.': this "
@@ -675,6 +787,15 @@ def main() -> None:
     if args.trees:
         with opencv_threads(args.cv_threads or None):
             trees_ab(args.trees, args.preset, args.pairs, args.skip, args.rounds)
+        return
+    if args.stages or args.processes:
+        params = load_preset(args.preset)
+        full_rig = rig_from_nycu(DATA / RALLY / "CameraReader_1.cfg", DATA / RALLY / "CameraReader_2.cfg")
+        with opencv_threads(args.cv_threads or None):
+            if args.stages:
+                stage_cpu(full_rig, params, args.pairs, args.skip, args.preset)
+            if args.processes:
+                processes_ab(full_rig, params, args.pairs, args.skip, args.rounds, args.preset)
         return
     if args.window:
         params = load_preset(args.preset)

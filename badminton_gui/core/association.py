@@ -314,6 +314,11 @@ class TrackletAssociator:
             return self._ghost
         return None
 
+    @property
+    def ghost(self) -> Tracklet | None:
+        """The followed tracklet after it was dropped, while a candidate may still inherit it."""
+        return self._ghost
+
     def tracklet(self, ident: int) -> Tracklet | None:
         """The live tracklet ``ident`` (a candidate's ``tracklet`` field), or None."""
         for tr in self.tracklets:

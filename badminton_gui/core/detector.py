@@ -43,6 +43,7 @@ from .detect.candidates import (ContourShapes, MergedBlobSplitter, gate_factors,
                                 rank_for_measuring, shape_filters, shape_rejects, too_large)
 from .detect.measure import (FEATURE_NAMES, PATCH_CELLS, PATCH_HALF, PATCH_NAMES,  # noqa: F401
                              BlobMeasurements, measure_blobs, patch_features)
+from .detect.answers import DetectorSnapshot, TrackletQueries, _leaving_edge  # noqa: F401
 from .detect.diagnostics import DetectionDiagnostics, ScoreReport, ShapeReport
 from .detect.scoring import BlobScorer, ScoredBlobs, ScoreFunction, ShapedBlob, score_blobs
 from .detect.segmentation import ModelGrey, Segmented, external_contours, model_scale  # noqa: F401
@@ -65,8 +66,9 @@ class _FrameMemory:
     splitter: MergedBlobSplitter = dataclasses.field(default_factory=MergedBlobSplitter)
 
 
-class CameraDetector:
-    """Finds the shuttle in one camera's frames."""
+class CameraDetector(TrackletQueries):
+    """Finds the shuttle in one camera's frames (the questions the stereo stage asks about its
+    candidates: ``TrackletQueries``)."""
 
     def __init__(self, params: TrackerParams | None = None, geometry: tuple[object, int] | None = None) -> None:
         """``geometry``: (a rig with its court pose, this camera's index in it), whose view of the
@@ -171,6 +173,19 @@ class CameraDetector:
     def window_tracker(self) -> WindowTracker:
         """Where this camera's windows go (``window.enabled``) and how many frames were windowed."""
         return self._window
+
+    @property
+    def _looks(self):
+        """Each tracklet's recent blob widths and areas (``TrackletQueries.lead_to_head``)."""
+        return self._tracklets.looks
+
+    def snapshot(self, result: CameraResult) -> DetectorSnapshot:
+        """What the stereo stage may ask about ``result`` (this detector's last frame) until the
+        next frame, for a stand-in in another process (``core/camera_process.py``); the
+        classifier's view of the blobs (``last_scored``) only while the court adaptation reads it."""
+        scored = self.last_scored if self.params.adapt.enabled else None
+        return DetectorSnapshot.of(self._associator, self._tracklets.looks, result,
+                                   self.last_diagnostics, scored)
 
     @property
     def tracking(self) -> bool:
@@ -363,125 +378,6 @@ class CameraDetector:
         h, w = mask.shape[:2]
         return bool((mask[max(my - 1, 0):min(my + 2, h), max(mx - 1, 0):min(mx + 2, w)] > 0).any())
 
-    def tracklet_hits(self, candidate: Candidate) -> int:
-        """Frames the candidate's tracklet has been seen (0 when it is on none)."""
-        tr = self._associator.tracklet(candidate.tracklet)
-        return 0 if tr is None else tr.hits
-
-    def vouchable(self, candidate: Candidate, min_quality: float) -> tuple[float, float] | None:
-        """Image velocity (px/s) of a candidate the association held back (filter 4: its tracklet
-        is not confirmed yet, or not travelling far enough) while the tracklet is seen this frame,
-        has a known velocity and a running quality of at least ``min_quality``; else None.
-
-        The stereo tracker lets such a candidate through when the other camera sees a partner
-        on its epipolar line moving the same way in 3D (``StereoTracker._vouch``): the flight's
-        first frames after a serve or a hit, a shuttle coming back slowly into view.
-        """
-        if candidate.rejected_by != REJECT_MOTION or candidate.predicted:
-            return None
-        tr = self._associator.tracklet(candidate.tracklet)
-        if (tr is not None and tr.hit_now and tr.velocity_known and tr.quality >= min_quality
-                and len(tr.recent) >= 2
-                and math.hypot(tr.x - tr.recent[-2][0], tr.y - tr.recent[-2][1]) >= self.params.stereo.vouch_min_step):
-            return tr.vx, tr.vy
-        return None
-
-    def first_sighting(self, candidate: Candidate, min_quality: float) -> bool:
-        """The held-back candidate starts a track this frame (no velocity yet) and scores at
-        least ``min_quality`` by its looks: the other camera may vouch for it by position alone."""
-        if candidate.rejected_by != REJECT_MOTION or candidate.predicted or candidate.score < min_quality:
-            return False
-        tr = self._associator.tracklet(candidate.tracklet)
-        return tr is not None and tr.hit_now and tr.hits == 1
-
-    def vouch(self, candidate: Candidate, score: float) -> Candidate:
-        """The held-back candidate let through with ``score`` (it keeps its tracklet)."""
-        return dataclasses.replace(candidate, rejected_by=None, score=score)
-
-    def tracklet_velocity(self, candidate: Candidate) -> tuple[float, float] | None:
-        """Image velocity (px/s) of the candidate's tracklet, or None when not yet known."""
-        tr = self._associator.tracklet(candidate.tracklet)
-        return (tr.vx, tr.vy) if tr is not None and tr.velocity_known else None
-
-    def _velocity_of(self, ident: int) -> tuple[float, float] | None:
-        """Image velocity (px/s) of the tracklet ``ident`` (or of the followed one's ghost)."""
-        if ident < 0:
-            return None
-        tr = self._associator.tracklet(ident)
-        if tr is not None:
-            return (tr.vx, tr.vy) if tr.velocity_known else None
-        ghost = self._associator.followed
-        if ghost is not None and ghost.ident == ident and ghost.velocity_known:
-            return ghost.vx, ghost.vy
-        return None
-
-    def lead_to_head(self, result: CameraResult, chosen: Candidate | None
-                     ) -> tuple[CameraResult, Candidate | None]:
-        """Move a moving detection forward along its tracklet to the cork (``colour.head_lead``).
-
-        The bright centroid of a moving shuttle trails its cork: the skirt is behind it and the
-        motion blur smears the white backwards too. The lead is proportional to the blob's width
-        (the shuttle's apparent size, which blur does not stretch). Call after ``commit`` (the
-        tracklet's velocity then includes this frame); the associator keeps the measured
-        position, only the reported one moves. Returns the result with the moved candidate in
-        place of the old one, and the moved candidate; no candidate (None) when the cork is led
-        out of the image.
-        """
-        c = self.params.colour
-        w, h = result.image_size
-        if chosen is not None and chosen.predicted:
-            # A coasting prediction (no blob) at the edge its track leaves through: the blob is
-            # missing because the shuttle has left the image, not because it is hidden.
-            velocity = self._velocity_of(chosen.tracklet)
-            if (c.edge_exit > 0 and w > 0 and velocity is not None
-                    and _leaving_edge(chosen.x, chosen.y, velocity, w, h, c.edge_exit * w / 1280.0)):
-                return result, None
-            return result, chosen
-        if (chosen is None or (c.head_lead <= 0 and c.edge_exit <= 0)
-                or not math.isfinite(chosen.short_side)):
-            return result, chosen
-        velocity = self.tracklet_velocity(chosen)
-        if velocity is None:
-            return result, chosen
-        moved = chosen
-        speed = math.hypot(*velocity)
-        if c.head_lead > 0 and speed >= c.head_lead_min_speed:
-            width = chosen.short_side
-            widths = self._tracklets.looks.widths(chosen.tracklet)
-            if c.head_lead_width_frames > 1 and widths:
-                # A shuttle merged with a racket or an arm: the blob is wider than the shuttle,
-                # whose own width shows in the tracklet's recent frames.
-                width = min(width, min(widths))
-            lead = c.head_lead * width / speed
-            moved = dataclasses.replace(chosen, x=chosen.x + lead * velocity[0],
-                                        y=chosen.y + lead * velocity[1])
-            if w > 0 and not (-0.5 <= moved.x < w - 0.5 and -0.5 <= moved.y < h - 0.5):
-                # The cork has left the image (only the skirt's end still shows at the border):
-                # no point inside the frame is the shuttle's, and none outside it can be reported.
-                return result, None
-        if (c.edge_exit > 0 and w > 0
-                and _leaving_edge(moved.x, moved.y, velocity, w, h, c.edge_exit * w / 1280.0)):
-            # A shuttle clipped by the edge it is leaving through: its visible part's bright
-            # centroid stays inside while the cork is already out (``colour.edge_exit``). The
-            # cork leads, so it is out once the blob has lost a good part of its usual area.
-            areas = self._tracklets.looks.areas(chosen.tracklet)
-            if areas is not None and len(areas) >= 3:
-                usual = float(np.median(list(areas)[:-1]))
-                if chosen.area < c.edge_exit_area * usual:
-                    return result, None
-        if moved is chosen:
-            return result, chosen
-        candidates = tuple(moved if cand is chosen else cand for cand in result.candidates)
-        return dataclasses.replace(result, candidates=candidates), moved
-
-    def choose(self, candidates: tuple[Candidate, ...]) -> Candidate | None:
-        """The best candidate that passed every filter, or None."""
-        best = None
-        for c in candidates:
-            if c.rejected_by is None and (best is None or c.score > best.score):
-                best = c
-        return best
-
     def commit(self, detection: Candidate | None, t: float,
                candidates: tuple[Candidate, ...] = ()) -> None:
         """Follow the chosen candidate's tracklet (hysteresis in the next frames' choice)."""
@@ -500,23 +396,3 @@ class CameraDetector:
         r = math.ceil(self.params.background.protect_radius * width / 1280.0 * s) + int(self.params.background.shake_tolerance)
         x, y = report.x * s, report.y * s
         self._background.protect((int(x) - r, int(y) - r, int(x) + r + 1, int(y) + r + 1))
-
-    @staticmethod
-    def finalise(result: CameraResult, chosen: Candidate | None,
-                 losers_reason: str = REJECT_SCORE) -> CameraResult:
-        """Mark the chosen candidate, and the other survivors as rejected by ``losers_reason``."""
-        cands = []
-        for c in result.candidates:
-            if c.rejected_by is None and c is not chosen:
-                c = dataclasses.replace(c, rejected_by=losers_reason)
-            cands.append(c)
-        return dataclasses.replace(result, detection=chosen, candidates=tuple(cands))
-
-
-def _leaving_edge(x: float, y: float, velocity: tuple[float, float], w: int, h: int,
-                  margin: float) -> bool:
-    """True when (x, y) lies within ``margin`` px of an image edge that ``velocity`` moves
-    towards (pixel centres are integers: the image spans -0.5 … w - 0.5)."""
-    vx, vy = velocity
-    return ((vx < 0 and x + 0.5 < margin) or (vx > 0 and w - 0.5 - x < margin)
-            or (vy < 0 and y + 0.5 < margin) or (vy > 0 and h - 0.5 - y < margin))

@@ -4,7 +4,7 @@ Why this file exists: it is the one object that the GUI worker, the CLI and the 
 A pair step runs these stages, in this order (``StereoTracker.process``):
 
 1. segmentation and candidates, per camera (:class:`CameraDetector`, the two cameras side by
-   side on two threads);
+   side on two threads, or each in a process of its own: ``core/execution.py``);
 2. stereo vouch and pairing (``stereo/vouch.py``, ``stereo/pairing.py``): a young track the other
    camera confirms passes; the stereo-consistent pair is chosen (within the followed flight's
    reach with ``stereo.flight_reach``), else each camera's own choice; each detector commits
@@ -53,7 +53,6 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import ThreadPoolExecutor
 
 import cv2
 import numpy as np
@@ -61,6 +60,7 @@ import numpy.ma  # noqa: F401  np.median imports it on its first call: 17 ms in 
 
 from .court_adaptation import CourtAdaptation
 from .detector import CameraDetector
+from .execution import ProcessCameras, ThreadCameras
 from .frame_checks import InputChecks
 from .flight.camera_rules import HoldInputs, ReadoutInputs, ReadoutState, hold_transition, readout_transition
 from .flight.guide import StepGuide
@@ -86,15 +86,17 @@ class StereoTracker:
     """Tracks the shuttle with two calibrated cameras."""
 
     def __init__(self, rig: StereoRig, params: TrackerParams | None = None,
-                 parallel: bool = True) -> None:
+                 parallel: bool = True, processes: bool = False) -> None:
+        """``parallel``: the cameras' image work on two threads; ``processes``: each camera's
+        detector in a process of its own instead (``core/execution.py``; the same results)."""
         self.rig = rig
         self._params = params or TrackerParams()
-        self.left = CameraDetector(self.params, (rig, 0) if rig.has_court_pose else None)
-        self.right = CameraDetector(self.params, (rig, 1) if rig.has_court_pose else None)
+        geometry = tuple((rig, cam) if rig.has_court_pose else None for cam in (0, 1))
+        self.cameras = (ProcessCameras(self.params, geometry) if processes
+                        else ThreadCameras(self.params, geometry, parallel))
+        self.left, self.right = self.cameras.detectors
         # ``window.stagger``: the right camera's scheduled whole frames half a period after the left's.
         self.right.set_window_phase(0.5)
-        # OpenCV releases the GIL: the two cameras run side by side on two cores.
-        self._pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="camera") if parallel else None
         self._trajectory = Trajectory(self.params.trajectory, rig.has_court_pose)
         self._input_checks = InputChecks(rig.image_size)
         self._checked_size = False
@@ -168,9 +170,7 @@ class StereoTracker:
 
     def close(self) -> None:
         self.adaptation.close()
-        if self._pool is not None:
-            self._pool.shutdown(wait=True)
-            self._pool = None
+        self.cameras.close()
 
     @property
     def trajectory(self):
@@ -227,25 +227,9 @@ class StereoTracker:
 
     # ---- stage 1: segmentation and candidates, per camera ----------------------------------
     def _segment(self, step: Step, keep_masks: bool) -> None:
-        """Each camera's candidates. A windowed frame is mostly Python holding the GIL: when both
-        cameras process this frame in a window they run faster in turn on this thread than side
-        by side; a pair with a whole frame, mostly image work that releases the GIL, runs side by
-        side. The windows are chosen first, so a camera's periodic whole frame is never run in
-        turn with the other's."""
-        (left_bgr, right_bgr), t, t_r = step.frames, step.t, step.t_right
+        """Each camera's candidates (``core/execution.py``: on threads or in processes)."""
         self.left.keep_whole, self.right.keep_whole = self.readout.holding(0), self.readout.holding(1)
-        in_turn = self.left.plan_window(left_bgr, t) & self.right.plan_window(right_bgr, t_r)
-        if self._pool is not None and not in_turn:
-            # Only the image half runs side by side (CameraDetector.segment); the measuring
-            # half, many small calls each of which hands the GIL over, runs on this thread,
-            # the left camera's while the right camera's image half may still be running.
-            fut = self._pool.submit(self.right.segment, right_bgr, t_r)
-            res_left = self.left.candidates_from(left_bgr, t, self.left.segment(left_bgr, t), keep_masks)
-            res_right = self.right.candidates_from(right_bgr, t_r, fut.result(), keep_masks)
-        else:
-            res_left = self.left.find_candidates(left_bgr, t, keep_masks)
-            res_right = self.right.find_candidates(right_bgr, t_r, keep_masks)
-        step.results = [res_left, res_right]
+        step.results = self.cameras.find_candidates(step.frames, (step.t, step.t_right), keep_masks)
 
     # ---- stage 2: stereo vouch, pairing, each camera's commit ------------------------------
     def _pair(self, step: Step) -> None:
