@@ -153,6 +153,18 @@ def test_default_rests_only_the_followed_tracklet_for_long():
     assert out[1][2] < 0
 
 
+def test_broadcast_followed_pause_is_bounded():
+    """The TV preset's followed allowance (40 frames, 1.3 s at 30 fps) outlasts the longest rest
+    the TV labels mark visible (33 frames) but not a whole clip: at 1000 frames a board's letter
+    the follower once took was held as a still blob for all 254 frames of bwf_00027."""
+    p = load_preset("broadcast")
+    assert p.association.pause_frames < p.association.followed_pause_frames <= 60
+    resting = _fly_then_stop(p, 10 + 35)          # 35 frames after the stop: still reported
+    assert resting[0][2] >= 0
+    stale = _fly_then_stop(p, 10 + 60)            # 60 frames after: no longer
+    assert stale[0][2] < 0
+
+
 def _far_court_flight(n=50, small=range(25, 29)):
     """A TV-sized dot flight (1280×720 at 30 fps, 12 px a frame) that shrinks to a 3 × 3 px
     dot in the ``small`` frames (the far-court shuttle: a blob of 14–19 px contour length, below
