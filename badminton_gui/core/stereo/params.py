@@ -53,9 +53,9 @@ class StereoParams(ParamGroup):
     serve_min_rise: float = param(0.15, 0.0, 5.0, step=0.01, unit="m", label="... rising at least",
                                   help="How much higher the last of those pairs lies than the first (two frames' "
                                        "triangulation noise does not rise this much)")
-    serve_max_height: float = param(2.5, 0.0, 20.0, step=0.1, unit="m", label="... from at most",
+    serve_max_height: float = param(4.0, 0.0, 20.0, step=0.1, unit="m", label="... from at most",
                                     help="The first of those pairs no higher than this above the court (a "
-                                         "player's hand or racket)")
+                                         "player's hand or racket, and the first frames a far camera may miss)")
     max_candidates: int = param(6, 1, 50, step=1, label="Candidates per camera",
                                 help="How many best candidates per camera are tried for a stereo pair")
     adaptive_epipolar: bool = flag(True, label="Learn the epipolar tolerance",
