@@ -34,7 +34,8 @@ The rules, each switched by its parameter (the trace names them by the first col
     landed_other_anchor                 not HOLDING, anchored   a report without one, the other camera HOLDING   still anchored
     flown                               —                       a report with a 3D point above landed_max_height its track flown now (forgotten after flown_memory)
     alone_limit (+ alone_max_frames,    —                       a report, no 3D point, the other camera without  one more alone; withheld past alone_max_frames
-      alone_anchor_gap)                                         one (or HOLDING)                                 unless it continues a 3D point's readout
+      alone_anchor_gap)                                         one (or HOLDING, or before the serve with        unless it continues a 3D point's readout
+                                                                stereo.serve_start)
 
 Why each:
 
@@ -47,7 +48,9 @@ Why each:
 - ``stereo.caught_frames`` (CAUGHT): the shuttle in the hand that caught it is out of play:
   withhold it in both cameras while the hand carries it.
 - ``stereo.alone_limit``: a report the other camera does not confirm is mostly not the shuttle,
-  unless it continues a readout that had a 3D point (a flight the other camera lost).
+  unless it continues a readout that had a 3D point (a flight the other camera lost). Before the
+  serve (``stereo.serve_start``) a report beside the other camera's that makes no pair with it is
+  not confirmed either (an LED board's dot in one camera, clutter in the other).
 """
 
 from __future__ import annotations
