@@ -36,6 +36,8 @@ class Step:
     trace: list[str] | None = None
     # The pair's measured point extended the followed flight (``TrackResult.pair_in_flight``).
     in_flight: bool = False
+    # No shuttle in play yet (``stereo.serve_start``): the pairing took only serve-like starts.
+    before_serve: bool = False
 
     def fired(self, rule: str, cam: int | None = None) -> None:
         """The rule ``rule`` (of camera ``cam``) changed this step's readout."""

@@ -237,6 +237,10 @@ class StereoTracker:
         if self.params.stereo.stereo_vouch:
             step.take("stereo_vouch", self.vouch.apply(res[0], res[1]))
         step.take("off_volume", self.pairing.reject_off_volume(res[0], res[1], step.t, step.guide))
+        if self.params.stereo.serve_start and self.rig.has_court_pose:
+            step.before_serve = self.pairing.serve_start.before_serve(step.t, step.guide, self.phase, self.params)
+            step.take("serve_start", self.pairing.reject_before_serve(res[0], res[1], step.t, step.before_serve,
+                                                                     self._trajectory.resting_direction))
         self.pairing.learn(res[0], res[1])
         self.pairing.pair(step)
         self.left.commit(step.dets[0], step.t, res[0].candidates)
@@ -281,10 +285,12 @@ class StereoTracker:
         if self.phase.net_stop:
             step.fired("caught_net_exception")
         caught = withheld(self.phase, step.t, self.params)
+        self.pairing.serve_start.note_flight(flight)
         if caught:
             point, flight = None, caught_flight(flight)
         self._readout_rules(step, ReadoutInputs(step.t, tuple(step.results), tuple(step.dets), (0, 1), point is not None,
-                                                None if point is None else float(point[2]), caught, self.phase))
+                                                None if point is None else float(point[2]), caught, self.phase,
+                                                step.before_serve))
         return point, flight
 
     def _readout_rules(self, step: Step, inputs: ReadoutInputs) -> None:

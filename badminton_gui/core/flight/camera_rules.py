@@ -34,7 +34,8 @@ The rules, each switched by its parameter (the trace names them by the first col
     landed_other_anchor                 not HOLDING, anchored   a report without one, the other camera HOLDING   still anchored
     flown                               —                       a report with a 3D point above landed_max_height its track flown now (forgotten after flown_memory)
     alone_limit (+ alone_max_frames,    —                       a report, no 3D point, the other camera without  one more alone; withheld past alone_max_frames
-      alone_anchor_gap)                                         one (or HOLDING)                                 unless it continues a 3D point's readout
+      alone_anchor_gap)                                         one (or HOLDING, or before the serve with        unless it continues a 3D point's readout
+                                                                stereo.serve_start)
 
 Why each:
 
@@ -47,7 +48,9 @@ Why each:
 - ``stereo.caught_frames`` (CAUGHT): the shuttle in the hand that caught it is out of play:
   withhold it in both cameras while the hand carries it.
 - ``stereo.alone_limit``: a report the other camera does not confirm is mostly not the shuttle,
-  unless it continues a readout that had a 3D point (a flight the other camera lost).
+  unless it continues a readout that had a 3D point (a flight the other camera lost). Before the
+  serve (``stereo.serve_start``) a report beside the other camera's that makes no pair with it is
+  not confirmed either (an LED board's dot in one camera, clutter in the other).
 """
 
 from __future__ import annotations
@@ -151,7 +154,9 @@ class ReadoutInputs:
     camera's report for the hold's anchor and the tracks seen in the air (a pair step: its
     reports as paired; None: the results' detections after the caught rule, a one-camera step),
     ``cameras`` those with a new image, whether the step reports a 3D point and its court
-    height, whether the phase withholds the shuttle (caught), and the phase."""
+    height, whether the phase withholds the shuttle (caught), the phase, and whether the step
+    came before the serve (``stereo.serve_start``: then a report without a 3D point is alone
+    even beside the other camera's)."""
 
     t: float
     results: tuple[CameraResult, CameraResult]
@@ -161,6 +166,7 @@ class ReadoutInputs:
     height: float | None = None
     caught: bool = False
     phase: PhaseState = PhaseState()
+    before_serve: bool = False
 
 
 def reject_report(result: CameraResult) -> CameraResult:
@@ -310,8 +316,9 @@ def readout_transition(state: ReadoutState, inputs: ReadoutInputs, params: Track
             fired.append(("landed_other_anchor", cam))
     present = [r.detection is not None for r in results]
     for cam in inputs.cameras:
+        other_present = present[1 - cam] and not inputs.before_serve
         cam_state, limited = _limit_alone(state.cams[cam], state.cams[1 - cam], results[cam], present[cam],
-                                          present[1 - cam], inputs.has_point, params)
+                                          other_present, inputs.has_point, params)
         state = state.with_camera(cam, cam_state)
         if limited is not results[cam]:
             fired.append(("alone_limit", cam))
@@ -381,7 +388,9 @@ def _limit_alone(state: CameraReadoutState, other: CameraReadoutState, result: C
     break longer than ``alone_anchor_gap`` frames, since a frame with a 3D point; otherwise at
     most ``alone_max_frames`` such reports in a row are kept. Only the readout changes
     (``reject_report``). ``present`` / ``other_present``: whether this camera and the other
-    report now (the other's readout: its last one when it brought no new image).
+    report now (the other's readout: its last one when it brought no new image). Before the
+    serve (``stereo.serve_start``) the caller passes ``other_present`` False: two reports that
+    make no pair then confirm nothing (an LED board's dot in one camera, clutter in the other).
     """
     sp = params.stereo
     if not present or state.holding:

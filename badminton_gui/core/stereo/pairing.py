@@ -10,7 +10,9 @@ their miss moved little (``stereo.pair_continuity``). Free-running cameras' righ
 first moved along their tracks to the left image's time (``stereo.align_pairs``). With
 ``stereo.play_volume`` a pair must lie inside the play volume, and what pairs only outside it
 (an LED board's moving dot) is rejected in both cameras; with ``stereo.off_volume_radius`` also
-what one camera keeps alone where such pairs were refused (``off_volume.py``).
+what one camera keeps alone where such pairs were refused (``off_volume.py``). With
+``stereo.serve_start``, before the serve a pair is taken only once its 3D track starts like a
+serve (``serve_start.py``).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from ..step import Step
 from ..types import REJECT_STEREO, CameraResult, Candidate
 from .epipolar import EpipolarGate
 from .off_volume import OffVolumeMemory
+from .serve_start import ServeRule, ServeStart
 
 # s: the least time between a pair's two images for the right camera's detections to be moved
 # along their tracks to the left image's time before they are paired (free-running cameras,
@@ -97,6 +100,8 @@ class StereoPairing:
         self._last_pair: _LastPair | None = None
         # Where pairs were refused as off the play volume (``stereo.off_volume_radius``).
         self.off_volume = OffVolumeMemory()
+        # The 3D tracks of the pairs seen before the serve (``stereo.serve_start``).
+        self.serve_start = ServeStart()
 
     def set_times(self, t_left: float, t_right: float) -> None:
         """The pair being processed was taken at these times (``right_xy`` moves by their lag)."""
@@ -189,6 +194,54 @@ class StereoPairing:
             for cam, res in enumerate((res_left, res_right)):
                 gone[cam].update(id(c) for c in self._lone_at_refused_places(cam, res, paired_inside | gone[cam],
                                                                              guide))
+        return (_rejected(res_left, gone[0]) if gone[0] else res_left,
+                _rejected(res_right, gone[1]) if gone[1] else res_right)
+
+    def reject_before_serve(self, res_left: CameraResult, res_right: CameraResult, t: float,
+                            before_serve: bool, resting=None) -> tuple[CameraResult, CameraResult]:
+        """Before the serve (``before_serve``: no shuttle in play; ``stereo.serve_start``), each
+        camera's surviving candidate that meets partners on the other camera inside the play
+        volume, none of whose pairs of tracks starts like a serve (``ServeStart.qualifies``), is
+        rejected (``REJECT_STEREO``): a shuttle held before the serve, an LED board's dot inside
+        the play volume's margin. A pair that ``resting`` (a court point → None or not) says lies
+        where the last flight came down is the shuttle lying there and is left alone. A pair that starts like a serve
+        puts the shuttle in play (``ServeStart.in_play``). Returns the two results (the same
+        objects where nothing was rejected)."""
+        sp = self.params.stereo
+        if not sp.serve_start or not self.rig.has_court_pose:
+            return res_left, res_right
+        if not before_serve:
+            self.serve_start.clear()
+            return res_left, res_right
+        rule = ServeRule(sp.serve_points, sp.serve_min_speed, sp.serve_min_climb, sp.serve_min_rise,
+                         sp.serve_max_height, self.params.trajectory.max_gap)
+        self.serve_start.forget_before(t - rule.max_gap)
+        left, right = self._best(res_left), self._best(res_right)
+        if not left or not right:
+            return res_left, res_right
+        pl = np.array([[c.x, c.y] for c in left])
+        pr = np.array([self.right_xy(c) for c in right])
+        epi = self.rig.epipolar_errors(pl, pr)
+        paired = (np.zeros(len(left), dtype=bool), np.zeros(len(right), dtype=bool))
+        started = (np.zeros(len(left), dtype=bool), np.zeros(len(right), dtype=bool))
+        for i, j in zip(*np.nonzero(epi <= self.gate.tolerance())):
+            point = self.rig.triangulate(pl[i:i + 1], pr[j:j + 1])[0]
+            if not self._in_front_within_range(point) or not in_play_volume(self.rig, self.params, point):
+                continue
+            paired[0][i] = paired[1][j] = True
+            court = self.rig.to_output(point[None])[0]
+            if resting is not None and resting(court) is not None:
+                started[0][i] = started[1][j] = True
+                continue
+            key = (left[i].tracklet, right[j].tracklet)
+            if min(key) < 0:
+                continue        # no track yet: nothing to tell a start by
+            self.serve_start.observe(key, t, court, rule)
+            if self.serve_start.qualifies(key, t, rule):
+                started[0][i] = started[1][j] = True
+                self.serve_start.in_play = True
+        gone = ({id(c) for c, p, s in zip(left, paired[0], started[0]) if p and not s},
+                {id(c) for c, p, s in zip(right, paired[1], started[1]) if p and not s})
         return (_rejected(res_left, gone[0]) if gone[0] else res_left,
                 _rejected(res_right, gone[1]) if gone[1] else res_right)
 

@@ -36,6 +36,26 @@ class StereoParams(ParamGroup):
     off_volume_memory: float = param(60.0, 0.0, 3600.0, step=5.0, unit="s", label="... refused within",
                                      help="How long a place where a pair was refused as off the play volume is "
                                           "remembered (a board stands where it stands; its dot comes back)")
+    serve_start: bool = flag(False, label="Before the serve, pairs that start like one",
+                             help="With a court pose, while no flight is followed (no 3D point for the "
+                                  "trajectory's 'Longest gap'), two detections are a pair only once their "
+                                  "tracks' 3D points start like a serve (the next settings); both are rejected "
+                                  "until then: a shuttle held before the serve is at rest, and an LED board's "
+                                  "dot inside the play volume's margin slides along its board")
+    serve_points: int = param(3, 2, 20, step=1, unit="pairs", label="... over",
+                              help="At least this many pairs of the same two tracks, one after the other "
+                                   "(within the trajectory's 'Longest gap' of each other and in all), make the start")
+    serve_min_speed: float = param(5.0, 0.0, 100.0, step=0.5, unit="m/s", label="... moving at least",
+                                   help="Their average speed from the first to the last of those pairs")
+    serve_min_climb: float = param(2.0, -50.0, 50.0, step=0.5, unit="m/s", label="... climbing at least",
+                                   help="Their average upward speed (a serve must clear the net), and they move "
+                                        "towards the net")
+    serve_min_rise: float = param(0.15, 0.0, 5.0, step=0.01, unit="m", label="... rising at least",
+                                  help="How much higher the last of those pairs lies than the first (two frames' "
+                                       "triangulation noise does not rise this much)")
+    serve_max_height: float = param(4.0, 0.0, 20.0, step=0.1, unit="m", label="... from at most",
+                                    help="The first of those pairs no higher than this above the court (a "
+                                         "player's hand or racket, and the first frames a far camera may miss)")
     max_candidates: int = param(6, 1, 50, step=1, label="Candidates per camera",
                                 help="How many best candidates per camera are tried for a stereo pair")
     adaptive_epipolar: bool = flag(True, label="Learn the epipolar tolerance",
