@@ -204,13 +204,15 @@ def test_catch_up_teaches_the_missed_pixels_what_the_missed_frames_would_have(k)
     assert not np.allclose(slow.average[0, 0], whole.average[0, 0], atol=1e-3)
 
 
+@pytest.mark.parametrize("changed", [False, True])
 @pytest.mark.parametrize("k", [1, 3, 7])
-def test_catch_up_fades_a_ghost_outside_the_windows_as_whole_frames_do(k):
+def test_catch_up_fades_a_ghost_outside_the_windows_as_whole_frames_do(k, changed):
     """A dark player stood long enough to be learnt, then left: the court where he stood is
     brighter than the average, foreground (a ghost), learning at α/10. Outside the windows for
     k frames, then a whole frame with ``catch_up``: the ghost has faded as far as on k + 1
     whole frames, not k + 1 times less (it would outlast the whole frames' masks by
-    ``full_every`` × and merge with a shuttle landing beside it)."""
+    ``full_every`` × and merge with a shuttle landing beside it), also where the grey value
+    changed since the last whole frame (the player moving about beside his ghost)."""
     p = _params(background__compensate_gain=False)
     whole, part = BackgroundModel(p.background, p.binarize), BackgroundModel(p.background, p.binarize)
     player = np.full((96, 128), 40, np.uint8)
@@ -223,7 +225,7 @@ def test_catch_up_fades_a_ghost_outside_the_windows_as_whole_frames_do(k):
     for _ in range(k):
         part.apply_window(court[16:48, 32:80], 32, 16)
     missed[16:48, 32:80] = 0
-    part.catch_up(missed, k)
+    part.catch_up(missed, k, np.full(court.shape, 255 if changed else 0, np.uint8))
     assert part.apply(court)[0, 0] == 255
     assert np.allclose(part.average, whole.average, atol=1e-3)
 
