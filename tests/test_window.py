@@ -204,13 +204,15 @@ def test_catch_up_teaches_the_missed_pixels_what_the_missed_frames_would_have(k)
     assert not np.allclose(slow.average[0, 0], whole.average[0, 0], atol=1e-3)
 
 
+@pytest.mark.parametrize("changed", [False, True])
 @pytest.mark.parametrize("k", [1, 3, 7])
-def test_catch_up_fades_a_ghost_outside_the_windows_as_whole_frames_do(k):
+def test_catch_up_fades_a_ghost_outside_the_windows_as_whole_frames_do(k, changed):
     """A dark player stood long enough to be learnt, then left: the court where he stood is
     brighter than the average, foreground (a ghost), learning at α/10. Outside the windows for
     k frames, then a whole frame with ``catch_up``: the ghost has faded as far as on k + 1
     whole frames, not k + 1 times less (it would outlast the whole frames' masks by
-    ``full_every`` × and merge with a shuttle landing beside it)."""
+    ``full_every`` × and merge with a shuttle landing beside it), also where the grey value
+    changed since the last whole frame (the player moving about beside his ghost)."""
     p = _params(background__compensate_gain=False)
     whole, part = BackgroundModel(p.background, p.binarize), BackgroundModel(p.background, p.binarize)
     player = np.full((96, 128), 40, np.uint8)
@@ -223,9 +225,49 @@ def test_catch_up_fades_a_ghost_outside_the_windows_as_whole_frames_do(k):
     for _ in range(k):
         part.apply_window(court[16:48, 32:80], 32, 16)
     missed[16:48, 32:80] = 0
-    part.catch_up(missed, k)
+    part.catch_up(missed, k, np.full(court.shape, 255 if changed else 0, np.uint8))
     assert part.apply(court)[0, 0] == 255
     assert np.allclose(part.average, whole.average, atol=1e-3)
+
+
+def test_catch_up_leaves_out_what_changed_between_the_whole_frames(monkeypatch):
+    """A dark player reaches a spot outside the windows just as the next whole frame comes:
+    the frames missed there showed the court, which the catch-up cannot know. Taking the whole
+    frame's player as what the missed frames showed, the average there fell k + 1 times as far
+    as on whole frames, and once the player moved on the court was foreground: a ghost of a
+    place he touched on one frame (beside a moving player, pieces of it broke his blob). Pixels
+    whose grey value changed since the last whole frame learn only from this frame; those that
+    stayed put still catch up: the ghost where another player stood at the start fades as on
+    whole frames."""
+    court = np.full((192, 256, 3), 100, np.uint8)
+    start = court.copy()
+    start[:32, 64:96] = 86           # learnt at once: the court there is a ghost, fading
+    player = court.copy()
+    player[16:48, 16:48] = 40        # darker: learnt at α (never foreground)
+    k = 7
+    frames = [start] + [court] * 3 + [court] * k + [player] + [court] * 40
+    windowed = range(5, 5 + k)       # frame counts (1-based) processed in a window
+    window = (128, 96, 256, 192)     # away from the player and the ghost
+    monkeypatch.setattr(WindowTracker, "_choose",
+                        lambda self, *a: window if self.frames in windowed else None)
+    # No shake tolerance: it erodes a ghost from its edge, pixel by pixel, which no catch-up
+    # reproduces (the rate of a pixel there changes within the missed frames).
+    p = _params(window__catch_up=True, background__compensate_gain=False,
+                background__shake_tolerance=0)
+    whole = CameraDetector(p.with_value("window.enabled", False))
+    part = CameraDetector(p)
+    ghost = []
+    for i, img in enumerate(frames):
+        a = whole.process(img, i / FPS)
+        b = part.process(img, i / FPS)
+        assert (part.window_tracker.last_window is not None) == (i + 1 in windowed), i
+        if i + 1 not in windowed:
+            assert np.array_equal(a.mask, b.mask), i
+        ghost.append(bool(a.mask[:16, 32:48].any()))
+    assert ghost[1] and not ghost[-1]                   # the ghost faded within the clip
+    assert ghost.index(False, 1) > 5 + k                # ... after the windowed frames
+    s = a.mask_scale
+    assert not a.mask[int(16 * s):int(48 * s), int(16 * s):int(48 * s)].any()
 
 
 def test_both_cameras_windowed_run_in_turn_else_side_by_side(monkeypatch):

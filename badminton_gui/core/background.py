@@ -332,18 +332,25 @@ class BackgroundModel:
         still, it faded ``full_every`` × slower outside the windows than on whole frames, and
         beside a landed shuttle merged with it into one blob too long for filter 1.
         """
-        missed, frames = self._catch_up
-        cv2.accumulateWeighted(gray, self._average, 1.0 - (1.0 - alpha) ** frames,
-                               mask=cv2.bitwise_and(self._still, missed))
+        missed, frames, changed = self._catch_up
+        still = cv2.bitwise_and(self._still, missed)
+        if changed is not None:
+            cv2.subtract(still, changed, dst=still)
+        cv2.accumulateWeighted(gray, self._average, 1.0 - (1.0 - alpha) ** frames, mask=still)
         cv2.accumulateWeighted(gray, self._average, 1.0 - (1.0 - alpha * 0.1) ** frames,
                                mask=cv2.bitwise_and(slow, missed))
 
-    def catch_up(self, missed: np.ndarray, frames: int) -> None:
+    def catch_up(self, missed: np.ndarray, frames: int, changed: np.ndarray | None = None) -> None:
         """The next ``apply`` also teaches the pixels where ``missed`` is 255 what the
         ``frames`` updates they missed would have: an extra rate 1 − (1 − r)^frames, r the
-        pixel's own rate in that update (α, or α/10 under the foreground)."""
+        pixel's own rate in that update (α, or α/10 under the foreground).
+
+        ``changed`` (255): pixels whose grey value changed since the last whole frame, where the
+        next frame is no stand-in for the missed ones; those learning at α learn from it alone.
+        Under the foreground (α/10) the stand-in errs by little and a ghost must fade.
+        """
         alpha = float(self._bg.learning_rate)
-        self._catch_up = (missed, int(frames)) if frames > 0 and alpha > 0 else None
+        self._catch_up = (missed, int(frames), changed) if frames > 0 and alpha > 0 else None
 
     def _three_frame_difference(self, gray: np.ndarray) -> np.ndarray:
         """Pixels that differ from *both* of the two previous frames: the object now, no ghosts."""

@@ -266,7 +266,7 @@ class CameraDetector(TrackletQueries):
         if window is not None:
             self._window.note(None)
         gray = self._grey(frame_bgr, scale)
-        self._window.before_whole(self._background)
+        self._window.before_whole(self._background, gray)
         mask = self._background.apply(gray)
         return Segmented(gray, mask, external_contours(mask), None, False)
 

@@ -18,7 +18,10 @@ Consequences, by design:
   covered the weight of the k updates they missed on the next whole frame, 1 − (1 − α)^k, and
   1 − (1 − α/10)^k under the foreground (a ghost fades as on whole frames; caught up at α
   only for the still pixels, a player's ghost outlasted the whole frames' by ``full_every`` ×
-  and swallowed a shuttle landing beside it); the flicker gain of a windowed frame is
+  and swallowed a shuttle landing beside it); the still pixels only where the grey value
+  stayed within ``binarize.diff_threshold`` of the last whole frame's (``before_whole``: where
+  it changed, a player moved in between, and the frame caught up would stand for missed frames
+  that showed something else); the flicker gain of a windowed frame is
   estimated on the window's part of the sparse grid (a finer grid when it holds too few points);
 - on windowed frames the mask (and the GUI's mask preview) is empty outside the window, so
   ``is_merged`` sees nothing there; ``is_blind`` reads the running average, stale outside;
@@ -113,6 +116,7 @@ class WindowTracker:
         self.windowed = 0
         self._touched: np.ndarray | None = None   # model pixels some window covered (255)
         self._skipped = 0                          # windowed frames since the last whole one
+        self._last_whole: np.ndarray | None = None  # the last whole frame's grey image (catch_up)
         # ``window.stagger``: this camera's scheduled whole frames fall on the frames whose
         # count plus ``phase`` × ``full_every`` is a multiple of ``full_every`` (the stereo
         # tracker gives the right camera phase 0.5, so the two cameras' whole frames alternate).
@@ -128,14 +132,35 @@ class WindowTracker:
         self._skipped = 0
         self._large = None
 
-    def before_whole(self, background: BackgroundModel) -> None:
-        """Call before a whole frame's ``background.apply``: with ``window.catch_up`` the pixels
-        no window covered since the last whole frame catch up on the updates they missed."""
-        if self._skipped and self._touched is not None and self.params.window.catch_up:
-            background.catch_up(cv2.bitwise_not(self._touched), self._skipped)
+    def before_whole(self, background: BackgroundModel, gray: np.ndarray | None = None) -> None:
+        """Call before a whole frame's ``background.apply`` (``gray``: that frame's grey image,
+        model scale): with ``window.catch_up`` the pixels no window covered since the last whole
+        frame catch up on the updates they missed; those learning at α only where their grey
+        value stayed within ``binarize.diff_threshold`` of the last whole frame's.
+
+        The catch-up takes this frame as what the missed frames showed. Where the scene moved in
+        between (beside a player) it did not, and a still pixel given a third of this frame's
+        value (1 − (1 − α)^k at k = 7) drifted: a dark player's edge reached on a whole frame
+        left a ghost of that one frame once he moved on, a brighter one raised the average beside
+        him until his blob broke into shuttle-sized pieces (tests/test_window.py). Such a pixel
+        learns from this frame alone, as a whole frame teaches it. Under the foreground (α/10)
+        the stand-in errs by little and a player's ghost must fade as on whole frames even while
+        he moves about beside it (a landed shuttle there would merge with it).
+        """
+        catch_up = self.params.window.catch_up
+        if self._skipped and self._touched is not None and catch_up:
+            last, changed = self._last_whole, None
+            if gray is not None and last is not None and last.shape == gray.shape:
+                changed = cv2.compare(cv2.absdiff(gray, last),
+                                      float(self.params.binarize.diff_threshold), cv2.CMP_GT)
+            background.catch_up(cv2.bitwise_not(self._touched), self._skipped, changed)
         self._skipped = 0
         if self._touched is not None:
             self._touched.fill(0)
+        if catch_up and gray is not None and self.params.window.enabled:
+            if self._last_whole is None or self._last_whole.shape != gray.shape:
+                self._last_whole = np.empty_like(gray)
+            np.copyto(self._last_whole, gray)
 
     # ---- the choice --------------------------------------------------------------------
     def plan(self, associator: TrackletAssociator, t: float, width: int, height: int,

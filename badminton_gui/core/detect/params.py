@@ -428,7 +428,9 @@ class WindowParams(ParamGroup):
     catch_up: bool = flag(False, label="Catch up outside the window",
                           help="On a whole frame, the background pixels no window covered since the last "
                                "whole frame learn as much as the frames they missed would have taught "
-                               "them (1 − (1 − α)^k), instead of learning k× slower")
+                               "them (1 − (1 − α)^k), instead of learning k× slower; the background-like "
+                               "ones only where the grey value stayed within the threshold of the "
+                               "last whole frame's")
     stagger: bool = flag(False, label="Stagger the cameras' whole frames",
                          help="The cameras take their scheduled whole frames half a period apart, on a "
                               "fixed clock (the left camera at frames 0, 8, 16 …, the right at 4, 12 …), "
