@@ -134,7 +134,8 @@ def _tracked(left: int, right: int, frames: int = 200) -> StereoTracker:
 def test_cameras_given_the_other_way_round_are_named_as_swapped_not_as_an_off_rig():
     as_given, exchanged = _tracked(0, 1), _tracked(1, 0)
     width = 640
-    assert as_given.rig_epipolar_px < 1.0 and as_given.rig_swapped_px > refine_threshold(width)
+    # A rig that fits as given never measures the other way round (it costs a pair's time).
+    assert as_given.rig_epipolar_px < 1.0 and as_given.rig_swapped_px is None
     assert not inputs_look_swapped(as_given.rig_epipolar_px, as_given.rig_swapped_px, width)
     assert exchanged.rig_epipolar_px > refine_threshold(width) and exchanged.rig_swapped_px < 1.0
     assert inputs_look_swapped(exchanged.rig_epipolar_px, exchanged.rig_swapped_px, width)

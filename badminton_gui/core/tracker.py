@@ -164,7 +164,7 @@ class StereoTracker:
     @property
     def rig_swapped_px(self) -> float | None:
         """The median epipolar error (px) the same sure pairs have with the left and right images
-        exchanged (None: too few yet): far below ``rig_epipolar_px`` when the inputs are swapped
+        exchanged (None: too few yet; measured only on pairs that miss as given): far below ``rig_epipolar_px`` when the inputs are swapped
         (``rig.inputs_look_swapped``)."""
         return self.gate.swapped_error_px()
 
